@@ -1,0 +1,1 @@
+"""Registry of learned-dynamics models assembled from inductive biases."""

@@ -1,0 +1,3 @@
+from bench._env import configure_threads
+
+configure_threads()
