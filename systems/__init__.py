@@ -3,3 +3,24 @@
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+from ._base import AbstractSystem, reference_masses_lengths  # noqa: E402
+from ._chain import ChainPendulum  # noqa: E402
+from ._dataset import Dataset, DatasetConfig, make_dataset  # noqa: E402
+from ._registry import available, make, parameters  # noqa: E402
+from ._relativistic import RelativisticParticle  # noqa: E402
+from ._spring import SpringPendulum  # noqa: E402
+
+__all__ = [
+    "AbstractSystem",
+    "ChainPendulum",
+    "Dataset",
+    "DatasetConfig",
+    "RelativisticParticle",
+    "SpringPendulum",
+    "available",
+    "make",
+    "make_dataset",
+    "parameters",
+    "reference_masses_lengths",
+]

@@ -1,0 +1,229 @@
+"""The abstract system and the Lagrangian machinery shared by every concrete system.
+
+A system is a small ``eqx.Module`` whose physics is one scalar, L(q, qdot) = T - V. The
+equations of motion follow from the Euler-Lagrange equations by automatic differentiation,
+in one place (here), for every system:
+
+    M(q, qdot) qddot = dL/dq - (d2L/dqdot dq) qdot + Q,      M = d2L/dqdot2,
+
+solved by a linear solve. Q is the generalised friction force of a drag -f m_i v_i on every
+body: Q = -f dT/dqdot (for T = 1/2 sum m_i |v_i|^2 with v_i = J_i(q) qdot, sum_i F_i . dx_i/dq
+= -f sum_i m_i J_i^T v_i = -f dT/dqdot). When T is quadratic in qdot, M^{-1} Q = -f qdot
+exactly, whatever the coordinates.
+
+Ground truth is integrated in float64 by diffrax (8th-order Dormand-Prince, PID step control at
+rtol = atol = 1e-11), saved at the requested times. The batched solver is one module-level
+``eqx.filter_jit`` function taking the system as an argument, so it is traced once per system
+type, state size and number of save times (array fields such as masses are traced, not baked
+in).
+"""
+
+from __future__ import annotations
+
+import abc
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+RTOL = 1e-11
+ATOL = 1e-11
+MAX_STEPS = 1_000_000
+
+
+class AbstractSystem(eqx.Module):
+    """A mechanical system with Lagrangian L(q, qdot, args) = T(q, qdot) - V(q, args).
+
+    State z = concat(q, qdot) of length 2 * dof. ``args`` holds the per-trajectory parameters
+    (shape ``(n_args,)``); ``None`` means :meth:`default_args`.
+    """
+
+    name: eqx.AbstractVar[str]
+    angular: eqx.AbstractVar[tuple[bool, ...]]
+    friction: eqx.AbstractVar[float]
+    n_args: eqx.AbstractVar[int]
+
+    # ----------------------------------------------------------------------------- physics
+    @property
+    def dof(self) -> int:
+        """Number of generalised coordinates."""
+        return len(self.angular)
+
+    def default_args(self) -> Float[Array, " n_args"]:
+        """The parameters used when ``args`` is None (empty for parameter-free systems)."""
+        return jnp.zeros((0,), dtype=jnp.float64)
+
+    @abc.abstractmethod
+    def kinetic_energy(self, q, qdot, args=None):
+        """T(q, qdot); also defines the friction force Q = -f dT/dqdot."""
+
+    @abc.abstractmethod
+    def potential_energy(self, q, args=None):
+        """V(q)."""
+
+    @abc.abstractmethod
+    def positions(self, z) -> Float[Array, "bodies dim"]:
+        """Cartesian positions of the bodies at state z."""
+
+    @abc.abstractmethod
+    def sample_initial(self, key, n: int) -> Float[Array, "n state"]:
+        """``n`` random initial states z0."""
+
+    def sample_args(self, key, n: int) -> Float[Array, "n n_args"]:
+        """``n`` random per-trajectory parameter vectors (shape (n, 0) when there are none)."""
+        del key
+        return jnp.zeros((n, 0), dtype=jnp.float64)
+
+    def potential_range(self, args=None) -> float:
+        """max V - min V over configuration space, or nan where V is unbounded."""
+        del args
+        return float("nan")
+
+    def _args(self, args):
+        return self.default_args() if args is None else jnp.asarray(args)
+
+    def lagrangian(self, q, qdot, args=None):
+        """L = T(q, qdot) - V(q)."""
+        args = self._args(args)
+        return self.kinetic_energy(q, qdot, args) - self.potential_energy(q, args)
+
+    def momentum(self, z, args=None):
+        """Canonical momentum p = dL/dqdot at z = (q, qdot)."""
+        args = self._args(args)
+        q, qdot = self._split(z)
+        return jax.grad(self.lagrangian, argnums=1)(q, qdot, args)
+
+    def velocity(self, q, p, args=None):
+        """Inverse of :meth:`momentum` for T quadratic in qdot: qdot = M(q)^{-1} p."""
+        args = self._args(args)
+        mass = jax.hessian(self.lagrangian, argnums=1)(q, jnp.zeros_like(q), args)
+        return jnp.linalg.solve(mass, p)
+
+    def energy(self, z, args=None):
+        """Total energy H = p . qdot - L (the Legendre transform; T + V when T is quadratic)."""
+        args = self._args(args)
+        q, qdot = self._split(z)
+        return jnp.dot(self.momentum(z, args), qdot) - self.lagrangian(q, qdot, args)
+
+    def friction_force(self, q, qdot, args):
+        """Generalised force of a drag -f m_i v_i on every body: Q = -f dT/dqdot."""
+        return -self.friction * jax.grad(self.kinetic_energy, argnums=1)(q, qdot, args)
+
+    def acceleration(self, q, qdot, args=None):
+        """qddot = M^{-1} (dL/dq - (d2L/dqdot dq) qdot + Q), M = d2L/dqdot2 (Euler-Lagrange)."""
+        args = self._args(args)
+        dl_dqdot = lambda q_, v_: jax.grad(self.lagrangian, argnums=1)(q_, v_, args)
+        dl_dq = jax.grad(self.lagrangian, argnums=0)(q, qdot, args)
+        mass = jax.jacfwd(dl_dqdot, argnums=1)(q, qdot)
+        # d/dq (dL/dqdot) . qdot as a single forward-mode product, not a full Jacobian.
+        _, mixed = jax.jvp(lambda q_: dl_dqdot(q_, qdot), (q,), (qdot,))
+        rhs = dl_dq - mixed
+        if self.friction != 0.0:
+            rhs = rhs + self.friction_force(q, qdot, args)
+        return jnp.linalg.solve(mass, rhs)
+
+    def vector_field(self, t, z, args):
+        """dz/dt = (qdot, qddot). Pure; ``diffrax.ODETerm(system.vector_field)`` works."""
+        del t
+        q, qdot = self._split(z)
+        return jnp.concatenate([qdot, self.acceleration(q, qdot, args)])
+
+    def _split(self, z):
+        return z[..., : self.dof], z[..., self.dof :]
+
+    # -------------------------------------------------------------------------- simulation
+    def check_states(self, z: np.ndarray) -> None:
+        """Raise ValueError for states outside the system's domain (hook; none by default)."""
+
+    def simulate(self, z0, ts, args=None) -> Float[Array, "T state"]:
+        """Ground-truth trajectory z(ts) from z(ts[0]) = z0, float64, shape (len(ts), 2*dof)."""
+        z0 = _as_float_array(z0, "z0")
+        if z0.shape != (2 * self.dof,):
+            raise ValueError(
+                f"z0 must have shape ({2 * self.dof},) for {self.name}; got {z0.shape}"
+            )
+        if args is not None:
+            args = _as_float_array(args, "args")
+            if args.shape != (self.n_args,):
+                raise ValueError(f"args must have shape ({self.n_args},); got {args.shape}")
+            args = args[None]
+        return self.simulate_batch(z0[None], ts, args)[0]
+
+    def simulate_batch(self, z0s, ts, args=None) -> Float[Array, "N T state"]:
+        """Ground-truth trajectories for a batch of initial states, shape (N, len(ts), 2*dof).
+
+        ``args``: None (default parameters), shape (n_args,) (shared) or (N, n_args).
+        """
+        z0s = _as_float_array(z0s, "z0s")
+        if z0s.ndim != 2 or z0s.shape[1] != 2 * self.dof or z0s.shape[0] < 1:
+            raise ValueError(
+                f"z0s must have shape (N >= 1, {2 * self.dof}) for {self.name}; got {z0s.shape}"
+            )
+        self.check_states(z0s)
+        ts = _as_float_array(ts, "ts")
+        if ts.ndim != 1 or ts.shape[0] < 2:
+            raise ValueError(f"ts must be a 1-D array of at least 2 times; got shape {ts.shape}")
+        if not np.all(np.diff(ts) > 0):
+            raise ValueError("ts must be strictly increasing")
+        n = z0s.shape[0]
+        if args is None:
+            args = np.broadcast_to(np.asarray(self.default_args()), (n, self.n_args))
+        else:
+            args = _as_float_array(args, "args")
+            if args.shape == (self.n_args,):
+                args = np.broadcast_to(args, (n, self.n_args))
+            if args.shape != (n, self.n_args):
+                raise ValueError(
+                    f"args must have shape ({self.n_args},) or ({n}, {self.n_args}); "
+                    f"got {args.shape}"
+                )
+        return _solve_batch(self, jnp.asarray(z0s), jnp.asarray(ts), jnp.asarray(args))
+
+
+def _as_float_array(x, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{what} must be a real float array; got {type(x).__name__}") from e
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{what} must be finite (no nan or inf)")
+    return arr
+
+
+@eqx.filter_jit
+def _solve_batch(system: AbstractSystem, z0s, ts, args):
+    term = diffrax.ODETerm(system.vector_field)
+    solver = diffrax.Dopri8()
+    controller = diffrax.PIDController(rtol=RTOL, atol=ATOL)
+
+    def one(z0, a):
+        sol = diffrax.diffeqsolve(
+            term,
+            solver,
+            t0=ts[0],
+            t1=ts[-1],
+            dt0=None,
+            y0=z0,
+            args=a,
+            saveat=diffrax.SaveAt(ts=ts),
+            stepsize_controller=controller,
+            max_steps=MAX_STEPS,
+        )
+        return sol.ys
+
+    return jax.vmap(one)(z0s, args)
+
+
+def reference_masses_lengths(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The reference masses and lengths of n bodies.
+
+    A legacy ``numpy.random.RandomState(0)`` draws n masses and then n lengths, each uniform on
+    [0.6, 1.4]; each list is used in reverse order (REFERENCE.md, "Systems").
+    """
+    rng = np.random.RandomState(0)
+    masses = rng.uniform(0.6, 1.4, size=n)
+    lengths = rng.uniform(0.6, 1.4, size=n)
+    return masses[::-1].copy(), lengths[::-1].copy()
