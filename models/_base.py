@@ -1,0 +1,59 @@
+"""The model family: abstract classes that the bench, the integrators and the tests rely on."""
+
+from __future__ import annotations
+
+import abc
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from ._scene import Scene
+
+
+def as_dtype(x, dtype) -> Array:
+    """Cast an input (state, args, time step) to the model's dtype; None args -> shape (0,)."""
+    if x is None:
+        return jnp.zeros((0,), dtype)
+    return jnp.asarray(x, dtype)
+
+
+class AbstractModel(eqx.Module):
+    """A learned model of the dynamics of a :class:`Scene`.
+
+    ``penalty(zs, args)`` is a soft-bias term that the trainer adds to the loss, evaluated on
+    the rollout states zs (..., 2 dof); zero unless a model defines one.
+    """
+
+    scene: eqx.AbstractVar[Scene]
+    dtype: eqx.AbstractVar[str]
+
+    def penalty(self, zs, args) -> Array:
+        return jnp.zeros((), self.dtype)
+
+
+class AbstractContinuousModel(AbstractModel):
+    """A learned vector field dz/dt = F(t, z, args), integrated by ``models.rollout``.
+
+    Second-order models have dq/dt = qdot exactly and expose ``acceleration(q, v, args)``, so
+    that a leapfrog integrator can use them.
+    """
+
+    second_order: ClassVar[bool] = False
+
+    @abc.abstractmethod
+    def vector_field(self, t, z, args) -> Array:
+        """dz/dt for one state z (2 dof,) and args (n_args,)."""
+
+    def acceleration(self, q, v, args) -> Array:
+        """qddot(q, v); only second-order models define it."""
+        raise NotImplementedError(f"{type(self).__name__} is not a second-order model")
+
+
+class AbstractDiscreteModel(AbstractModel):
+    """A learned map z_n -> z_{n+1} over one time step dt: the integrator is the model."""
+
+    @abc.abstractmethod
+    def step(self, z, dt, args) -> Array:
+        """z_{n+1} for one state z (2 dof,), time step dt and args (n_args,)."""

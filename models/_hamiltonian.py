@@ -1,0 +1,56 @@
+"""Learned Hamiltonians: the energy-conservation bias in (q, p)."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.random as jr
+from jaxtyping import Array
+
+from ._features import Features
+from ._mass import CholeskyNet
+from ._mlp import MLP
+
+INVERSE_MASS_JITTER = 1e-4
+
+
+class GeneralHamiltonian(eqx.Module):
+    """H(q, p) = MLP(cos q, sin q, p, args): no assumed structure ("HNN without SO")."""
+
+    features: Features
+    net: MLP
+
+    def __init__(self, features: Features, width, depth, activation, dtype, *, key):
+        self.features = features
+        self.net = MLP(features.size(True), 1, width, depth, activation, dtype, key=key)
+
+    def __call__(self, q: Array, p: Array, args: Array) -> Array:
+        return self.net(self.features(q, p, args))[0]
+
+
+class SeparableHamiltonian(eqx.Module):
+    """H(q, p) = 1/2 p^T M^-1(q) p + V(q), M^-1 = L L^T + 1e-4 I ("HNN with SO").
+
+    L(q) lower-triangular with softplus diagonal from an MLP; V an MLP.
+    """
+
+    inverse_mass: CholeskyNet
+    features: Features
+    potential: MLP
+
+    def __init__(self, features: Features, width, depth, activation, dtype, *, key):
+        k1, k2 = jr.split(key)
+        self.inverse_mass = CholeskyNet(
+            features, width, depth, activation, dtype, key=k1, jitter=INVERSE_MASS_JITTER
+        )
+        self.features = features
+        self.potential = MLP(features.size(False), 1, width, depth, activation, dtype, key=k2)
+
+    def kinetic(self, q: Array, p: Array, args: Array) -> Array:
+        lt_p = self.inverse_mass.factor(q, args).T @ p
+        return 0.5 * (lt_p @ lt_p) + 0.5 * INVERSE_MASS_JITTER * (p @ p)
+
+    def potential_energy(self, q: Array, args: Array) -> Array:
+        return self.potential(self.features(q, None, args))[0]
+
+    def __call__(self, q: Array, p: Array, args: Array) -> Array:
+        return self.kinetic(q, p, args) + self.potential_energy(q, args)

@@ -1,0 +1,78 @@
+"""Learned positive-definite matrices: mass matrices and their inverses, via Cholesky factors."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from ._features import Features
+from ._mlp import MLP
+
+# softplus(x + _SHIFT) = 1 at x = 0: a freshly initialised factor is close to the identity.
+_SHIFT = math.log(math.e - 1.0)
+
+
+def cholesky_from_raw(raw: Array, dof: int, eps: float) -> Array:
+    """Lower-triangular C from dof (dof + 1) / 2 numbers; diagonal softplus(.) + eps > 0."""
+    rows, cols = np.tril_indices(dof)
+    c = jnp.zeros((dof, dof), raw.dtype).at[rows, cols].set(raw)
+    diag = jax.nn.softplus(jnp.diagonal(c) + _SHIFT) + eps
+    return c.at[np.arange(dof), np.arange(dof)].set(diag)
+
+
+class CholeskyNet(eqx.Module):
+    """A positive-definite A(q) = C(q) C(q)^T (+ jitter I), C lower-triangular from an MLP.
+
+    ``state_dependent=False`` makes C a free constant parameter instead (VIN mass, damping).
+    """
+
+    features: Features | None
+    net: MLP | None
+    raw: Array | None
+    dof: int = eqx.field(static=True)
+    eps: float = eqx.field(static=True)
+    jitter: float = eqx.field(static=True)
+
+    def __init__(
+        self,
+        features,
+        width,
+        depth,
+        activation,
+        dtype,
+        *,
+        key,
+        state_dependent=True,
+        eps=0.0,
+        jitter=0.0,
+    ):
+        self.dof = features.dof
+        self.eps = eps
+        self.jitter = jitter
+        n_raw = self.dof * (self.dof + 1) // 2
+        if state_dependent:
+            self.features = features
+            self.net = MLP(features.size(False), n_raw, width, depth, activation, dtype, key=key)
+            self.raw = None
+        else:
+            self.features = None
+            self.net = None
+            self.raw = jnp.zeros((n_raw,), dtype)
+
+    def factor(self, q: Array, args: Array) -> Array:
+        """C(q)."""
+        raw = self.raw if self.net is None else self.net(self.features(q, None, args))
+        return cholesky_from_raw(raw, self.dof, self.eps)
+
+    def matrix(self, q: Array, args: Array) -> Array:
+        """A(q) = C C^T + jitter I."""
+        c = self.factor(q, args)
+        a = c @ c.T
+        if self.jitter:
+            a = a + self.jitter * jnp.eye(self.dof, dtype=a.dtype)
+        return a

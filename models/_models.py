@@ -1,0 +1,580 @@
+"""The registered models, each assembled from the bias parts of the sibling modules.
+
+| name         | biases                                                                   |
+| ------------ | ------------------------------------------------------------------------ |
+| node         | ODE: dz/dt = MLP(z)                                                      |
+| node_so      | ODE + second order: dq/dt = qdot, dqdot/dt = MLP(q, qdot)               |
+| hnn          | ODE + energy + exact symplectic: J grad H, general H(q, p)               |
+| hnn_so       | hnn + second order: separable H = 1/2 p^T M^-1(q) p + V(q)               |
+| node_symreg  | node + soft symplectic penalty weight * mean ||J DF - (J DF)^T||^2       |
+| lnn          | ODE + second order + energy: Euler-Lagrange of a learned L(q, qdot)      |
+| vin          | discrete + variational: Verlet step of L = 1/2 v^T M v - U(q)            |
+| vin_implicit | discrete + variational: midpoint DEL step of a general learned L(q, v)   |
+| resnet       | discrete, free: z_{n+1} = z_n + MLP(z_n)                                 |
+
+The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
+part when the scene is damped (or ``dissipation=True``).
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.random as jr
+import jax.scipy.linalg as jsl
+from jaxtyping import Array
+
+from ._base import AbstractContinuousModel, AbstractDiscreteModel, as_dtype
+from ._dissipation import Dissipation
+from ._features import Features
+from ._hamiltonian import GeneralHamiltonian, SeparableHamiltonian
+from ._mass import CholeskyNet
+from ._mlp import ACTIVATIONS, DTYPES, INITS, MLP
+from ._scalar import SOLVES, acceleration_from_lagrangian, hamiltonian_field, lagrangian_energy
+from ._scene import Scene
+from ._symplectic import symplectic_error
+from ._variational import midpoint_variational_step, verlet_step
+
+MASS_EPS = 1e-3  # floor on the diagonal of a learned mass factor: M stays invertible
+
+
+def _split(z: Array) -> tuple[Array, Array]:
+    d = z.shape[-1] // 2
+    return z[..., :d], z[..., d:]
+
+
+# --------------------------------------------------------------------------- free models
+
+
+class NeuralODE(AbstractContinuousModel):
+    """dz/dt = MLP(cos q, sin q, qdot, args); with ``weight`` > 0 (node_symreg) the loss gets
+    the soft symplectic penalty weight * mean ||J DF - (J DF)^T||_F^2 over the rollout states."""
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    weight: float = eqx.field(static=True)
+    features: Features
+    net: MLP
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key, weight=0.0):
+        self.scene, self.dtype, self.weight = scene, dtype, float(weight)
+        self.features = Features(scene)
+        self.net = MLP(
+            self.features.size(True), 2 * scene.dof, width, depth, activation, dtype, key=key
+        )
+
+    def vector_field(self, t, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        return self.net(self.features(q, v, as_dtype(args, self.dtype)))
+
+    def penalty(self, zs, args):
+        if self.weight == 0.0:
+            return jnp.zeros((), self.dtype)
+        return self.weight * symplectic_error(self, zs, args)
+
+
+class SecondOrderODE(AbstractContinuousModel):
+    """dq/dt = qdot (exactly), dqdot/dt = MLP(cos q, sin q, qdot, args)."""
+
+    second_order: ClassVar[bool] = True
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    features: Features
+    net: MLP
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key):
+        self.scene, self.dtype = scene, dtype
+        self.features = Features(scene)
+        self.net = MLP(
+            self.features.size(True), scene.dof, width, depth, activation, dtype, key=key
+        )
+
+    def acceleration(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        return self.net(self.features(q, v, args))
+
+    def vector_field(self, t, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        return jnp.concatenate([v, self.acceleration(q, v, args)])
+
+
+class ResNet(AbstractDiscreteModel):
+    """z_{n+1} = z_n + MLP(cos q_n, sin q_n, qdot_n, args): the VIN seed's baseline.
+
+    The step is tied to the time step it was trained at (dt is not an input).
+    """
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    features: Features
+    net: MLP
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key):
+        self.scene, self.dtype = scene, dtype
+        self.features = Features(scene)
+        self.net = MLP(
+            self.features.size(True), 2 * scene.dof, width, depth, activation, dtype, key=key
+        )
+
+    def step(self, z, dt, args):
+        z = as_dtype(z, self.dtype)
+        q, v = _split(z)
+        return z + self.net(self.features(q, v, as_dtype(args, self.dtype)))
+
+
+# --------------------------------------------------------------------------- Hamiltonian
+
+
+class HNN(AbstractContinuousModel):
+    """dz/dt = J grad H(q, p) (+ friction Q on dp/dt), for any learned H.
+
+    In a canonical scene z = (q, p) and the field is J grad H itself. Otherwise z = (q, qdot)
+    and p = M(q) qdot with a learned mass matrix M = C C^T (C lower-triangular from an MLP,
+    softplus diagonal + 1e-3); the Hamiltonian flow is pushed forward to (q, qdot):
+
+        dq/dt = dH/dp,   dp/dt = -dH/dq + Q,   dqdot/dt = M^-1 (dp/dt - (dM/dt) qdot),
+
+    with dM/dt the derivative of M(q) along dq/dt (one jvp), solved with the Cholesky factor.
+    With friction Q = -D(q) dH/dp, dH/dt = -(dH/dp)^T D dH/dp <= 0.
+    """
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    hamiltonian_part: GeneralHamiltonian | SeparableHamiltonian
+    mass: CholeskyNet | None
+    dissipation: Dissipation | None
+
+    def __init__(
+        self, scene, width, depth, activation, dtype, *, key, separable=False, dissipation=False
+    ):
+        self.scene, self.dtype = scene, dtype
+        kh, km, kd = jr.split(key, 3)
+        features = Features(scene)
+        part = SeparableHamiltonian if separable else GeneralHamiltonian
+        self.hamiltonian_part = part(features, width, depth, activation, dtype, key=kh)
+        self.mass = (
+            None
+            if scene.canonical
+            else CholeskyNet(features, width, depth, activation, dtype, key=km, eps=MASS_EPS)
+        )
+        self.dissipation = (
+            Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None
+        )
+
+    def momentum(self, q, v, args):
+        """p = M(q) qdot (identity map in a canonical scene, where the state holds p)."""
+        if self.mass is None:
+            return v
+        c = self.mass.factor(q, args)
+        return c @ (c.T @ v)
+
+    def hamiltonian(self, z, args):
+        q, x = _split(as_dtype(z, self.dtype))
+        args = as_dtype(args, self.dtype)
+        return self.hamiltonian_part(q, self.momentum(q, x, args), args)
+
+    def vector_field(self, t, z, args):
+        q, x = _split(as_dtype(z, self.dtype))
+        args = as_dtype(args, self.dtype)
+        H = lambda q_, p_: self.hamiltonian_part(q_, p_, args)
+        if self.mass is None:
+            qdot, pdot = hamiltonian_field(H, q, x)
+            if self.dissipation is not None:
+                pdot = pdot + self.dissipation.force(q, qdot, args)
+            return jnp.concatenate([qdot, pdot])
+        c = self.mass.factor(q, args)
+        p = c @ (c.T @ x)
+        qdot, pdot = hamiltonian_field(H, q, p)
+        if self.dissipation is not None:
+            pdot = pdot + self.dissipation.force(q, qdot, args)
+        _, dm_v = jax.jvp(lambda q_: self.mass.matrix(q_, args) @ x, (q,), (qdot,))
+        vdot = jsl.cho_solve((c, True), pdot - dm_v)
+        return jnp.concatenate([qdot, vdot])
+
+
+class SeparableHNN(AbstractContinuousModel):
+    """The separable HNN in z = (q, qdot): H = 1/2 p^T M^-1(q) p + V(q), p = M(q) qdot.
+
+    dH/dp = M^-1 p = qdot, so the model is second order exactly; the momentum equation
+    dp/dt = -dH/dq + Q pushed forward to qdot = M^-1 p gives
+
+        dqdot/dt = M^-1(q) dp/dt + (dM^-1/dt) p,
+
+    with (dM^-1/dt) p one jvp of q -> M^-1(q) p along qdot. p = M qdot is a Cholesky solve
+    with M^-1. (In a canonical scene ``make`` builds :class:`HNN` with a separable H.)
+    """
+
+    second_order: ClassVar[bool] = True
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    hamiltonian_part: SeparableHamiltonian
+    dissipation: Dissipation | None
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
+        self.scene, self.dtype = scene, dtype
+        kh, kd = jr.split(key)
+        features = Features(scene)
+        self.hamiltonian_part = SeparableHamiltonian(
+            features, width, depth, activation, dtype, key=kh
+        )
+        self.dissipation = (
+            Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None
+        )
+
+    def momentum(self, q, v, args):
+        """p = M(q) qdot = (M^-1(q))^-1 qdot."""
+        minv = self.hamiltonian_part.inverse_mass.matrix(q, args)
+        return jsl.cho_solve((jnp.linalg.cholesky(minv), True), v)
+
+    def hamiltonian(self, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        args = as_dtype(args, self.dtype)
+        return self.hamiltonian_part(q, self.momentum(q, v, args), args)
+
+    def acceleration(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        inverse_mass = lambda q_: self.hamiltonian_part.inverse_mass.matrix(q_, args)
+        minv = inverse_mass(q)
+        p = jsl.cho_solve((jnp.linalg.cholesky(minv), True), v)
+        pdot = -jax.grad(self.hamiltonian_part, argnums=0)(q, p, args)
+        if self.dissipation is not None:
+            pdot = pdot + self.dissipation.force(q, v, args)
+        _, dminv_p = jax.jvp(lambda q_: inverse_mass(q_) @ p, (q,), (v,))
+        return minv @ pdot + dminv_p
+
+    def vector_field(self, t, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        return jnp.concatenate([v, self.acceleration(q, v, args)])
+
+
+# --------------------------------------------------------------------------- Lagrangian
+
+
+class LNN(AbstractContinuousModel):
+    """dq/dt = qdot, qddot = (d2L/dqdot2)^-1 (dL/dq - (d2L/dqdot dq) qdot + Q) for a learned
+    L(q, qdot) = MLP(cos q, sin q, qdot, args) (softplus, the LNN seed's initialisation).
+
+    With friction Q = -D(q) qdot the energy E = qdot . dL/dqdot - L has dE/dt = qdot . Q <= 0.
+    """
+
+    second_order: ClassVar[bool] = True
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    solve: str = eqx.field(static=True)
+    eps: float = eqx.field(static=True)
+    features: Features
+    net: MLP
+    dissipation: Dissipation | None
+
+    def __init__(
+        self,
+        scene,
+        width,
+        depth,
+        activation,
+        dtype,
+        *,
+        key,
+        dissipation=False,
+        solve="solve",
+        eps=1e-3,
+        init="lnn",
+    ):
+        self.scene, self.dtype, self.solve, self.eps = scene, dtype, solve, float(eps)
+        kl, kd = jr.split(key)
+        self.features = Features(scene)
+        self.net = MLP(
+            self.features.size(True), 1, width, depth, activation, dtype, key=kl, init=init
+        )
+        self.dissipation = (
+            Dissipation(self.features, width, depth, activation, dtype, key=kd)
+            if dissipation
+            else None
+        )
+
+    def lagrangian(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        return self.net(self.features(q, v, args))[0]
+
+    def energy(self, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        return lagrangian_energy(lambda q_, v_: self.lagrangian(q_, v_, args), q, v)
+
+    def acceleration(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        force = None if self.dissipation is None else self.dissipation.force(q, v, args)
+        return acceleration_from_lagrangian(
+            lambda q_, v_: self.net(self.features(q_, v_, args))[0],
+            q,
+            v,
+            force=force,
+            solve=self.solve,
+            eps=self.eps,
+        )
+
+    def vector_field(self, t, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        return jnp.concatenate([v, self.acceleration(q, v, args)])
+
+
+# --------------------------------------------------------------------------- variational
+
+
+class VIN(AbstractDiscreteModel):
+    """Variational integrator network: velocity Verlet of L = 1/2 v^T M v - U(q).
+
+    M = C C^T a learned constant positive-definite matrix (C starts at the identity), U an
+    MLP. With dissipation a learned constant PSD friction D enters as a trapezoidal discrete
+    Lagrange-d'Alembert force (see :func:`verlet_step`).
+    """
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    features: Features
+    potential: MLP
+    mass: CholeskyNet
+    dissipation: Dissipation | None
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
+        self.scene, self.dtype = scene, dtype
+        self.features = Features(scene)
+        self.potential = MLP(self.features.size(False), 1, width, depth, activation, dtype, key=key)
+        self.mass = CholeskyNet(
+            self.features,
+            width,
+            depth,
+            activation,
+            dtype,
+            key=key,
+            state_dependent=False,
+            eps=MASS_EPS,
+        )
+        self.dissipation = (
+            Dissipation(
+                self.features, width, depth, activation, dtype, key=key, state_dependent=False
+            )
+            if dissipation
+            else None
+        )
+
+    def potential_energy(self, q, args):
+        return self.potential(self.features(q, None, args))[0]
+
+    def lagrangian(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        m = self.mass.matrix(q, args)
+        return 0.5 * v @ (m @ v) - self.potential_energy(q, args)
+
+    def energy(self, z, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        args = as_dtype(args, self.dtype)
+        m = self.mass.matrix(q, args)
+        return 0.5 * v @ (m @ v) + self.potential_energy(q, args)
+
+    def step(self, z, dt, args):
+        q, v = _split(as_dtype(z, self.dtype))
+        args, dt = as_dtype(args, self.dtype), as_dtype(dt, self.dtype)
+        grad_U = jax.grad(lambda q_: self.potential_energy(q_, args))
+        damping = None if self.dissipation is None else self.dissipation.matrix(q, args)
+        q1, v1 = verlet_step(grad_U, self.mass.factor(q, args), q, v, dt, damping)
+        return jnp.concatenate([q1, v1])
+
+
+class ImplicitVIN(AbstractDiscreteModel):
+    """Variational integrator network for a general L(q, v) = 1/2 |v|^2 + MLP(q, v, args).
+
+    One step is the midpoint-rule discrete Euler-Lagrange equation, solved by Newton with
+    implicit differentiation (:func:`midpoint_variational_step`); the state velocity is mapped
+    to and from the discrete momenta with the continuous Legendre map. The 1/2 |v|^2 prior
+    keeps d2L/dv2 near the identity at initialisation, so both Newton solves are well posed;
+    the MLP can learn any correction. With dissipation, Q = -D(q) v (learned PSD D(q)).
+    """
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    newton_steps: int = eqx.field(static=True)
+    features: Features
+    net: MLP
+    dissipation: Dissipation | None
+
+    def __init__(
+        self, scene, width, depth, activation, dtype, *, key, dissipation=False, newton_steps=20
+    ):
+        self.scene, self.dtype, self.newton_steps = scene, dtype, int(newton_steps)
+        kl, kd = jr.split(key)
+        self.features = Features(scene)
+        self.net = MLP(self.features.size(True), 1, width, depth, activation, dtype, key=kl)
+        self.dissipation = (
+            Dissipation(self.features, width, depth, activation, dtype, key=kd)
+            if dissipation
+            else None
+        )
+
+    def lagrangian(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        return 0.5 * (v @ v) + self.net(self.features(q, v, args))[0]
+
+    def step_with_status(self, z, dt, args):
+        """(z_{n+1}, converged): the step and whether both Newton solves converged."""
+        q, v = _split(as_dtype(z, self.dtype))
+        args, dt = as_dtype(args, self.dtype), as_dtype(dt, self.dtype)
+        L = lambda q_, v_: 0.5 * (v_ @ v_) + self.net(self.features(q_, v_, args))[0]
+        force = None
+        if self.dissipation is not None:
+            force = lambda q_, v_: self.dissipation.force(q_, v_, args)
+        q1, v1, ok = midpoint_variational_step(L, q, v, dt, force, self.newton_steps)
+        return jnp.concatenate([q1, v1]), ok
+
+    def step(self, z, dt, args):
+        return self.step_with_status(z, dt, args)[0]
+
+
+# --------------------------------------------------------------------------- registry
+
+
+def _positive_float(name):
+    def check(x):
+        if isinstance(x, bool) or not isinstance(x, int | float) or not x >= 0:
+            raise ValueError(f"option {name} must be a number >= 0, got {x!r}")
+        return float(x)
+
+    return check
+
+
+def _choice(name, allowed):
+    def check(x):
+        if x not in allowed:
+            raise ValueError(f"option {name} must be one of {allowed}, got {x!r}")
+        return x
+
+    return check
+
+
+def _positive_int(name):
+    def check(x):
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            raise ValueError(f"option {name} must be an int >= 1, got {x!r}")
+        return x
+
+    return check
+
+
+def _build_hnn(scene, *a, key, dissipation, separable=False, **kw):
+    if separable and not scene.canonical:
+        return SeparableHNN(scene, *a, key=key, dissipation=dissipation)
+    return HNN(scene, *a, key=key, separable=separable, dissipation=dissipation)
+
+
+# name -> (builder, {option: validator}, structured (takes dissipation), needs velocities,
+#          default activation)
+_REGISTRY = {
+    "node": (lambda s, *a, key, dissipation: NeuralODE(s, *a, key=key), {}, False, False, "tanh"),
+    "node_so": (
+        lambda s, *a, key, dissipation: SecondOrderODE(s, *a, key=key),
+        {},
+        False,
+        False,
+        "tanh",
+    ),
+    "hnn": (_build_hnn, {}, True, False, "tanh"),
+    "hnn_so": (
+        lambda s, *a, key, dissipation: _build_hnn(
+            s, *a, key=key, separable=True, dissipation=dissipation
+        ),
+        {},
+        True,
+        False,
+        "tanh",
+    ),
+    "node_symreg": (
+        lambda s, *a, key, dissipation, weight=1.0: NeuralODE(s, *a, key=key, weight=weight),
+        {"weight": _positive_float("weight")},
+        False,
+        False,
+        "tanh",
+    ),
+    "lnn": (
+        LNN,
+        {
+            "solve": _choice("solve", SOLVES),
+            "eps": _positive_float("eps"),
+            "init": _choice("init", INITS),
+        },
+        True,
+        True,
+        "softplus",
+    ),
+    "vin": (VIN, {}, True, True, "tanh"),
+    "vin_implicit": (
+        ImplicitVIN,
+        {"newton_steps": _positive_int("newton_steps")},
+        True,
+        True,
+        "tanh",
+    ),
+    "resnet": (lambda s, *a, key, dissipation: ResNet(s, *a, key=key), {}, False, False, "tanh"),
+}
+
+
+def available() -> list[str]:
+    """Names of the registered models."""
+    return list(_REGISTRY)
+
+
+def make(
+    name: str,
+    scene: Scene,
+    *,
+    key,
+    width: int = 256,
+    depth: int = 2,
+    activation: str | None = None,
+    dtype: str = "float32",
+    dissipation: bool | None = None,
+    **options,
+):
+    """Build the model ``name`` for ``scene``.
+
+    ``activation`` None takes the model's default (softplus for lnn, as in the LNN seed; tanh
+    otherwise). ``dissipation`` None follows ``scene.damped`` for the structured models (hnn,
+    hnn_so, lnn, vin, vin_implicit); False forces the plain variant; free models ignore it.
+    """
+    if name not in _REGISTRY:
+        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=1)
+        hint = f" (closest: {close[0]!r})" if close else ""
+        raise ValueError(f"unknown model {name!r}{hint}; allowed: {available()}")
+    builder, allowed, structured, needs_velocity, default_activation = _REGISTRY[name]
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a models.Scene, got {type(scene).__name__}")
+    for field, value in (("width", width), ("depth", depth)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{field} must be an int >= 1, got {value!r}")
+    activation = default_activation if activation is None else activation
+    if activation not in ACTIVATIONS:
+        raise ValueError(f"activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}")
+    if dtype not in DTYPES:
+        raise ValueError(f"dtype must be one of {DTYPES}, got {dtype!r}")
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {unknown} for model {name!r}; allowed: {sorted(allowed)}"
+        )
+    options = {k: allowed[k](v) for k, v in options.items()}
+    if dissipation is not None and not isinstance(dissipation, bool):
+        raise ValueError(f"dissipation must be None, True or False, got {dissipation!r}")
+    if needs_velocity and scene.canonical:
+        raise ValueError(f"model {name!r} needs velocity coordinates (Scene.canonical=False)")
+    dissipation = (scene.damped if dissipation is None else dissipation) and structured
+    return builder(
+        scene, width, depth, activation, dtype, key=key, dissipation=dissipation, **options
+    )
+
+
+def n_parameters(model) -> int:
+    """The number of trainable scalars of a model."""
+    leaves = jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_inexact_array))
+    return int(sum(x.size for x in leaves))
