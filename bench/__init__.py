@@ -3,3 +3,43 @@
 from ._env import configure_threads as _configure_threads
 
 _configure_threads()
+
+from . import _experiments as experiments  # noqa: E402
+from . import _metrics as metrics  # noqa: E402
+from ._experiments import (  # noqa: E402
+    PROFILES,
+    Experiment,
+    RunConfig,
+    available,
+    expand,
+    get,
+    register,
+)
+from ._runner import execute_run, sweep  # noqa: E402
+from ._store import aggregate, load_curves, load_runs, runs_of  # noqa: E402
+
+__all__ = [
+    "PROFILES",
+    "Experiment",
+    "RunConfig",
+    "aggregate",
+    "available",
+    "execute_run",
+    "expand",
+    "experiments",
+    "get",
+    "load_curves",
+    "load_runs",
+    "metrics",
+    "register",
+    "runs_of",
+    "sweep",
+]
+
+try:  # the trainer lands separately; re-export it when it is there
+    from ._train import TrainConfig, TrainResult, train  # noqa: E402, F401
+
+    __all__ += ["TrainConfig", "TrainResult", "train"]
+except ModuleNotFoundError as _e:  # pragma: no cover
+    if _e.name != "bench._train":
+        raise

@@ -1,16 +1,310 @@
-"""Command line: ``python -m bench <verb>`` (placeholder until the runner lands)."""
+"""Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
+
+Verbs: list, run, sweep, figures, report, perf, bench. A bad name or value prints one line
+``error: ...`` on stderr and exits with code 2, without a traceback.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import json
+import math
+import sys
+from pathlib import Path
+
+from ._experiments import (
+    PROFILES,
+    RunConfig,
+    check_choice,
+    field_names,
+    profile_defaults,
+)
+
+
+class UsageError(Exception):
+    """A bad command-line input: reported in one line, exit code 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, no usage dump
+        raise UsageError(message)
+
+
+def _int(name):
+    def parse(s):
+        try:
+            return int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be an integer; got {s!r}") from None
+
+    return parse
+
+
+def _float(name):
+    def parse(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number; got {s!r}") from None
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} must be finite; got {s!r}")
+        return v
+
+    return parse
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m bench", description=__doc__)
+    p.add_argument("--results", default="results", help="results directory (default results/)")
+    sub = p.add_subparsers(dest="verb", required=True, parser_class=_Parser)
+
+    sub.add_parser("list", help="systems, models, experiments, profiles")
+
+    r = sub.add_parser("run", help="one ad-hoc run: print its metrics and store its row")
+    r.add_argument("--system", required=True)
+    r.add_argument("--k", type=_int("k"), default=None)
+    r.add_argument("--friction", type=_float("friction"), default=0.0)
+    r.add_argument("--model", default="node")
+    r.add_argument("--seed", type=_int("seed"), default=0)
+    r.add_argument("--profile", default="smoke", help=f"one of {', '.join(PROFILES)}")
+    r.add_argument("--width", type=_int("width"))
+    r.add_argument("--depth", type=_int("depth"))
+    r.add_argument("--steps", type=_int("steps"))
+    r.add_argument("--lr", type=_float("lr"))
+    r.add_argument("--coordinates")
+    r.add_argument("--integrator", help="train and eval integrator")
+    r.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="any other RunConfig field (JSON value), repeatable",
+    )
+
+    s = sub.add_parser("sweep", help="run an experiment's runs not yet stored")
+    s.add_argument("experiment", nargs="?")
+    s.add_argument("--all", action="store_true", help="every registered experiment")
+    _sweep_opts(s, default_profile="quick")
+
+    sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
+    sub.add_parser("report", help="write results/REPORT.md")
+    sub.add_parser("perf", help="performance measurements (bench._perf)")
+
+    b = sub.add_parser("bench", help="sweep every experiment, then figures, then report")
+    _sweep_opts(b, default_profile="quick")
+    return p
+
+
+def _sweep_opts(p, default_profile):
+    p.add_argument("--profile", default=default_profile, help=f"one of {', '.join(PROFILES)}")
+    p.add_argument("--executor", default="local", help="local (default) or ray")
+    p.add_argument("--address", default=None, help="Ray cluster address (ray executor)")
+    p.add_argument(
+        "--workers",
+        type=_int("workers"),
+        default=1,
+        help="local processes (default 1: in-process; 0: one per core)",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _check_sweep_args(args):
+    check_choice("profile", args.profile, list(PROFILES))
+    check_choice("executor", args.executor, ["local", "ray"])
+    if args.workers < 0:
+        raise ValueError(f"workers must be an integer >= 0; got {args.workers}")
+
+
+def _config_from_args(args) -> RunConfig:
+    import models
+    import systems
+
+    check_choice("profile", args.profile, list(PROFILES))
+    check_choice("system", args.system, systems.available())
+    check_choice("model", args.model, models.available())
+    base, _ = profile_defaults(args.profile)
+    kw = dict(base)
+    kw.update(system=args.system, k=args.k, friction=args.friction, model=args.model)
+    kw["seed"] = args.seed
+    for name in ("width", "depth", "steps", "lr", "coordinates"):
+        if getattr(args, name) is not None:
+            kw[name] = getattr(args, name)
+    if args.integrator is not None:
+        kw["train_integrator"] = kw["eval_integrator"] = args.integrator
+    names = field_names()
+    for item in args.set:
+        if "=" not in item:
+            raise ValueError(f"--set expects FIELD=VALUE; got {item!r}")
+        key, value = item.split("=", 1)
+        check_choice("RunConfig field", key, names)
+        try:
+            kw[key] = json.loads(value)
+        except ValueError:
+            kw[key] = value
+    cfg = RunConfig(**kw).validate()
+    # Surface the system's own ValueErrors (e.g. a parameter it does not take) before training.
+    systems.make(cfg.system, **cfg.system_kwargs())
+    return cfg
+
+
+def _print_row(row: dict) -> None:
+    keys = [
+        "status",
+        "error",
+        "diverged_step",
+        "rollout_error",
+        "energy_violation",
+        "mse",
+        "valid_time",
+        "floor",
+        "rollout_error_ref",
+        "energy_pct_max_pe",
+        "symplectic_error",
+        "train_seconds",
+        "compile_seconds",
+        "rollout_seconds",
+        "nfe",
+        "n_params",
+        "config_hash",
+    ]
+    for k in keys:
+        v = row.get(k)
+        if v is None and k in ("error", "diverged_step"):
+            continue
+        if isinstance(v, float):
+            v = f"{v:.4g}"
+        print(f"{k:>18}: {v}")
+
+
+def _optional_entry(module: str, entry: str, what: str):
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as e:
+        if e.name != module:
+            raise
+        print(f"{what}: {module} is not there yet; nothing to do")
+        return None
+    return getattr(mod, entry)
+
+
+def _cmd_list(args) -> int:
+    import models
+    import systems
+
+    from . import _experiments as E
+
+    print("systems:     " + ", ".join(systems.available()))
+    print("models:      " + ", ".join(models.available()))
+    print("experiments: " + (", ".join(E.available()) or "(none registered)"))
+    print("profiles:    " + ", ".join(PROFILES))
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from . import _runner
+
+    cfg = _config_from_args(args)
+    row = _runner.sweep(
+        [cfg], args.results, experiment="adhoc", profile=args.profile, progress=False
+    )
+    if not row:  # already stored: show the stored row
+        from . import _store
+
+        row = [r for r in _store.read_rows(args.results) if r["config_hash"] == cfg.config_hash]
+        print("(already stored; delete its row file to rerun)")
+    _print_row(row[0])
+    return 0 if row[0]["status"] != "failed" else 1
+
+
+def _sweep_names(args) -> list[str]:
+    from . import _experiments as E
+
+    if getattr(args, "all", False) or args.verb == "bench":
+        return E.available()
+    if not args.experiment:
+        raise UsageError("sweep needs an experiment name or --all")
+    E.get(args.experiment)  # ValueError with the allowed names
+    return [args.experiment]
+
+
+def _do_sweep(args, names) -> int:
+    from . import _runner
+
+    _check_sweep_args(args)
+    if not names:
+        print("no experiments yet")
+        return 0
+    res = _runner.run_experiments(
+        names,
+        args.profile,
+        args.results,
+        executor=args.executor,
+        workers=None if args.workers == 0 else args.workers,
+        address=args.address,
+        progress=not args.no_progress,
+    )
+    for name, rows in res.items():
+        counts = {}
+        for r in rows:
+            counts[r["status"]] = counts.get(r["status"], 0) + 1
+        print(f"{name}: {len(rows)} new runs {counts}")
+    return 0
+
+
+def _cmd_figures(args) -> int:
+    fn = _optional_entry("bench._figures", "make_figures", "figures")
+    if fn is not None:
+        fn(Path(args.results))
+    return 0
+
+
+def _cmd_report(args) -> int:
+    fn = _optional_entry("bench._report", "write_report", "report")
+    if fn is not None:
+        fn(Path(args.results))
+    return 0
+
+
+def _cmd_perf(args) -> int:
+    fn = _optional_entry("bench._perf", "main", "perf")
+    if fn is not None:
+        out = fn()
+        return int(out or 0)
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    names = _sweep_names(args)
+    if not names:
+        _check_sweep_args(args)
+        print("no experiments yet")
+        return 0
+    _do_sweep(args, names)
+    _cmd_figures(args)
+    _cmd_report(args)
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench", description=__doc__)
-    sub = parser.add_subparsers(dest="verb", required=True)
-    b = sub.add_parser("bench", help="run every experiment, then figures and report")
-    b.add_argument("--profile", default="quick")
-    args = parser.parse_args(argv)
-    if args.verb == "bench":
-        print("no experiments yet")
-    return 0
+    """Entry point; returns the exit code (2 for bad input)."""
+    try:
+        args = _parser().parse_args(argv)
+        if args.verb == "list":
+            return _cmd_list(args)
+        if args.verb == "run":
+            return _cmd_run(args)
+        if args.verb == "sweep":
+            return _do_sweep(args, _sweep_names(args))
+        return {
+            "figures": _cmd_figures,
+            "report": _cmd_report,
+            "perf": _cmd_perf,
+            "bench": _cmd_bench,
+        }[args.verb](args)
+    except (UsageError, ValueError) as e:
+        print(f"error: {str(e).splitlines()[0] if str(e) else type(e).__name__}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

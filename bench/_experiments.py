@@ -1,0 +1,386 @@
+"""Experiments as data: a run is a frozen :class:`RunConfig`, an experiment a product of axes.
+
+An :class:`Experiment` names the RunConfig fields it varies (``axes``, expanded as a Cartesian
+product), the ones it fixes (``fixed``) and per-profile overrides. :func:`expand` turns it into
+the list of runs of one profile. Precedence, lowest first::
+
+    RunConfig defaults < PROFILES[profile] < exp.fixed < exp.profile_overrides[profile] < axes
+
+(an override whose key is an axis replaces that axis' values; ``"seeds"`` replaces the seeds).
+
+A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
+of every field, ``train_hash`` the same over every field except the ``eval_*`` ones, so runs
+that differ only in how they are evaluated share one training. Experiment and profile names
+are not part of either hash: experiments that expand to the same run share it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import hashlib
+import importlib
+import itertools
+import json
+import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+INTEGRATORS = ("euler", "rk4", "rk4_38", "leapfrog", "adaptive")
+COORDINATES = ("velocity", "momentum")
+LOSSES = ("l1", "l2")
+DTYPES = ("float32", "float64")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One training-and-evaluation run; flat so that every field is a column of the results."""
+
+    system: str
+    k: int | None = None
+    friction: float = 0.0
+    system_params: tuple = ()
+    model: str = "node"
+    dissipation: bool | None = None
+    model_options: tuple = ()
+    width: int = 256
+    depth: int = 2
+    activation: str = "tanh"
+    coordinates: str = "velocity"
+    random_args: bool = False
+    noise: float = 0.0
+    n_generated: int = 1000
+    n_train: int = 800
+    chunk: int = 5
+    dt: float = 0.03
+    n_test: int = 200
+    test_chunks: int = 20
+    steps: int = 8000
+    batch: int = 200
+    lr: float = 5e-3
+    loss: str = "l2"
+    train_integrator: str = "rk4_38"
+    train_substeps: int = 1
+    eval_integrator: str = "rk4_38"
+    eval_substeps: int = 1
+    eval_rtol: float = 1e-6
+    dtype: str = "float32"
+    seed: int = 0
+
+    def __post_init__(self):
+        # Canonical forms, so that equal runs hash equally however they were written.
+        for name in ("system_params", "model_options"):
+            value = getattr(self, name)
+            if isinstance(value, Mapping):
+                value = tuple(value.items())
+            object.__setattr__(self, name, tuple(sorted((str(a), b) for a, b in value)))
+        if self.k is not None:
+            object.__setattr__(self, "k", _as_int(self.k, "k"))
+        for name in ("friction", "noise", "dt", "lr", "eval_rtol"):
+            object.__setattr__(self, name, _as_float(getattr(self, name), name))
+        for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
+            object.__setattr__(self, name, _as_int(getattr(self, name), name))
+        for name in ("test_chunks", "steps", "batch", "train_substeps", "eval_substeps", "seed"):
+            object.__setattr__(self, name, _as_int(getattr(self, name), name))
+
+    def validate(self) -> RunConfig:
+        """Check values that need no registry; raise ValueError naming what is allowed."""
+        if self.k is not None and self.k < 1:
+            raise ValueError(f"k must be an integer >= 1; got {self.k}")
+        for name in ("friction", "noise"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0; got {v}")
+        for name in ("dt", "lr", "eval_rtol"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a finite number > 0; got {v}")
+        if self.seed < 0:
+            raise ValueError(f"seed must be an integer >= 0; got {self.seed}")
+        for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1; got {getattr(self, name)}")
+        for name in ("test_chunks", "steps", "batch", "train_substeps", "eval_substeps"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1; got {getattr(self, name)}")
+        if self.n_train > self.n_generated:
+            raise ValueError(
+                f"n_train ({self.n_train}) must be <= n_generated ({self.n_generated})"
+            )
+        check_choice("train_integrator", self.train_integrator, INTEGRATORS)
+        check_choice("eval_integrator", self.eval_integrator, INTEGRATORS)
+        check_choice("coordinates", self.coordinates, COORDINATES)
+        check_choice("loss", self.loss, LOSSES)
+        check_choice("dtype", self.dtype, DTYPES)
+        return self
+
+    def to_dict(self) -> dict:
+        """Every field, JSON-ready (tuples of pairs become lists)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping) -> RunConfig:
+        names = field_names()
+        kw = {a: b for a, b in d.items() if a in names}
+        for name in ("system_params", "model_options"):
+            if name in kw:
+                v = kw[name]
+                if isinstance(v, str):
+                    v = json.loads(v)
+                kw[name] = tuple(tuple(p) for p in v)
+        for name in ("k", "dissipation"):
+            if name in kw and _is_missing(kw[name]):
+                kw[name] = None
+        if "dissipation" in kw and kw["dissipation"] is not None:
+            kw["dissipation"] = bool(kw["dissipation"])
+        return cls(**kw)
+
+    def system_kwargs(self) -> dict:
+        """Keyword arguments of ``systems.make`` for this run."""
+        kw = dict(self.system_params)
+        if self.k is not None:
+            kw["k"] = self.k
+        if self.friction:
+            kw["friction"] = self.friction
+        return kw
+
+    @property
+    def config_hash(self) -> str:
+        """sha256 (16 hex digits) of the canonical JSON of every field."""
+        return _hash(self.to_dict())
+
+    @property
+    def train_hash(self) -> str:
+        """sha256 (16 hex digits) of every field except the ``eval_*`` ones."""
+        return _hash({a: b for a, b in self.to_dict().items() if not a.startswith("eval_")})
+
+
+def _is_missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+def _as_int(v, name):
+    if isinstance(v, bool):
+        raise ValueError(f"{name} must be an integer; got {v!r}")
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer; got {v!r}") from None
+    if not f.is_integer():
+        raise ValueError(f"{name} must be an integer; got {v!r}")
+    return int(f)
+
+
+def _as_float(v, name):
+    if isinstance(v, bool):
+        raise ValueError(f"{name} must be a number; got {v!r}")
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number; got {v!r}") from None
+
+
+def _hash(d: Mapping) -> str:
+    text = json.dumps(d, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def field_names() -> tuple[str, ...]:
+    """The RunConfig field names (the columns every run row carries)."""
+    return tuple(f.name for f in dataclasses.fields(RunConfig))
+
+
+def check_choice(what: str, value, allowed: Sequence[str]) -> None:
+    """Raise ``ValueError("unknown <what> 'x'; allowed: ... (did you mean 'y'?)")``."""
+    allowed = list(allowed)
+    if value in allowed:
+        return
+    msg = f"unknown {what} {value!r}; allowed: {', '.join(map(str, allowed))}"
+    close = difflib.get_close_matches(str(value), [str(a) for a in allowed], n=1)
+    if close:
+        msg += f" (did you mean {close[0]!r}?)"
+    raise ValueError(msg)
+
+
+# ------------------------------------------------------------------------------- profiles
+# RunConfig defaults per profile, plus "seeds". The experiments tune them further through
+# their profile_overrides.
+PROFILES: dict[str, dict[str, object]] = {
+    "smoke": {
+        "n_generated": 20,
+        "n_train": 16,
+        "n_test": 4,
+        "test_chunks": 4,
+        "width": 16,
+        "steps": 20,
+        "batch": 8,
+        "seeds": (0,),
+    },
+    "quick": {
+        "n_generated": 250,
+        "n_train": 200,
+        "n_test": 40,
+        "test_chunks": 20,
+        "width": 128,
+        "steps": 1000,
+        "batch": 100,
+        "seeds": (0, 1, 2),
+    },
+    "paper": {
+        "n_generated": 1000,
+        "n_train": 800,
+        "n_test": 200,
+        "test_chunks": 20,
+        "width": 256,
+        "steps": 8000,
+        "batch": 200,
+        "seeds": (0, 1, 2, 3, 4),
+    },
+}
+
+
+# ----------------------------------------------------------------------------- experiments
+@dataclass(frozen=True)
+class Experiment:
+    """A named family of runs: the product of ``axes`` over the profile's seeds."""
+
+    name: str
+    title: str
+    axes: Mapping[str, Sequence] = field(default_factory=dict)
+    fixed: Mapping[str, object] = field(default_factory=dict)
+    profile_overrides: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
+    include: Callable[[RunConfig], bool] | None = None
+    claim: int | None = None
+
+    def __post_init__(self):
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError("an experiment needs a non-empty string name")
+        names = set(field_names())
+        for what, keys in (("axes", self.axes), ("fixed", self.fixed)):
+            for key in keys:
+                if key not in names:
+                    check_choice(f"RunConfig field in {self.name}.{what}", key, sorted(names))
+        for axis, values in self.axes.items():
+            if isinstance(values, str) or len(list(values)) == 0:
+                raise ValueError(f"{self.name}.axes[{axis!r}] must be a non-empty sequence")
+        for prof, over in self.profile_overrides.items():
+            check_choice(f"profile in {self.name}.profile_overrides", prof, list(PROFILES))
+            for key in over:
+                if key not in names and key != "seeds":
+                    check_choice(
+                        f"RunConfig field in {self.name}.profile_overrides[{prof!r}]",
+                        key,
+                        sorted(names | {"seeds"}),
+                    )
+        object.__setattr__(self, "axes", MappingProxyType(dict(self.axes)))
+        object.__setattr__(self, "fixed", MappingProxyType(dict(self.fixed)))
+
+
+_REGISTRY: dict[str, Experiment] = {}
+_LOADED = False
+# Modules that declare experiments by calling register() at import; missing ones are skipped,
+# so the registry grows as the team's modules land. DECON_EXTRA_EXPERIMENTS adds more
+# (comma-separated module names), e.g. for the tests.
+_BUILTIN_MODULES = ("bench._paper", "bench._tradeoff", "bench._stability")
+
+
+def register(exp: Experiment, *, replace: bool = False) -> Experiment:
+    """Add an experiment to the registry (ValueError if the name is taken, unless replace)."""
+    if not isinstance(exp, Experiment):
+        raise ValueError(f"register expects an Experiment; got {type(exp).__name__}")
+    if exp.name in _REGISTRY and not replace and _REGISTRY[exp.name] != exp:
+        raise ValueError(f"experiment {exp.name!r} is already registered")
+    _REGISTRY[exp.name] = exp
+    return exp
+
+
+def _load() -> None:
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    extra = [m.strip() for m in os.environ.get("DECON_EXTRA_EXPERIMENTS", "").split(",")]
+    for mod in (*_BUILTIN_MODULES, *[m for m in extra if m]):
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as e:
+            if e.name != mod:  # the module exists but something it imports does not
+                raise
+
+
+def available() -> list[str]:
+    """Names of the registered experiments, sorted."""
+    _load()
+    return sorted(_REGISTRY)
+
+
+def get(name: str) -> Experiment:
+    """The registered experiment ``name`` (ValueError naming the registered ones)."""
+    _load()
+    if name not in _REGISTRY:
+        check_choice("experiment", name, sorted(_REGISTRY) or ["(none registered)"])
+    return _REGISTRY[name]
+
+
+def profile_defaults(profile: str) -> tuple[dict, tuple[int, ...]]:
+    """(RunConfig field defaults, seeds) of a profile."""
+    check_choice("profile", profile, list(PROFILES))
+    d = dict(PROFILES[profile])
+    seeds = tuple(d.pop("seeds", (0,)))
+    return d, seeds
+
+
+def expand(exp: Experiment | str, profile: str = "quick") -> list[RunConfig]:
+    """The runs of ``exp`` under ``profile``: product of the axes x seeds, filtered, unique.
+
+    Combinations rejected by ``exp.include`` or by :func:`valid` (e.g. leapfrog on a
+    first-order model) are dropped; runs are unique by ``config_hash``, in expansion order.
+    """
+    exp = get(exp) if isinstance(exp, str) else exp
+    base, seeds = profile_defaults(profile)
+    base.update(exp.fixed)
+    axes = dict(exp.axes)
+    for key, value in exp.profile_overrides.get(profile, {}).items():
+        if key == "seeds":
+            seeds = tuple(value)
+        elif key in axes:
+            axes[key] = list(value)
+        else:
+            base[key] = value
+    if "seed" not in axes:
+        axes["seed"] = seeds
+    keys = list(axes)
+    out, seen = [], set()
+    for combo in itertools.product(*(list(axes[k]) for k in keys)):
+        cfg = RunConfig(**{**base, **dict(zip(keys, combo, strict=True))})
+        if not valid(cfg) or (exp.include is not None and not exp.include(cfg)):
+            continue
+        if cfg.config_hash in seen:
+            continue
+        seen.add(cfg.config_hash)
+        out.append(cfg)
+    return out
+
+
+def valid(cfg: RunConfig) -> bool:
+    """Whether a combination makes sense: leapfrog needs a second-order continuous model."""
+    if "leapfrog" in (cfg.train_integrator, cfg.eval_integrator):
+        return _second_order(cfg.model)
+    return True
+
+
+def _second_order(model: str) -> bool:
+    try:
+        import models
+    except ImportError:  # pragma: no cover - models not installed yet
+        return True
+    cls = getattr(models, "model_class", None)
+    if cls is not None:
+        try:
+            return bool(getattr(cls(model), "second_order", False))
+        except Exception:
+            return False
+    # Without a class lookup, fall back to the naming convention of the zoo.
+    return model.endswith("_so") or model in ("hnn_so", "lnn")

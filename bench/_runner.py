@@ -1,0 +1,493 @@
+"""Execute runs and sweeps: data -> model -> training -> test rollouts -> metrics -> rows.
+
+``execute_run(config)`` never raises: every outcome is a row with ``status`` ``ok``,
+``diverged`` (training went non-finite at ``diverged_step``) or ``failed`` (``error`` holds the
+exception's message, the traceback is in the run's artifact directory).
+
+Caches under ``$DECON_CACHE`` (default ``./.cache/decon-bench``, git-ignored):
+
+- ``params/<train_hash>/model.eqx`` + ``train.json`` (with the sha256 of ``model.eqx``): runs
+  that differ only in evaluation settings train once; a params file whose checksum does not
+  match is ignored and the model retrained;
+- ``runs/<config_hash>/``: ``config.json``, ``metrics.json``, ``curves.npz`` (per trajectory
+  and time), ``traceback.txt`` for failures;
+- ``floors/<dataset hash>.json``: the perturbed-ground-truth floor of a test set.
+
+``sweep(configs, results_dir, ...)`` skips the config hashes already stored, executes the rest
+with the local executor (in-process, or a spawn pool whose workers each get cores / workers
+XLA threads) or Ray, and writes each row as it arrives (see ``bench._store``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import sys
+import time
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from . import _metrics as M
+from . import _store
+from ._env import cpu_count
+from ._experiments import RunConfig
+
+EXECUTORS = ("local", "ray")
+# Test states used for the symplectic error (a Jacobian per state: keep it small).
+_SYMPLECTIC_STATES = 64
+
+
+def default_cache_root() -> Path:
+    """$DECON_CACHE, or ./.cache/decon-bench."""
+    return Path(os.environ.get("DECON_CACHE", Path(".cache") / "decon-bench"))
+
+
+def artifact_dir(config_hash: str, cache_root=None) -> Path:
+    """Per-run artifacts: ``<cache>/runs/<config_hash>/``."""
+    return Path(cache_root or default_cache_root()) / "runs" / config_hash
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _write_json(path: Path, obj) -> None:
+    _store._atomic_write_bytes(path, json.dumps(_store._jsonable(obj), indent=1).encode())
+
+
+def base_row(config: RunConfig) -> dict:
+    """The row fields every run has, before any computation."""
+    row = config.to_dict()
+    row.update(
+        config_hash=config.config_hash,
+        train_hash=config.train_hash,
+        status="failed",
+        diverged_step=None,
+        error=None,
+    )
+    return row
+
+
+# -------------------------------------------------------------------------------- one run
+def _build(config: RunConfig, cache_root: Path):
+    import jax
+
+    import models
+    import systems
+
+    system = systems.make(config.system, **config.system_kwargs())
+    dcfg = systems.DatasetConfig(
+        system=config.system,
+        system_params=tuple(sorted(config.system_kwargs().items())),
+        n_generated=config.n_generated,
+        n_train=config.n_train,
+        chunk=config.chunk,
+        dt=config.dt,
+        n_test=config.n_test,
+        test_chunks=config.test_chunks,
+        noise=config.noise,
+        coordinates=config.coordinates,
+        random_args=config.random_args,
+        seed=config.seed,
+    )
+    data = systems.make_dataset(dcfg, cache_dir=cache_root)
+    scene = models.Scene(
+        dof=system.dof,
+        angular=tuple(system.angular),
+        n_args=system.n_args if config.random_args else 0,
+        damped=config.friction > 0,
+        canonical=config.coordinates == "momentum",
+    )
+    model = models.make(
+        config.model,
+        scene,
+        key=jax.random.PRNGKey(config.seed),
+        width=config.width,
+        depth=config.depth,
+        activation=config.activation,
+        dtype=config.dtype,
+        dissipation=config.dissipation,
+        **dict(config.model_options),
+    )
+    return system, data, scene, model
+
+
+def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
+    """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
+    import equinox as eqx
+
+    import models
+
+    from ._train import TrainConfig, train
+
+    pdir = Path(cache_root) / "params" / config.train_hash
+    pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
+    if pfile.exists() and meta_file.exists():
+        try:
+            meta = json.loads(meta_file.read_text())
+            if meta.get("sha256") == _sha256(pfile):
+                loaded = eqx.tree_deserialise_leaves(pfile, like=model)
+                meta["train_cached"] = True
+                return loaded, meta
+        except Exception:  # a corrupt cache entry: retrain below
+            pass
+    tcfg = TrainConfig(
+        steps=config.steps,
+        batch=config.batch,
+        lr=config.lr,
+        loss=config.loss,
+        integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
+        dtype=config.dtype,
+        seed=config.seed,
+    )
+    res = train(model, data, tcfg, progress=progress)
+    losses = np.asarray(res.losses, dtype=np.float64)
+    meta = {
+        "status": res.status,
+        "diverged_step": res.diverged_step,
+        "train_seconds": float(res.train_seconds),
+        "compile_seconds": float(res.compile_seconds),
+        "steps_done": int(res.steps_done),
+        "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
+    }
+    pdir.mkdir(parents=True, exist_ok=True)
+    tmp = pdir / f".tmp-{os.getpid()}.eqx"
+    eqx.tree_serialise_leaves(tmp, res.model)
+    os.replace(tmp, pfile)
+    meta["sha256"] = _sha256(pfile)
+    _write_json(meta_file, meta)
+    np.save(pdir / "losses.npy", losses)
+    meta["train_cached"] = False
+    return res.model, meta
+
+
+def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
+    path = Path(cache_root) / "floors" / f"{data.config.hash()}.json"
+    try:
+        return float(json.loads(path.read_text())["floor"])
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    args = data.args_test if config.random_args else None
+    value = M.perturbed_floor(
+        system, data.z_test, data.ts_test, args, key=config.seed, coordinates=config.coordinates
+    )
+    _write_json(path, {"floor": value})
+    return value
+
+
+def _evaluate(config, system, data, model, cache_root):
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    import models
+
+    integ = models.Integrator(
+        config.eval_integrator, substeps=config.eval_substeps, rtol=config.eval_rtol
+    )
+    dtype = jnp.dtype(config.dtype)
+    z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
+    ts = jnp.asarray(data.ts_test, dtype=dtype)
+    args = jnp.asarray(data.args_test, dtype=dtype) if config.random_args else None
+
+    @eqx.filter_jit
+    def roll(m, z0s, ts, args):
+        return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
+
+    t0 = time.perf_counter()
+    jax.block_until_ready(roll(model, z0s, ts, args))  # compile + first run
+    t1 = time.perf_counter()
+    pred, stats = jax.block_until_ready(roll(model, z0s, ts, args))
+    t2 = time.perf_counter()
+    rollout_seconds = t2 - t1
+    zhat = np.asarray(pred, dtype=np.float64)
+    z = data.z_test
+    angular = tuple(system.angular)
+    h_args = data.args_test if config.random_args else None
+
+    err_t = M.relative_error(zhat, z, angular)
+    h_true = M.energies(system, z, h_args, config.coordinates)
+    h_pred = M.energies(system, zhat, h_args, config.coordinates)
+    ev_t = M.energy_violation_curve(h_pred, h_true)
+    vpt = M.valid_prediction_time(err_t, data.ts_test)
+    finite = bool(np.all(np.isfinite(zhat)))
+
+    states = z.reshape(-1, z.shape[-1])
+    pick = np.linspace(0, len(states) - 1, min(_SYMPLECTIC_STATES, len(states))).astype(int)
+    s_args = None
+    if config.random_args:
+        s_args = jnp.asarray(np.repeat(data.args_test, z.shape[1], axis=0)[pick], dtype=dtype)
+    try:
+        nfe = float(np.mean(np.asarray(stats["nfe"])))
+    except Exception:
+        nfe = float("nan")
+    metrics = {
+        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
+        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
+        "mse": M.mse(zhat, z, angular),
+        "valid_time": float(np.mean(vpt)),
+        "rollout_error_ref": M.rollout_error(zhat, z, angular, reference_compatible=True),
+        "energy_violation_ref": M.energy_violation(h_pred, h_true, reference_compatible=True),
+        "energy_pct_max_pe": M.energy_pct_max_pe(
+            h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
+        ),
+        "symplectic_error": M.symplectic_error(
+            model, jnp.asarray(states[pick], dtype=dtype), s_args
+        ),
+        "floor": _floor(system, data, config, cache_root),
+        "rollout_finite": finite,
+        "eval_compile_seconds": max(0.0, (t1 - t0) - rollout_seconds),
+        "rollout_seconds": rollout_seconds,
+        "rollout_seconds_per_traj": rollout_seconds / max(1, len(zhat)),
+        "nfe": nfe,
+        "n_params": M.n_params(model),
+    }
+    curves = {
+        "t": (data.ts_test - data.ts_test[0]).tolist(),
+        "rel_error": M.geometric_mean(err_t, axis=0).tolist(),
+        "energy_violation": M.geometric_mean(ev_t, axis=0).tolist(),
+        "z_true": z[0].tolist(),
+        "z_pred": zhat[0].tolist(),
+    }
+    full = {"err": err_t, "energy_violation": ev_t, "z_pred": zhat[:4], "z_true": z[:4]}
+    return metrics, curves, full
+
+
+NAN_METRICS = (
+    "rollout_error",
+    "energy_violation",
+    "mse",
+    "valid_time",
+    "rollout_error_ref",
+    "energy_violation_ref",
+    "energy_pct_max_pe",
+    "symplectic_error",
+)
+
+
+def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
+    """Run one configuration end to end and return its row (never raises).
+
+    The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
+    ``diverged_step``, ``error``, the metrics, the costs, and ``curves`` (small per-time
+    curves, stored in the row file and expanded into curves.parquet).
+    """
+    cache_root = Path(cache_root or default_cache_root())
+    row = base_row(config)
+    art = artifact_dir(config.config_hash, cache_root)
+    t_start = time.perf_counter()
+    try:
+        art.mkdir(parents=True, exist_ok=True)
+        _write_json(art / "config.json", config.to_dict())
+        (art / "traceback.txt").unlink(missing_ok=True)
+        config.validate()
+        system, data, _, model = _build(config, cache_root)
+        model, meta = _train_cached(config, model, data, cache_root, progress)
+        row.update(
+            status=meta["status"],
+            diverged_step=meta.get("diverged_step"),
+            train_seconds=meta["train_seconds"],
+            compile_seconds=meta["compile_seconds"],
+            steps_done=meta.get("steps_done"),
+            final_loss=meta.get("final_loss"),
+            train_cached=meta["train_cached"],
+        )
+        metrics, curves, full = _evaluate(config, system, data, model, cache_root)
+        if row["status"] == "diverged" and not metrics["rollout_finite"]:
+            # A model that went non-finite in training has no meaningful prediction.
+            metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))
+        row.update(metrics)
+        row["curves"] = curves
+        np.savez_compressed(art / "curves.npz", **full)
+    except Exception as e:  # one run never stops the sweep
+        row["status"] = "failed"
+        row["error"] = f"{type(e).__name__}: {e}".splitlines()[0][:500]
+        (art / "traceback.txt").write_text(traceback.format_exc())
+    row["wall_seconds"] = time.perf_counter() - t_start
+    _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
+    return row
+
+
+def _execute_dict(d: dict, cache_root: str | None = None) -> dict:
+    return execute_run(RunConfig.from_dict(d), cache_root=cache_root)
+
+
+# ---------------------------------------------------------------------------------- sweeps
+def _flags_with_threads(n: int) -> str:
+    """XLA_FLAGS with our thread settings replaced by ``n`` threads."""
+    from ._env import configure_threads
+
+    old = os.environ.get("XLA_FLAGS", "")
+    stripped = re.sub(
+        r"(--)?(intra_op_parallelism_threads|xla_cpu_multi_thread_eigen)=\S+", "", old
+    )
+    saved_omp = os.environ.get("OMP_NUM_THREADS")
+    try:
+        os.environ["XLA_FLAGS"] = " ".join(stripped.split())
+        os.environ.pop("OMP_NUM_THREADS", None)
+        configure_threads(n)
+        return os.environ["XLA_FLAGS"]
+    finally:
+        os.environ["XLA_FLAGS"] = old
+        if saved_omp is None:
+            os.environ.pop("OMP_NUM_THREADS", None)
+        else:
+            os.environ["OMP_NUM_THREADS"] = saved_omp
+
+
+def _label(c: RunConfig) -> str:
+    k = "" if c.k is None else f"-{c.k}"
+    f = f" f={c.friction:g}" if c.friction else ""
+    return f"{c.system}{k}{f} {c.model} s{c.seed}"
+
+
+def sweep(
+    configs: Sequence[RunConfig],
+    results_dir="results",
+    *,
+    experiment: str = "adhoc",
+    profile: str = "custom",
+    executor: str = "local",
+    workers: int | None = 1,
+    address: str | None = None,
+    progress: bool = True,
+    cache_root=None,
+) -> list[dict]:
+    """Execute the runs of ``configs`` not yet in ``results_dir``; return the new rows.
+
+    ``workers``: local processes (1 = in-process; None = one per core). Each finished row is
+    written atomically as it arrives and the tables are rebuilt, so a killed sweep resumes.
+    """
+    from ._experiments import check_choice
+
+    check_choice("executor", executor, EXECUTORS)
+    results_dir = Path(results_dir)
+    cache_root = Path(cache_root or default_cache_root()).resolve()
+    done = _store.done_hashes(results_dir)
+    todo, seen = [], set()
+    for c in configs:
+        if c.config_hash not in done and c.config_hash not in seen:
+            seen.add(c.config_hash)
+            todo.append(c)
+    new_rows: list[dict] = []
+    if not todo:
+        if progress:
+            print(f"{experiment}: all {len(configs)} runs already stored", file=sys.stderr)
+        _store.rebuild_tables(results_dir)
+        return new_rows
+
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(todo), desc=f"{experiment} [{profile}]", unit="run", disable=not progress)
+
+    def finish(row: dict) -> None:
+        row["experiment"] = experiment
+        row["profile"] = profile
+        _store.write_row(results_dir, row)
+        _store.rebuild_tables(results_dir)
+        new_rows.append(row)
+        bar.update(1)
+        bar.set_postfix_str(f"last: {row['model']} {row['status']}")
+
+    cores = cpu_count()
+    try:
+        if executor == "ray":
+            _sweep_ray(todo, finish, cache_root, address, cores)
+        else:
+            workers = cores if workers is None else max(1, int(workers))
+            workers = min(workers, len(todo))
+            if workers == 1:
+                for c in todo:
+                    bar.set_postfix_str(_label(c))
+                    finish(execute_run(c, cache_root=cache_root, progress=False))
+            else:
+                _sweep_pool(todo, finish, cache_root, workers, cores)
+    finally:
+        bar.close()
+    return new_rows
+
+
+def _sweep_pool(todo, finish, cache_root, workers, cores):
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    flags = _flags_with_threads(max(1, cores // workers))
+    # Spawned children read the environment at start: give them their share of the cores.
+    saved = {k: os.environ.get(k) for k in ("XLA_FLAGS", "OMP_NUM_THREADS")}
+    os.environ["XLA_FLAGS"] = flags
+    os.environ["OMP_NUM_THREADS"] = str(max(1, cores // workers))
+    try:
+        pool = ctx.Pool(workers)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    with pool:
+        jobs = [(c.to_dict(), str(cache_root)) for c in todo]
+        for row in pool.imap_unordered(_star_execute, jobs):
+            finish(row)
+
+
+def _star_execute(job):
+    return _execute_dict(*job)
+
+
+def _sweep_ray(todo, finish, cache_root, address, cores):
+    try:
+        import ray
+    except ImportError as e:  # pragma: no cover
+        raise ValueError("the ray executor needs the 'ray' extra: pip install -e '.[ray]'") from e
+    env = {
+        "XLA_FLAGS": _flags_with_threads(1),
+        "OMP_NUM_THREADS": "1",
+        "DECON_CACHE": str(cache_root),
+    }
+    started = False
+    if not ray.is_initialized():
+        if address:
+            ray.init(address=address, runtime_env={"env_vars": env}, log_to_driver=False)
+        else:
+            ray.init(
+                num_cpus=cores,
+                include_dashboard=False,
+                log_to_driver=False,
+                runtime_env={"env_vars": env},
+            )
+        started = True
+    try:
+        remote = ray.remote(num_cpus=1)(_execute_dict)
+        pending = {remote.remote(c.to_dict(), str(cache_root)): c for c in todo}
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            c = pending.pop(ready[0])
+            try:
+                row = ray.get(ready[0])
+            except Exception as e:  # a worker that died: record, keep going
+                row = base_row(c)
+                row["error"] = f"{type(e).__name__}: {e}".splitlines()[0][:500]
+            finish(row)
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def run_experiments(
+    names: Sequence[str],
+    profile: str,
+    results_dir="results",
+    **kw,
+) -> dict[str, list[dict]]:
+    """Sweep each named experiment under ``profile``; returns the new rows per experiment."""
+    from ._experiments import expand
+
+    return {
+        n: sweep(expand(n, profile), results_dir, experiment=n, profile=profile, **kw)
+        for n in names
+    }
