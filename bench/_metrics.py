@@ -117,13 +117,14 @@ def energies(system, zs, args=None, coordinates: str = "velocity") -> np.ndarray
     shape = zs.shape[:-1]
     d = zs.shape[-1] // 2
     if args is None:
-        a = np.broadcast_to(np.asarray(system.default_args(), dtype=np.float64), (*shape, -1))
+        a = np.asarray(system.default_args(), dtype=np.float64)
     else:
         a = np.asarray(args, dtype=np.float64)
-        if a.ndim == 1:
-            a = np.broadcast_to(a, (*shape, a.shape[0]))
-        else:  # (N, P) per trajectory: repeat over time
-            a = np.broadcast_to(a.reshape(a.shape[0], *([1] * (len(shape) - 1)), -1), (*shape, -1))
+    p = a.shape[-1]
+    if a.ndim == 1:
+        a = np.broadcast_to(a, (*shape, p))
+    else:  # (N, P) per trajectory: repeat over time
+        a = np.broadcast_to(a.reshape(a.shape[0], *([1] * (len(shape) - 1)), p), (*shape, p))
     flat_z = zs.reshape(-1, zs.shape[-1])
     flat_a = np.ascontiguousarray(a).reshape(flat_z.shape[0], -1)
     finite = np.all(np.isfinite(flat_z), axis=-1)

@@ -91,6 +91,12 @@ def _flat(row: dict) -> dict:
     return out
 
 
+def _numeric_or_null(v) -> bool:
+    if v is None or isinstance(v, str) and v in ("inf", "-inf"):
+        return True
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
 def rows_frame(rows: Sequence[dict]) -> pd.DataFrame:
     """The runs table of some rows: one row per config_hash, lists as JSON strings."""
     df = pd.DataFrame([_flat(r) for r in rows])
@@ -98,12 +104,9 @@ def rows_frame(rows: Sequence[dict]) -> pd.DataFrame:
         df = df.drop_duplicates("config_hash", keep="first").sort_values(
             ["experiment", "system", "model", "seed", "config_hash"], na_position="last"
         )
-        for col in df.columns:  # "inf" strings back to floats where the column is numeric
-            if df[col].dtype == object:
-                conv = pd.to_numeric(df[col], errors="coerce")
-                if conv.notna().sum() == df[col].notna().sum() and df[col].notna().any():
-                    if not df[col].map(lambda v: isinstance(v, bool)).any():
-                        df[col] = conv
+        for col in df.columns:  # JSON null -> NaN, "inf" -> inf, where a column is numeric
+            if df[col].dtype == object and df[col].map(_numeric_or_null).all():
+                df[col] = pd.to_numeric(df[col], errors="coerce").astype(float)
     return df.reset_index(drop=True)
 
 

@@ -1,0 +1,309 @@
+"""Experiments, the store and the sweep runner: expansion, hashing, atomic rows, resume.
+
+This module doubles as a test-only experiments module: a sweep subprocess started with
+``DECON_EXTRA_EXPERIMENTS=tests.test_runner`` imports it and so knows the experiments below.
+With ``DECON_TEST_FAKE_RUN=<log file>`` it also swaps the runner's ``execute_run`` for a fake
+that sleeps and logs each execution (the kill/resume test is about bookkeeping, not physics).
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bench._runner as runner
+from bench import _store
+from bench._experiments import Experiment, RunConfig, expand, register
+
+ROOT = Path(__file__).resolve().parents[1]
+
+RESUME = register(
+    Experiment(
+        name="test_resume",
+        title="test: resume after a kill",
+        axes={"model": ["node"]},
+        fixed={"system": "chain_pendulum", "k": 1},
+        profile_overrides={"smoke": {"seeds": list(range(6))}},
+    ),
+    replace=True,
+)
+TWO = register(
+    Experiment(
+        name="test_two",
+        title="test: two models",
+        axes={"model": ["node", "node_so"]},
+        fixed={"system": "chain_pendulum", "k": 1, "steps": 10},
+    ),
+    replace=True,
+)
+
+
+def _fake_execute_run(config, cache_root=None, progress=False):
+    log = os.environ["DECON_TEST_FAKE_RUN"]
+    with open(log, "a") as f:
+        f.write(config.config_hash + "\n")
+    time.sleep(float(os.environ.get("DECON_TEST_FAKE_SLEEP", "0.7")))
+    row = runner.base_row(config)
+    row.update(status="ok", rollout_error=0.01 * (config.seed + 1))
+    row["curves"] = {"t": [0.0, 0.03], "rel_error": [0.0, 0.01], "energy_violation": [0, 0]}
+    return row
+
+
+if os.environ.get("DECON_TEST_FAKE_RUN"):
+    runner.execute_run = _fake_execute_run
+
+
+# ------------------------------------------------------------------------- experiments
+def test_expand_product_seeds_overrides_and_filters():
+    exp = Experiment(
+        name="t",
+        title="t",
+        axes={"model": ["node", "node_so"], "eval_integrator": ["rk4_38", "leapfrog"]},
+        fixed={"system": "chain_pendulum", "k": 2},
+        profile_overrides={"smoke": {"seeds": [0, 1], "steps": 7}},
+    )
+    runs = expand(exp, "smoke")
+    # leapfrog needs a second-order model: node x leapfrog is dropped.
+    combos = {(r.model, r.eval_integrator) for r in runs}
+    assert combos == {("node", "rk4_38"), ("node_so", "rk4_38"), ("node_so", "leapfrog")}
+    assert len(runs) == 3 * 2
+    assert {r.seed for r in runs} == {0, 1}
+    assert all(r.steps == 7 and r.width == 16 and r.k == 2 for r in runs)
+    assert len({r.config_hash for r in runs}) == len(runs)
+    # Eval-only variants share the training.
+    a = [r for r in runs if r.model == "node_so" and r.seed == 0]
+    assert a[0].train_hash == a[1].train_hash and a[0].config_hash != a[1].config_hash
+    only = Experiment(
+        name="t2",
+        title="t",
+        axes={"model": ["node", "node_so"]},
+        fixed={"system": "chain_pendulum"},
+        include=lambda c: c.model == "node",
+    )
+    assert [r.model for r in expand(only, "smoke")] == ["node"]
+    # The paper profile is the reference budget.
+    p = expand(only, "paper")
+    assert len(p) == 5 and p[0].steps == 8000 and p[0].n_train == 800 and p[0].width == 256
+
+
+def test_hash_canonical_and_names_excluded():
+    a = RunConfig(system="chain_pendulum", k=2, model_options={"weight": 1.0, "a": 2})
+    b = RunConfig(system="chain_pendulum", k=2.0, model_options=(("a", 2), ("weight", 1.0)))
+    assert a.config_hash == b.config_hash
+    assert a.config_hash != RunConfig(system="chain_pendulum", k=3).config_hash
+    assert RunConfig.from_dict(json.loads(json.dumps(a.to_dict()))) == a
+    e1 = Experiment(name="x1", title="", axes={"model": ["node"]}, fixed={"system": "s"})
+    e2 = Experiment(name="x2", title="", axes={"model": ["node"]}, fixed={"system": "s"})
+    assert [r.config_hash for r in expand(e1, "smoke")] == [
+        r.config_hash for r in expand(e2, "smoke")
+    ]
+
+
+def test_unknown_fields_rejected_at_registration():
+    with pytest.raises(ValueError, match="did you mean 'width'"):
+        Experiment(name="bad", title="", axes={"widht": [1]})
+    with pytest.raises(ValueError, match="RunConfig field"):
+        Experiment(name="bad", title="", fixed={"nope": 1})
+    with pytest.raises(ValueError, match="profile"):
+        Experiment(name="bad", title="", profile_overrides={"quik": {}})
+    with pytest.raises(ValueError, match="steps"):
+        Experiment(name="bad", title="", profile_overrides={"smoke": {"stepz": 3}})
+    with pytest.raises(ValueError, match="k must be an integer >= 1"):
+        RunConfig(system="chain_pendulum", k=0).validate()
+    with pytest.raises(ValueError, match="seed"):
+        RunConfig(system="chain_pendulum", seed=-1).validate()
+
+
+# ------------------------------------------------------------------------------- store
+def test_store_one_row_per_hash_and_tables(tmp_path):
+    c = RunConfig(system="chain_pendulum", k=1)
+    row = runner.base_row(c)
+    row.update(status="ok", rollout_error=float("nan"), experiment="e", profile="smoke")
+    row["curves"] = {
+        "t": [0, 1],
+        "rel_error": [0, 0.5],
+        "energy_violation": [0, 0.1],
+        "z_true": [[1, 2], [3, 4]],
+        "z_pred": [[1, 2], [3, 5]],
+    }
+    _store.write_row(tmp_path, row)
+    _store.write_row(tmp_path, row)  # rewriting the same run cannot duplicate it
+    df = _store.rebuild_tables(tmp_path)
+    assert len(df) == 1 and np.isnan(df.loc[0, "rollout_error"])
+    assert len(pd.read_parquet(tmp_path / "runs.parquet")) == 1
+    assert len(pd.read_csv(tmp_path / "runs.csv")) == 1
+    cur = pd.read_parquet(tmp_path / "curves.parquet")
+    assert list(cur["rel_error"]) == [0, 0.5] and list(cur["z_pred_1"]) == [2, 5]
+    assert not list(tmp_path.glob(".tmp*")) and not list((tmp_path / ".rows").glob(".tmp*"))
+    assert _store.done_hashes(tmp_path) == {c.config_hash}
+
+
+# -------------------------------------------------------------------------- real runs
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    """A real smoke sweep: two models plus a deliberately diverging learning rate."""
+    res = tmp_path_factory.mktemp("results")
+    cache = tmp_path_factory.mktemp("cache")
+    configs = expand(TWO, "smoke")
+    bad = RunConfig(**{**configs[0].to_dict(), "lr": 1e30})
+    t0 = time.perf_counter()
+    rows = runner.sweep(
+        [*configs, bad],
+        res,
+        experiment="test_two",
+        profile="smoke",
+        progress=False,
+        cache_root=cache,
+    )
+    return {
+        "res": res,
+        "cache": cache,
+        "rows": rows,
+        "configs": configs,
+        "bad": bad,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def test_smoke_sweep_end_to_end(smoke):
+    df = _store.load_runs(smoke["res"])
+    assert len(df) == 3 and df["config_hash"].is_unique
+    by = df.set_index("config_hash")
+    for c in smoke["configs"]:
+        r = by.loc[c.config_hash]
+        assert r["status"] == "ok", r["error"]
+        assert 0 < r["rollout_error"] < 1 and 0 <= r["energy_violation"] <= 1
+        assert r["n_params"] > 0 and r["rollout_seconds"] > 0 and r["nfe"] == 4 * 19
+        assert r["experiment"] == "test_two" and r["profile"] == "smoke"
+        assert r["floor"] < r["rollout_error"]
+    # The diverging run is recorded as such, without stopping the others.
+    assert by.loc[smoke["bad"].config_hash, "status"] == "diverged"
+    cur = pd.read_parquet(smoke["res"] / "curves.parquet")
+    assert set(cur["config_hash"]) >= {c.config_hash for c in smoke["configs"]}
+    assert len(cur[cur["config_hash"] == smoke["configs"][0].config_hash]) == 20
+    # Rerunning the sweep executes nothing.
+    again = runner.sweep(smoke["configs"], smoke["res"], progress=False, cache_root=smoke["cache"])
+    assert again == []
+
+
+def test_same_config_same_metrics(smoke, tmp_path):
+    c = smoke["configs"][0]
+    fresh = runner.execute_run(c, cache_root=tmp_path)  # retrains from scratch
+    old = _store.load_runs(smoke["res"]).set_index("config_hash").loc[c.config_hash]
+    assert fresh["train_cached"] is False
+    for m in ("rollout_error", "energy_violation", "mse"):
+        assert fresh[m] == pytest.approx(old[m], rel=1e-6)
+
+
+def test_eval_variant_reuses_training_and_corrupt_params_retrain(smoke):
+    c = smoke["configs"][1]
+    variant = RunConfig(**{**c.to_dict(), "eval_substeps": 2})
+    row = runner.execute_run(variant, cache_root=smoke["cache"])
+    assert row["status"] == "ok" and row["train_cached"] is True
+    assert row["nfe"] == 2 * 4 * 19
+    pfile = Path(smoke["cache"]) / "params" / c.train_hash / "model.eqx"
+    data = pfile.read_bytes()
+    pfile.write_bytes(data[: len(data) // 2])  # truncated: the checksum no longer holds
+    variant3 = RunConfig(**{**c.to_dict(), "eval_substeps": 3})
+    row = runner.execute_run(variant3, cache_root=smoke["cache"])
+    assert row["status"] == "ok" and row["train_cached"] is False
+    assert pfile.read_bytes() != data[: len(data) // 2]
+
+
+def test_failed_run_recorded_with_traceback(tmp_path):
+    c = RunConfig(
+        system="chain_pendulum",
+        k=1,
+        model="no_such_model",
+        steps=1,
+        n_generated=4,
+        n_train=2,
+        n_test=1,
+        test_chunks=1,
+        width=4,
+        batch=2,
+    )
+    row = runner.execute_run(c, cache_root=tmp_path)
+    assert row["status"] == "failed" and "no_such_model" in row["error"]
+    assert (
+        "Traceback" in (runner.artifact_dir(c.config_hash, tmp_path) / "traceback.txt").read_text()
+    )
+
+
+# ------------------------------------------------------------------------- kill/resume
+def _sweep_cmd(res):
+    return [
+        sys.executable,
+        "-m",
+        "bench",
+        "--results",
+        str(res),
+        "sweep",
+        "test_resume",
+        "--profile",
+        "smoke",
+        "--no-progress",
+    ]
+
+
+def test_resume_after_kill(tmp_path):
+    log = tmp_path / "executed.log"
+    res = tmp_path / "results"
+    env = {
+        **os.environ,
+        "DECON_EXTRA_EXPERIMENTS": "tests.test_runner",
+        "DECON_TEST_FAKE_RUN": str(log),
+        "DECON_CACHE": str(tmp_path / "cache"),
+    }
+    proc = subprocess.Popen(
+        _sweep_cmd(res), cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    rows_dir = res / ".rows"
+    deadline = time.time() + 60
+    while time.time() < deadline and len(list(rows_dir.glob("*.json"))) < 2:
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    killed_rows = {p.stem for p in rows_dir.glob("*.json")}
+    assert 1 <= len(killed_rows) < 6, "kill landed outside the sweep"
+    out = subprocess.run(
+        _sweep_cmd(res), cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    expected = {c.config_hash for c in expand(RESUME, "smoke")}
+    df = pd.read_parquet(res / "runs.parquet")
+    assert len(df) == 6 and set(df["config_hash"]) == expected and (df["status"] == "ok").all()
+    executed = log.read_text().split()
+    # Rows stored before the kill were not executed again; at most the run in flight was.
+    assert all(executed.count(h) == 1 for h in killed_rows)
+    assert len(executed) <= 6 + 1
+    assert not list(rows_dir.glob(".tmp*"))
+
+
+# --------------------------------------------------------------------------------- ray
+@pytest.mark.ray
+def test_ray_two_run_sweep(tmp_path):
+    pytest.importorskip("ray")
+    configs = expand(TWO, "smoke")
+    t0 = time.perf_counter()
+    rows = runner.sweep(
+        configs,
+        tmp_path / "res",
+        experiment="test_two",
+        profile="smoke",
+        executor="ray",
+        progress=False,
+        cache_root=tmp_path / "cache",
+    )
+    assert len(rows) == 2, rows
+    assert all(r["status"] == "ok" for r in rows), [r["error"] for r in rows]
+    df = _store.load_runs(tmp_path / "res")
+    assert set(df["config_hash"]) == {c.config_hash for c in configs}
+    print(f"ray two-run sweep: {time.perf_counter() - t0:.1f} s")
