@@ -1,0 +1,103 @@
+"""The command line: every bad input is one line on stderr, exit code 2, no traceback."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from bench._cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+BAD = [
+    (["run", "--system", "chain_pendulum", "--k", "2", "--model", "nod"], "did you mean 'node'"),
+    (["run", "--system", "chain_pendulm", "--model", "node"], "unknown system"),
+    (["run", "--system", "chain_pendulum", "--k", "0"], "k must be an integer >= 1"),
+    (["run", "--system", "chain_pendulum", "--k", "two"], "k must be an integer"),
+    (["run", "--system", "chain_pendulum", "--k", "1", "--friction", "-0.4"], "friction"),
+    (["run", "--system", "chain_pendulum", "--k", "1", "--friction", "nan"], "friction"),
+    (["run", "--system", "chain_pendulum", "--k", "1", "--seed", "-1"], "seed"),
+    (
+        ["run", "--system", "chain_pendulum", "--k", "1", "--profile", "quik"],
+        "did you mean 'quick'",
+    ),
+    (["run", "--system", "chain_pendulum", "--k", "1", "--set", "widht=3"], "did you mean 'width'"),
+    (["run", "--system", "relativistic_particle", "--k", "2"], "relativistic"),
+    (["sweep", "no_such_experiment", "--profile", "smoke"], "unknown experiment"),
+    (["sweep", "--all", "--executor", "rya"], "did you mean 'ray'"),
+    (["sweep", "--all", "--profile", "papr"], "did you mean 'paper'"),
+    (["sweep", "--all", "--workers", "x"], "workers must be an integer"),
+    (["sweep"], "experiment name or --all"),
+    (["frobnicate"], "invalid choice"),
+]
+
+
+@pytest.mark.parametrize(("argv", "needle"), BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_one_line_exit_2(argv, needle, capsys, tmp_path):
+    code = main(["--results", str(tmp_path), *argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), err
+    assert needle in lines[0], lines[0]
+    assert not (tmp_path / ".rows").exists()  # nothing ran
+
+
+def test_bad_input_subprocess_has_no_traceback(tmp_path):
+    out = subprocess.run(
+        [sys.executable, "-m", "bench", "--results", str(tmp_path), "run", "--system",
+         "chain_pendulum", "--k", "2", "--model", "nod"],
+        cwd=ROOT, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert out.returncode == 2
+    assert "Traceback" not in out.stderr
+    assert out.stderr.strip().splitlines()[-1].startswith("error: unknown model 'nod'")
+
+
+def test_help_on_every_verb(capsys):
+    for verb in ("list", "run", "sweep", "figures", "report", "perf", "bench"):
+        with pytest.raises(SystemExit) as e:
+            main([verb, "--help"])
+        assert e.value.code == 0
+        assert "usage:" in capsys.readouterr().out
+
+
+def test_list(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for word in ("chain_pendulum", "node_so", "smoke", "quick", "paper"):
+        assert word in out
+
+
+def test_run_prints_metrics_and_adds_row(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("DECON_CACHE", str(tmp_path / "cache"))
+    argv = ["--results", str(tmp_path / "res"), "run", "--system", "chain_pendulum", "--k", "1",
+            "--model", "node_so", "--seed", "0", "--profile", "smoke", "--steps", "10"]  # fmt: skip
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "rollout_error" in out and "status: ok" in out
+    df = pd.read_parquet(tmp_path / "res" / "runs.parquet")
+    assert len(df) == 1 and df.loc[0, "experiment"] == "adhoc" and df.loc[0, "model"] == "node_so"
+    # Running it again adds nothing and shows the stored row.
+    assert main(argv) == 0
+    assert "already stored" in capsys.readouterr().out
+    assert len(pd.read_parquet(tmp_path / "res" / "runs.parquet")) == 1
+
+
+def test_figures_report_without_modules_or_results(capsys, tmp_path):
+    for verb in ("figures", "report"):
+        code = main(["--results", str(tmp_path), verb])
+        assert code == 0, capsys.readouterr()
+
+
+def test_env_keeps_threads_first():
+    # bench/__init__ must set XLA's thread flags before anything imports jax.
+    out = subprocess.run(
+        [sys.executable, "-c", "import bench, os; print(os.environ['XLA_FLAGS'])"],
+        cwd=ROOT, capture_output=True, text=True, timeout=120,
+        env={k: v for k, v in os.environ.items() if k != "XLA_FLAGS"},
+    )  # fmt: skip
+    assert "intra_op_parallelism_threads" in out.stdout
