@@ -776,12 +776,40 @@ CLAIMS: dict[int, Callable[..., Verdict]] = {
 }
 
 
-def evaluate_claims(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verdict]:
-    """All eight verdicts; a claim whose computation fails is "inconclusive" with the error."""
+# The experiments whose runs each claim reads (the runs of other experiments that happen to
+# match a claim's field filters, e.g. VIN's NODE+SO on the pendulum, are left out).
+CLAIM_EXPERIMENTS = {
+    1: ("energy",),
+    2: ("symplectic",),
+    3: ("second_order",),
+    4: ("coordinates",),
+    5: ("damped",),
+    6: ("loss",),
+    7: ("relativistic",),
+    8: ("vin",),
+}
+
+
+def _restrict(runs: pd.DataFrame, claim: int, profile: str | None) -> pd.DataFrame:
+    if profile is None or "config_hash" not in runs:
+        return runs
+    from ._figures import experiment_rows
+
+    parts = [experiment_rows(runs, name, profile) for name in CLAIM_EXPERIMENTS[claim]]
+    return pd.concat(parts).drop_duplicates("config_hash") if parts else runs
+
+
+def evaluate_claims(
+    runs: pd.DataFrame, curves: pd.DataFrame | None = None, profile: str | None = None
+) -> list[Verdict]:
+    """All eight verdicts; a claim whose computation fails is "inconclusive" with the error.
+
+    With ``profile``, each claim sees only the runs of its experiments (by config hash).
+    """
     out = []
     for n, fn in CLAIMS.items():
         try:
-            out.append(fn(runs, curves))
+            out.append(fn(_restrict(runs, n, profile), curves))
         except Exception as e:  # noqa: BLE001 - a report must still be written
             out.append(
                 Verdict(
