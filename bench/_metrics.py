@@ -17,6 +17,9 @@ Conventions shared by every metric here:
 
 from __future__ import annotations
 
+import equinox as eqx
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 CLAMP = 1e-7
@@ -110,12 +113,8 @@ def energies(system, zs, args=None, coordinates: str = "velocity") -> np.ndarray
     In momentum coordinates z = (q, p), qdot = system.velocity(q, p, args) first. Non-finite
     states give NaN. ``args``: None, (n_args,), or one row per leading trajectory (N, n_args).
     """
-    import jax
-    import jax.numpy as jnp
-
     zs = np.asarray(zs, dtype=np.float64)
     shape = zs.shape[:-1]
-    d = zs.shape[-1] // 2
     if args is None:
         a = np.asarray(system.default_args(), dtype=np.float64)
     else:
@@ -130,14 +129,22 @@ def energies(system, zs, args=None, coordinates: str = "velocity") -> np.ndarray
     finite = np.all(np.isfinite(flat_z), axis=-1)
     safe = np.where(finite[:, None], flat_z, 0.0)
 
+    h = np.asarray(_energy_batch(system, jnp.asarray(safe), jnp.asarray(flat_a), coordinates))
+    return np.where(finite, h, np.nan).reshape(shape)
+
+
+@eqx.filter_jit
+def _energy_batch(system, zs, args, coordinates):
+    # One compiled program per system type and shapes: the system is a pytree argument.
+    d = zs.shape[-1] // 2
+
     def one(zz, aa):
         if coordinates == "momentum":
             q, p = zz[:d], zz[d:]
             zz = jnp.concatenate([q, system.velocity(q, p, aa)])
         return system.energy(zz, aa)
 
-    h = np.asarray(jax.jit(jax.vmap(one))(jnp.asarray(safe), jnp.asarray(flat_a)))
-    return np.where(finite, h, np.nan).reshape(shape)
+    return jax.vmap(one)(zs, args)
 
 
 def energy_violation_curve(h_pred, h_true) -> np.ndarray:
