@@ -448,6 +448,10 @@ def _sweep_ray(todo, finish, cache_root, address, cores):
         "XLA_FLAGS": _flags_with_threads(1),
         "OMP_NUM_THREADS": "1",
         "DECON_CACHE": str(cache_root),
+        # Workers start elsewhere: let them import this checkout whether or not it is installed.
+        "PYTHONPATH": os.pathsep.join(
+            p for p in (str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")) if p
+        ),
     }
     started = False
     if not ray.is_initialized():
