@@ -1,0 +1,439 @@
+"""The speed/accuracy trade-off: how rollout error buys compute, per model and scene.
+
+The ``tradeoff`` experiment trains node, node_so, hnn_so, lnn and vin on chain_pendulum k = 2
+and spring_pendulum k = 2 and evaluates each trained model under many integrators. Its runs
+are one-factor-at-a-time around a base point, not a full product:
+
+- base training: the paper's cell (``train_integrator`` rk4_38, the profile's ``width`` and
+  ``steps``), so that node, node_so and hnn_so share their base runs with Figs. 2, 4, 5;
+- on the base training, an evaluation grid (:data:`EVAL_GRID`): fixed-step euler, rk4, rk4_38,
+  leapfrog at several substeps, and ``adaptive`` (tsit5) at several ``eval_rtol``. The runner
+  caches trained parameters by ``train_hash``, so these runs cost an evaluation each;
+- training variants that change one of ``width``, ``steps`` or ``train_integrator``, each
+  evaluated at the base evaluation (rk4_38 x 1) and with its own training integrator.
+
+Invalid combinations are dropped by ``include``: leapfrog for first-order models (also by
+``valid``), substeps or tolerances that do not apply to a method, any integrator other than
+the base label for the discrete vin (it is its own integrator), and more than one changed
+training factor. In ``quick`` the training variants run on chain_pendulum only and on seed 0.
+
+Analysis (pure functions of the runs DataFrame, tested on synthetic tables):
+:func:`pareto_front` (rows not dominated in (cost, error)), :func:`cheapest_within` (per scene,
+the cheapest configuration whose error is within 10% of the best), :func:`tradeoff_table`,
+:func:`tradeoff_section` (REPORT.md markdown) and :func:`tradeoff_figure`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ._experiments import PROFILES, Experiment, RunConfig, expand, register
+
+MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
+DISCRETE = ("vin", "resnet")
+SYSTEMS = ("chain_pendulum", "spring_pendulum")
+BASE_TRAIN_INTEGRATOR = "rk4_38"
+BASE_EVAL = ("rk4_38", 1)
+DEFAULT_RTOL = RunConfig.__dataclass_fields__["eval_rtol"].default
+COSTS = ("rollout_seconds_per_traj", "nfe", "train_seconds")
+ERROR = "rollout_error"
+
+# Fixed-step methods and the substeps evaluated per profile (adaptive: the rtol axis).
+EVAL_GRID: dict[str, dict[str, tuple[int, ...]]] = {
+    "smoke": {"rk4": (2,), "rk4_38": (1,), "leapfrog": (1,)},
+    "quick": {"euler": (1,), "rk4": (1, 4), "rk4_38": (1,), "leapfrog": (1,)},
+    "paper": {
+        "euler": (1, 2, 4, 8),
+        "rk4": (1, 2, 4, 8),
+        "rk4_38": (1, 2, 4, 8),
+        "leapfrog": (1, 2, 4, 8),
+    },
+}
+RTOLS = {
+    "smoke": (1e-3, DEFAULT_RTOL),
+    "quick": (1e-3, DEFAULT_RTOL, 1e-9),  # adaptive runs at 1e-3 and 1e-9 (see include)
+    "paper": (1e-3, 1e-4, 1e-5, DEFAULT_RTOL, 1e-7, 1e-8, 1e-9),
+}
+# Training variants: (width, steps, train_integrator) values beside the profile's base.
+WIDTHS = {"smoke": (8, 16), "quick": (64, 128, 256), "paper": (64, 128, 256)}
+STEPS = {"smoke": (10, 20), "quick": (300, 1000, 3000), "paper": (2000, 8000, 16000)}
+TRAIN_INTEGRATORS = ("rk4_38", "euler", "leapfrog")
+# smoke: a handful of runs (the CLI tests sweep every experiment at smoke).
+SMOKE_AXES = {
+    "system": ("chain_pendulum",),
+    "model": ("node_so", "vin"),
+    "width": (PROFILES["smoke"]["width"],),
+    "steps": (PROFILES["smoke"]["steps"],),
+    "train_integrator": ("rk4_38",),
+}
+SUBSTEPS = (1, 2, 4, 8)
+# Which (model, system) get training variants, and whether a variant is also evaluated with
+# its own training integrator. quick keeps the two cheap-to-train continuous SO models on the
+# chain: the whole trade-off must fit beside the paper experiments in ``make bench``.
+TRAIN_VARIANTS = {
+    "smoke": {"models": (), "systems": (), "own_eval": False},
+    "quick": {"models": ("node_so", "hnn_so"), "systems": ("chain_pendulum",), "own_eval": False},
+    "paper": {"models": MODELS, "systems": SYSTEMS, "own_eval": True},
+}
+QUICK_TRAIN_INTEGRATORS = ("rk4_38", "euler")
+
+
+def profile_of(cfg: RunConfig) -> str:
+    """The profile a run was expanded under, recognised by its data size (n_generated,
+    n_train), which each profile sets and this experiment does not change."""
+    for name, d in PROFILES.items():
+        if cfg.n_generated == d.get("n_generated") and cfg.n_train == d.get("n_train"):
+            return name
+    return "paper"
+
+
+def _train_changes(cfg: RunConfig, profile: str) -> list[str]:
+    base = PROFILES[profile]
+    changed = []
+    if cfg.width != base["width"]:
+        changed.append("width")
+    if cfg.steps != base["steps"]:
+        changed.append("steps")
+    if cfg.train_integrator != BASE_TRAIN_INTEGRATOR:
+        changed.append("train_integrator")
+    return changed
+
+
+def _is_base_eval(cfg: RunConfig) -> bool:
+    return (cfg.eval_integrator, cfg.eval_substeps) == BASE_EVAL and cfg.eval_rtol == DEFAULT_RTOL
+
+
+def include(cfg: RunConfig) -> bool:
+    """Whether a combination of the trade-off axes is a run (see the module docstring)."""
+    profile = profile_of(cfg)
+    changed = _train_changes(cfg, profile)
+    if len(changed) > 1:
+        return False
+    rule = TRAIN_VARIANTS[profile]
+    if changed and (cfg.model not in rule["models"] or cfg.system not in rule["systems"]):
+        return False
+    if cfg.model in DISCRETE:
+        return "train_integrator" not in changed and _is_base_eval(cfg)
+    if cfg.eval_integrator == "adaptive":
+        if cfg.eval_substeps != 1:
+            return False
+        if profile != "paper" and cfg.eval_rtol == DEFAULT_RTOL and len(RTOLS[profile]) > 2:
+            return False  # quick: the two ends of the tolerance range only
+    else:
+        if cfg.eval_rtol != DEFAULT_RTOL:
+            return False
+        if cfg.eval_substeps not in EVAL_GRID[profile].get(cfg.eval_integrator, ()):
+            return False
+    if changed:
+        if profile == "quick" and cfg.train_integrator not in QUICK_TRAIN_INTEGRATORS:
+            return False
+        own = cfg.eval_integrator == cfg.train_integrator and cfg.eval_substeps == 1
+        return _is_base_eval(cfg) or (rule["own_eval"] and own)
+    return True
+
+
+def _axes(profile: str) -> dict:
+    methods = (*EVAL_GRID[profile], "adaptive")
+    return {
+        "system": SYSTEMS,
+        "model": MODELS,
+        "width": WIDTHS[profile],
+        "steps": STEPS[profile],
+        "train_integrator": TRAIN_INTEGRATORS,
+        "eval_integrator": methods,
+        "eval_substeps": SUBSTEPS,
+        "eval_rtol": RTOLS[profile],
+    }
+
+
+TRADEOFF = Experiment(
+    name="tradeoff",
+    title="Speed/accuracy trade-off: integrator, substeps, tolerance, width, training budget",
+    axes=_axes("paper"),
+    fixed={"k": 2},
+    profile_overrides={
+        "smoke": {**_axes("smoke"), **SMOKE_AXES, "seeds": (0,)},
+        "quick": {**_axes("quick"), "seeds": (0,)},
+        "paper": {"seeds": (0, 1, 2)},
+    },
+    include=include,
+    claim=None,
+)
+register(TRADEOFF, replace=True)
+
+
+# ----------------------------------------------------------------------------- the budget
+def estimate(
+    profile: str = "quick",
+    *,
+    ms_per_step: dict | None = None,
+    eval_seconds: float = 6.0,
+    train_overhead_s: float = 12.0,
+    workers: int = 2,
+    exclude_shared: bool = True,
+) -> dict:
+    """Run count and wall-time estimate of the trade-off at ``profile``.
+
+    Training cost per unique ``train_hash`` with the per-step costs of
+    :data:`bench._paper.MS_PER_STEP` (scaled by batch / 200 and, for spring, by the dof the
+    same way :func:`bench._paper.estimate_seconds` does), plus ``eval_seconds`` (compile and
+    rollouts) per run; runs shared with the paper experiments are left out when
+    ``exclude_shared`` (``make bench`` runs them anyway).
+    """
+    import math
+
+    from . import _paper
+
+    ms = dict(_paper.MS_PER_STEP)
+    ms.update(ms_per_step or {})
+    runs = expand(TRADEOFF, profile)
+    shared = set()
+    if exclude_shared:
+        for exp in _paper.PAPER_EXPERIMENTS:
+            shared |= {c.config_hash for c in expand(exp, profile)}
+    new = [c for c in runs if c.config_hash not in shared]
+    trained_elsewhere = {c.train_hash for c in runs if c.config_hash in shared}
+    trainings = {}
+    for c in new:
+        if c.train_hash not in trained_elsewhere:
+            trainings.setdefault(c.train_hash, c)
+    total = 0.0
+    for c in trainings.values():
+        dof = 3 * (c.k or 1) if c.system == "spring_pendulum" else (c.k or 1)
+        free = c.model in ("node", "node_so", "resnet")
+        g = 1.0 if free else max(1.0, dof / 2) ** (math.log(60 / 35) / math.log(3))
+        width = (c.width / 128) ** 1.5  # between linear (small widths) and quadratic
+        steps_ms = ms.get(c.model, 20.0) * (min(c.batch, c.n_train) / 200) * g * width
+        total += c.steps * steps_ms / 1000 + train_overhead_s
+    total += eval_seconds * len(new)
+    return {
+        "runs": len(runs),
+        "new_runs": len(new),
+        "trainings": len(trainings),
+        "seconds": total / max(1, workers),
+    }
+
+
+# ----------------------------------------------------------------------------- analysis
+def pareto_front(df: pd.DataFrame, cost: str, error: str = ERROR) -> pd.DataFrame:
+    """The rows of ``df`` that no other row dominates in (cost, error), sorted by cost.
+
+    Row a dominates b when cost_a <= cost_b and error_a <= error_b with one strictly smaller.
+    Rows with a missing or non-finite cost or error are ignored; of exact duplicates in
+    (cost, error) the first is kept.
+    """
+    for col in (cost, error):
+        if col not in df.columns:
+            raise ValueError(f"unknown column {col!r}; columns: {', '.join(map(str, df.columns))}")
+    c = pd.to_numeric(df[cost], errors="coerce")
+    e = pd.to_numeric(df[error], errors="coerce")
+    ok = np.isfinite(c) & np.isfinite(e)
+    d = df[ok].assign(_c=c[ok], _e=e[ok])
+    d = d.sort_values(["_c", "_e"], kind="mergesort")
+    keep, best = [], np.inf
+    for idx, err in zip(d.index, d["_e"], strict=True):
+        if err < best:  # cheapest-first: a row survives only by beating every cheaper one
+            keep.append(idx)
+            best = err
+    return d.loc[keep].drop(columns=["_c", "_e"])
+
+
+def aggregate_seeds(df: pd.DataFrame, error: str = ERROR, costs: Sequence[str] = COSTS):
+    """One row per configuration (every RunConfig field but ``seed``) over its ``ok`` runs.
+
+    ``error``: geometric mean over seeds (errors are compared on a log scale); costs: mean;
+    ``n_seeds``: how many ok runs entered; ``diverged``: how many runs did not end ``ok``.
+    """
+    from ._experiments import field_names
+
+    keys = [f for f in field_names() if f != "seed" and f in df.columns]
+    if not len(df):
+        return df.copy()
+    d = df.copy()
+    for col in keys:  # tuples and None group badly: group on their text
+        d[col] = d[col].map(lambda v: v if isinstance(v, int | float | str | bool) else str(v))
+    status = d["status"] if "status" in d else pd.Series("ok", index=d.index)
+    d["_ok"] = status == "ok"
+    out = []
+    for key, g in d.groupby(keys, dropna=False, sort=False):
+        rec = dict(zip(keys, key if isinstance(key, tuple) else (key,), strict=True))
+        good = g[g["_ok"]]
+        x = pd.to_numeric(good[error], errors="coerce").to_numpy(dtype=float)
+        x = x[np.isfinite(x) & (x > 0)]
+        rec[error] = float(np.exp(np.mean(np.log(x)))) if len(x) else float("nan")
+        for col in costs:
+            if col in good:
+                v = pd.to_numeric(good[col], errors="coerce").to_numpy(dtype=float)
+                v = v[np.isfinite(v)]
+                rec[col] = float(np.mean(v)) if len(v) else float("nan")
+        rec["n_seeds"] = len(x)
+        rec["diverged"] = int((~g["_ok"]).sum())
+        out.append(rec)
+    return pd.DataFrame(out)
+
+
+def cheapest_within(
+    df: pd.DataFrame,
+    cost: str,
+    error: str = ERROR,
+    tolerance: float = 0.1,
+    by: Sequence[str] = ("system", "k"),
+) -> pd.DataFrame:
+    """Per scene (group of ``by``), the cheapest row whose error <= (1 + tolerance) * best.
+
+    ``best`` is the smallest finite error of the scene. The result has the chosen row's
+    columns plus ``best_error`` and ``error_ratio`` (its error / best). Ties in cost go to the
+    smaller error.
+    """
+    if not (np.isfinite(tolerance) and tolerance >= 0):
+        raise ValueError(f"tolerance must be a finite number >= 0; got {tolerance!r}")
+    for col in (cost, error, *by):
+        if col not in df.columns:
+            raise ValueError(f"unknown column {col!r}; columns: {', '.join(map(str, df.columns))}")
+    c = pd.to_numeric(df[cost], errors="coerce")
+    e = pd.to_numeric(df[error], errors="coerce")
+    ok = np.isfinite(c) & np.isfinite(e)
+    d = df[ok].assign(_c=c[ok], _e=e[ok])
+    out = []
+    for _, g in d.groupby(list(by), dropna=False, sort=True):
+        best = g["_e"].min()
+        cand = g[g["_e"] <= (1.0 + tolerance) * best]
+        pick = cand.sort_values(["_c", "_e"], kind="mergesort").iloc[0]
+        rec = pick.drop(labels=["_c", "_e"]).to_dict()
+        rec["best_error"] = float(best)
+        rec["error_ratio"] = float(pick["_e"] / best) if best > 0 else 1.0
+        out.append(rec)
+    return pd.DataFrame(out)
+
+
+def label(df: pd.DataFrame) -> pd.Series:
+    """A short text per configuration: ``rk4x2``, ``adaptive@1e-09``, ``w256``, ``s3000``..."""
+
+    def one(r):
+        if r.get("eval_integrator") == "adaptive":
+            ev = f"adaptive@{float(r['eval_rtol']):.0e}"
+        else:
+            ev = f"{r.get('eval_integrator')}x{int(r.get('eval_substeps', 1))}"
+        extra = []
+        if r.get("train_integrator", BASE_TRAIN_INTEGRATOR) != BASE_TRAIN_INTEGRATOR:
+            extra.append(f"train {r['train_integrator']}")
+        extra.append(f"w{int(r['width'])}" if "width" in r else "")
+        extra.append(f"s{int(r['steps'])}" if "steps" in r else "")
+        return " ".join([ev, *[x for x in extra if x]])
+
+    return df.apply(one, axis=1) if len(df) else pd.Series([], dtype=str)
+
+
+def tradeoff_table(runs: pd.DataFrame, cost: str = "rollout_seconds_per_traj") -> pd.DataFrame:
+    """The Pareto front per (system, model) of the seed-aggregated runs in (cost, error)."""
+    agg = aggregate_seeds(runs)
+    if not len(agg):
+        return agg
+    fronts = []
+    for _, g in agg.groupby(["system", "model"], sort=True):
+        f = pareto_front(g, cost)
+        fronts.append(f.assign(config=label(f)))
+    cols = ["system", "model", "config", ERROR, cost, "n_seeds", "diverged"]
+    return pd.concat(fronts)[[c for c in cols if c in agg.columns or c == "config"]]
+
+
+def _runs(results_dir, profile=None) -> tuple[pd.DataFrame, str | None]:
+    from . import _store
+    from ._figures import experiment_rows, pick_profile
+
+    runs = _store.load_runs(results_dir)
+    if not len(runs):
+        return runs, None
+    if profile is None:
+        profile = pick_profile(runs)
+    if profile is not None:
+        runs = runs[runs["profile"] == profile]
+    return experiment_rows(runs.reset_index(drop=True), "tradeoff", profile), profile
+
+
+def _md(df: pd.DataFrame) -> list[str]:
+    def f(v):
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v)
+
+    lines = ["| " + " | ".join(map(str, df.columns)) + " |", "|" + " --- |" * len(df.columns)]
+    for r in df.itertuples(index=False):
+        lines.append("| " + " | ".join(f(v) for v in r) + " |")
+    return lines
+
+
+def tradeoff_section(results_dir="results", profile: str | None = None) -> str:
+    """REPORT.md's trade-off section: Pareto fronts and the cheapest config within 10%."""
+    runs, profile = _runs(results_dir, profile)
+    head = ["## Speed/accuracy trade-off", ""]
+    if not len(runs):
+        return "\n".join(head + ["No trade-off runs yet: `python -m bench sweep tradeoff`.", ""])
+    agg = aggregate_seeds(runs)
+    lines = head + [
+        f"Profile `{profile}`: {len(runs)} runs, {len(agg)} configurations (seeds aggregated: "
+        "geometric-mean rollout error, mean costs). Cost = rollout seconds per test "
+        "trajectory after compilation; `nfe` = vector-field evaluations per trajectory.",
+        "",
+        "### Pareto front per model (error vs rollout seconds per trajectory)",
+        "",
+    ]
+    lines += _md(tradeoff_table(runs))
+    for cost, what in (
+        ("rollout_seconds_per_traj", "rollout seconds"),
+        ("nfe", "evaluations"),
+        ("train_seconds", "training seconds"),
+    ):
+        if cost not in agg or not np.isfinite(pd.to_numeric(agg[cost], errors="coerce")).any():
+            continue
+        pick = cheapest_within(agg, cost)
+        pick = pick.assign(config=label(pick))
+        cols = ["system", "model", "config", ERROR, "best_error", "error_ratio", cost]
+        lines += [
+            "",
+            f"### Cheapest configuration within 10% of the best error, by {what}",
+            "",
+            *_md(pick[[c for c in cols if c in pick.columns]]),
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def tradeoff_figure(results_dir="results", profile: str | None = None) -> list[Path]:
+    """Error vs rollout cost and vs training cost per scene, each model's Pareto front drawn."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs, _ = _runs(results_dir, profile)
+    if not len(runs):
+        return []
+    agg = aggregate_seeds(runs)
+    scenes = sorted(agg["system"].unique())
+    fig, axes = plt.subplots(len(scenes), 2, figsize=(11, 4 * len(scenes)), squeeze=False)
+    for i, scene in enumerate(scenes):
+        d = agg[agg["system"] == scene]
+        for j, cost in enumerate(("rollout_seconds_per_traj", "train_seconds")):
+            ax = axes[i, j]
+            for model, g in d.groupby("model"):
+                pts = ax.loglog(g[cost], g[ERROR], "o", alpha=0.35, label=None)
+                f = pareto_front(g, cost)
+                ax.loglog(f[cost], f[ERROR], "-o", color=pts[0].get_color(), label=model)
+            ax.set(
+                xlabel=cost.replace("_", " "),
+                ylabel="rollout error (geo. mean)",
+                title=f"{scene} k=2",
+            )
+            ax.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(results_dir) / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "tradeoff.png", out / "tradeoff.pdf"]
+    for p in paths:
+        fig.savefig(p, dpi=120)
+    plt.close(fig)
+    return paths
