@@ -95,7 +95,6 @@ def _build(config: RunConfig, cache_root: Path):
         random_args=config.random_args,
         seed=config.seed,
     )
-    data = systems.make_dataset(dcfg, cache_dir=cache_root)
     scene = models.Scene(
         dof=system.dof,
         angular=tuple(system.angular),
@@ -114,6 +113,7 @@ def _build(config: RunConfig, cache_root: Path):
         dissipation=config.dissipation,
         **dict(config.model_options),
     )
+    data = systems.make_dataset(dcfg, cache_dir=cache_root)
     return system, data, scene, model
 
 
@@ -174,7 +174,13 @@ def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
         pass
     args = data.args_test if config.random_args else None
     value = M.perturbed_floor(
-        system, data.z_test, data.ts_test, args, key=config.seed, coordinates=config.coordinates
+        system,
+        data.z_test,
+        data.ts_test,
+        args,
+        key=config.seed,
+        coordinates=config.coordinates,
+        sim_points=getattr(data.config, "n_points", None),
     )
     _write_json(path, {"floor": value})
     return value
