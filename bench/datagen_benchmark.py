@@ -54,14 +54,18 @@ def _energy_drift(n: int) -> None:
         zs = np.asarray(system.simulate_batch(z0, ts, args))
         seconds = time.perf_counter() - start
         if args is None:
-            energy = jax.vmap(jax.vmap(system.energy))(zs)
-        else:
-            energy = jax.vmap(lambda z, a: jax.vmap(lambda zz: system.energy(zz, a))(z))(zs, args)
-        energy = np.asarray(energy)
+            args = np.broadcast_to(np.asarray(system.default_args()), (n, system.n_args))
+        energy = np.asarray(_energies(system, zs, args))
         dabs = np.abs(energy - energy[:, :1])
         rel = np.max(dabs / np.abs(energy[:, :1]))
         label = f"{name}" + (f" k={params['k']}" if "k" in params else "")
         print(f"  {label:<28} {rel:>18.2e} {np.max(dabs):>14.2e} {seconds:>8.1f}")
+
+
+def _energies(system, zs, args):
+    """E along every trajectory, args (N, P) per trajectory."""
+    per_traj = jax.vmap(system.energy, in_axes=(0, None))
+    return jax.vmap(per_traj)(zs, args)
 
 
 def main(argv=None) -> None:

@@ -27,7 +27,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jax import Array
 
 RTOL = 1e-11
 ATOL = 1e-11
@@ -52,7 +52,7 @@ class AbstractSystem(eqx.Module):
         """Number of generalised coordinates."""
         return len(self.angular)
 
-    def default_args(self) -> Float[Array, " n_args"]:
+    def default_args(self) -> Array:
         """The parameters used when ``args`` is None (empty for parameter-free systems)."""
         return jnp.zeros((0,), dtype=jnp.float64)
 
@@ -65,14 +65,14 @@ class AbstractSystem(eqx.Module):
         """V(q)."""
 
     @abc.abstractmethod
-    def positions(self, z) -> Float[Array, "bodies dim"]:
+    def positions(self, z) -> Array:
         """Cartesian positions of the bodies at state z."""
 
     @abc.abstractmethod
-    def sample_initial(self, key, n: int) -> Float[Array, "n state"]:
+    def sample_initial(self, key, n: int) -> Array:
         """``n`` random initial states z0."""
 
-    def sample_args(self, key, n: int) -> Float[Array, "n n_args"]:
+    def sample_args(self, key, n: int) -> Array:
         """``n`` random per-trajectory parameter vectors (shape (n, 0) when there are none)."""
         del key
         return jnp.zeros((n, 0), dtype=jnp.float64)
@@ -138,7 +138,7 @@ class AbstractSystem(eqx.Module):
     def check_states(self, z: np.ndarray) -> None:
         """Raise ValueError for states outside the system's domain (hook; none by default)."""
 
-    def simulate(self, z0, ts, args=None) -> Float[Array, "T state"]:
+    def simulate(self, z0, ts, args=None) -> Array:
         """Ground-truth trajectory z(ts) from z(ts[0]) = z0, float64, shape (len(ts), 2*dof)."""
         z0 = _as_float_array(z0, "z0")
         if z0.shape != (2 * self.dof,):
@@ -152,7 +152,7 @@ class AbstractSystem(eqx.Module):
             args = args[None]
         return self.simulate_batch(z0[None], ts, args)[0]
 
-    def simulate_batch(self, z0s, ts, args=None) -> Float[Array, "N T state"]:
+    def simulate_batch(self, z0s, ts, args=None) -> Array:
         """Ground-truth trajectories for a batch of initial states, shape (N, len(ts), 2*dof).
 
         ``args``: None (default parameters), shape (n_args,) (shared) or (N, n_args).

@@ -6,7 +6,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jax import Array
 
 from ._base import AbstractSystem, reference_masses_lengths
 from ._params import check_count, check_nonneg, check_positive_values, check_real
@@ -23,8 +23,8 @@ class ChainPendulum(AbstractSystem):
     which in these coordinates is exactly qddot -> qddot - f qdot.
     """
 
-    masses: Float[Array, " k"]
-    lengths: Float[Array, " k"]
+    masses: Array
+    lengths: Array
     g: float = eqx.field(static=True)
     friction: float = eqx.field(static=True)
     angular: tuple[bool, ...] = eqx.field(static=True)
@@ -65,6 +65,7 @@ class ChainPendulum(AbstractSystem):
         tail_mass = np.cumsum(np.asarray(self.masses)[::-1])[::-1]
         return float(2.0 * self.g * np.sum(np.asarray(self.lengths) * tail_mass))
 
+    @eqx.filter_jit
     def sample_initial(self, key, n: int):
         """Random states spread like the reference's (REFERENCE.md, "Initial conditions").
 
@@ -79,19 +80,20 @@ class ChainPendulum(AbstractSystem):
         pos_noise = 0.2 * jax.random.normal(k_pos, (n, k, 2), dtype=jnp.float64)
         vel_noise = 0.4 * jax.random.normal(k_vel, (n, 2 * k), dtype=jnp.float64)
 
-        def one(th, om, dpos, dvel):
-            pos = self.positions(jnp.concatenate([th, om])) + dpos
-            links = jnp.diff(jnp.concatenate([jnp.zeros((1, 2)), pos]), axis=0)
-            th2 = jnp.arctan2(links[:, 0], -links[:, 1])
-            jac = jax.jacfwd(lambda t: jnp.concatenate(self._cartesian(t, om)[:2]))
-            v = jac(th) @ om
-            target = 3.0 * (0.5 * v + dvel)
-            j2 = jac(th2)
-            om2 = jnp.linalg.solve(j2.T @ j2, j2.T @ target)
-            return jnp.concatenate([th2, om2])
-
-        return jax.vmap(one)(theta, omega, pos_noise, vel_noise)
-
+        x, y, vx, vy = jax.vmap(self._cartesian)(theta, omega)
+        pos = jnp.stack([x, y], axis=-1) + pos_noise
+        links = jnp.diff(pos, axis=1, prepend=jnp.zeros((n, 1, 2)))
+        theta2 = jnp.arctan2(links[..., 0], -links[..., 1])
+        target = 3.0 * (0.5 * jnp.concatenate([vx, vy], axis=-1) + vel_noise)
+        # Link Jacobian d(x, y)/d theta: row i, column j is l_j (cos, sin) theta_j for j <= i.
+        tri = jnp.tril(jnp.ones((k, k)))
+        lc = self.lengths * jnp.cos(theta2)
+        ls = self.lengths * jnp.sin(theta2)
+        jac = jnp.concatenate([tri * lc[:, None, :], tri * ls[:, None, :]], axis=1)
+        jtj = jnp.einsum("nij,nik->njk", jac, jac)
+        jtv = jnp.einsum("nij,ni->nj", jac, target)
+        omega2 = jnp.linalg.solve(jtj, jtv[..., None])[..., 0]
+        return jnp.concatenate([theta2, omega2], axis=-1)
 
 def chain_pendulum(k, masses=None, lengths=None, g=G, friction=0.0) -> ChainPendulum:
     """A chain pendulum of k links; masses/lengths default to the reference table."""

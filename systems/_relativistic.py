@@ -67,6 +67,7 @@ class RelativisticParticle(AbstractSystem):
         if not np.all(np.abs(z[..., 1]) < 1.0):
             raise ValueError("relativistic_particle needs |qdot| < 1 (c = 1) in every state")
 
+    @eqx.filter_jit
     def sample_initial(self, key, n: int):
         """q ~ N(0, 1), qdot ~ U(-0.9, 0.9): well inside the light cone |qdot| < 1."""
         k_q, k_v = jax.random.split(key)
@@ -74,6 +75,7 @@ class RelativisticParticle(AbstractSystem):
         v = jax.random.uniform(k_v, (n, 1), dtype=jnp.float64, minval=-MAX_SPEED, maxval=MAX_SPEED)
         return jnp.concatenate([q, v], axis=-1)
 
+    @eqx.filter_jit
     def sample_args(self, key, n: int):
         """g ~ U(0.5, 2.0) per trajectory, shape (n, 1)."""
         lo, hi = G_RANGE
