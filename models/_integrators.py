@@ -36,6 +36,9 @@ class Integrator:
     ``substeps``: fixed steps per interval of ``ts`` (fixed-step methods and discrete models).
     ``rtol``, ``atol``, ``solver`` (``tsit5`` | ``dopri5`` | ``dopri8``), ``max_steps``: the
     adaptive solve.
+    ``implicit_iterations``: leapfrog only; fixed-point iterations of the implicit second
+    velocity kick for velocity-dependent accelerations (0: the explicit variant, see
+    :func:`rollout`).
     """
 
     method: str = "rk4_38"
@@ -44,6 +47,7 @@ class Integrator:
     atol: float = 1e-8
     solver: str = "tsit5"
     max_steps: int = 100_000
+    implicit_iterations: int = 0
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -58,6 +62,9 @@ class Integrator:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and 0 < value < 1):
                 raise ValueError(f"{name} must be a number in (0, 1), got {value!r}")
+        k = self.implicit_iterations
+        if isinstance(k, bool) or not isinstance(k, int) or k < 0:
+            raise ValueError(f"implicit_iterations must be an integer >= 0, got {k!r}")
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int):
             raise ValueError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
         if self.max_steps < 1:
@@ -193,9 +200,13 @@ def rollout(
 
     and ``a_new`` is reused as the first kick of the next step (one acceleration per step).
     When ``a`` does not depend on ``v`` this is the exact symplectic, time-reversible,
-    second-order Stormer-Verlet map. When it does (damped models) this explicit variant
-    evaluates the velocity-dependent part at the half-step velocity: it is then neither
-    exactly symplectic nor second order in that part.
+    second-order Stormer-Verlet map. When it does (damping; Coriolis terms of a learned
+    mass matrix) this explicit variant evaluates the velocity-dependent part at the half-step
+    velocity: it is then neither symplectic nor time-reversible, and first order in that part.
+    ``implicit_iterations = k > 0`` instead solves the second kick
+    ``v_new = v' + h/2 a(q_new, v_new)`` by k fixed-point iterations started from the explicit
+    value (1 + k accelerations per step): the generalised leapfrog, time-reversible when
+    ``a(q, -v) = a(q, v)`` (no drift of a conserved energy) and second order.
 
     With ``return_stats=True`` returns ``(zs, stats)``; ``stats["nfe"]`` counts vector-field
     evaluations. For ``adaptive`` it is ``1 + (stages - fsal) * num_steps`` from diffrax's step
@@ -236,6 +247,8 @@ def rollout(
             v_half = v + (0.5 * h) * a
             q_new = q + h * v_half
             a_new = accel(q_new, v_half)
+            for _ in range(integrator.implicit_iterations):
+                a_new = accel(q_new, v_half + (0.5 * h) * a_new)
             return (jnp.concatenate([q_new, v_half + (0.5 * h) * a_new]), a_new)
 
         zs = _scan_intervals(advance, (z0, accel(z0[:d], z0[d:])), ts, m)
@@ -279,9 +292,9 @@ def rollout_batch(
 def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
     """Vector-field evaluations per trajectory of a fixed-step rollout over ``ts``.
 
-    Per step: euler 1, rk4 and rk4_38 4, leapfrog 1 (plus one initial acceleration, reused
-    afterwards), a discrete model 1 ``step``. For ``adaptive`` the count is known only after
-    the solve: use ``rollout(..., return_stats=True)``.
+    Per step: euler 1, rk4 and rk4_38 4, leapfrog 1 + implicit_iterations (plus one initial
+    acceleration, reused afterwards), a discrete model 1 ``step``. For ``adaptive`` the count
+    is known only after the solve: use ``rollout(..., return_stats=True)``.
     """
     kind = _check(model, integrator)
     steps = (len(ts) - 1) * integrator.substeps
@@ -293,5 +306,5 @@ def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
             "use rollout(..., return_stats=True) (allowed here: euler, rk4, rk4_38, leapfrog)"
         )
     if integrator.method == "leapfrog":
-        return steps + (1 if steps > 0 else 0)
+        return steps * (1 + integrator.implicit_iterations) + (1 if steps > 0 else 0)
     return steps * {"euler": 1, "rk4": 4, "rk4_38": 4}[integrator.method]

@@ -174,6 +174,7 @@ def _counting(model):
         Integrator("rk4"),
         Integrator("rk4_38", substeps=2),
         Integrator("leapfrog", substeps=3),
+        Integrator("leapfrog", implicit_iterations=2),
         Integrator("adaptive", rtol=1e-7, atol=1e-9),
     ],
     ids=lambda i: i.method,
@@ -210,6 +211,28 @@ def test_leapfrog_bounded_energy_euler_grows(osc):
     # explicit Euler multiplies the energy by (1 + (h w)^2) every step
     ze = np.asarray(rollout(osc, Z0, ts[:1001], None, Integrator("euler")))
     np.testing.assert_allclose(energy(ze[-1]) / e0, (1 + (h * W) ** 2) ** 1000, rtol=1e-9)
+
+
+@pytest.mark.parametrize(("iterations", "order"), [(0, 1), (3, 2)])
+def test_leapfrog_order_velocity_dependent(iterations, order):
+    # explicit variant: first order once a depends on v; implicit kick: second order again
+    damped = Oscillator(w=W, gamma=0.5)
+    t1 = 2.0
+    ref = rollout(damped, Z0, jnp.array([0.0, t1]), None, Integrator("rk4", substeps=2000))[-1]
+    dts = [0.1, 0.05, 0.025]
+    errors = []
+    for dt in dts:
+        n = int(round(t1 / dt))
+        zs = rollout(
+            damped,
+            Z0,
+            jnp.array([0.0, t1]),
+            None,
+            Integrator("leapfrog", substeps=n, implicit_iterations=iterations),
+        )
+        errors.append(float(jnp.max(jnp.abs(zs[-1] - ref))))
+    slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert abs(slope - order) < 0.3, (iterations, slope, errors)
 
 
 def test_damped_leapfrog_decays(osc):
@@ -264,6 +287,7 @@ def test_float32_state_stays_float32(osc):
         {"rtol": -1.0},
         {"atol": 0.0},
         {"max_steps": 0},
+        {"implicit_iterations": -1},
     ],
 )
 def test_bad_integrator(kwargs):
