@@ -20,9 +20,15 @@ _SHIFT = math.log(math.e - 1.0)
 def cholesky_from_raw(raw: Array, dof: int, eps: float) -> Array:
     """Lower-triangular C from dof (dof + 1) / 2 numbers; diagonal softplus(.) + eps > 0."""
     rows, cols = np.tril_indices(dof)
-    c = jnp.zeros((dof, dof), raw.dtype).at[rows, cols].set(raw)
-    diag = jax.nn.softplus(jnp.diagonal(c) + _SHIFT) + eps
-    return c.at[np.arange(dof), np.arange(dof)].set(diag)
+    n_raw = rows.size
+    # one gather (no scatter): strictly-lower entries from raw, the rest from a zero slot
+    index = np.full((dof, dof), n_raw)
+    strict = rows != cols
+    index[rows[strict], cols[strict]] = np.flatnonzero(strict)
+    diag_index = np.flatnonzero(~strict)
+    lower = jnp.concatenate([raw, jnp.zeros((1,), raw.dtype)])[index]
+    diag = jax.nn.softplus(raw[diag_index] + _SHIFT) + eps
+    return lower + jnp.eye(dof, dtype=raw.dtype) * diag
 
 
 class CholeskyNet(eqx.Module):

@@ -25,13 +25,13 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import jax.random as jr
-import jax.scipy.linalg as jsl
 from jaxtyping import Array
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, as_dtype
 from ._dissipation import Dissipation
 from ._features import Features
 from ._hamiltonian import GeneralHamiltonian, SeparableHamiltonian
+from ._linalg import cho_solve, cholesky
 from ._mass import CholeskyNet
 from ._mlp import ACTIVATIONS, DTYPES, INITS, MLP
 from ._scalar import SOLVES, acceleration_from_lagrangian, hamiltonian_field, lagrangian_energy
@@ -192,7 +192,7 @@ class HNN(AbstractContinuousModel):
         if self.dissipation is not None:
             pdot = pdot + self.dissipation.force(q, qdot, args)
         _, dm_v = jax.jvp(lambda q_: self.mass.matrix(q_, args) @ x, (q,), (qdot,))
-        vdot = jsl.cho_solve((c, True), pdot - dm_v)
+        vdot = cho_solve(c, pdot - dm_v)
         return jnp.concatenate([qdot, vdot])
 
 
@@ -228,7 +228,7 @@ class SeparableHNN(AbstractContinuousModel):
     def momentum(self, q, v, args):
         """p = M(q) qdot = (M^-1(q))^-1 qdot."""
         minv = self.hamiltonian_part.inverse_mass.matrix(q, args)
-        return jsl.cho_solve((jnp.linalg.cholesky(minv), True), v)
+        return cho_solve(cholesky(minv), v)
 
     def hamiltonian(self, z, args):
         q, v = _split(as_dtype(z, self.dtype))
@@ -239,7 +239,7 @@ class SeparableHNN(AbstractContinuousModel):
         q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
         inverse_mass = lambda q_: self.hamiltonian_part.inverse_mass.matrix(q_, args)
         minv = inverse_mass(q)
-        p = jsl.cho_solve((jnp.linalg.cholesky(minv), True), v)
+        p = cho_solve(cholesky(minv), v)
         pdot = -jax.grad(self.hamiltonian_part, argnums=0)(q, p, args)
         if self.dissipation is not None:
             pdot = pdot + self.dissipation.force(q, v, args)

@@ -25,7 +25,7 @@ def symplectic_error(model, zs, args) -> Array:
     if args.ndim <= 1:
         args = jnp.broadcast_to(args.reshape(n_args), zs.shape[:-1] + (n_args,))
     flat_z = zs.reshape(-1, n)
-    flat_a = jnp.broadcast_to(args, zs.shape[:-1] + (n_args,)).reshape(-1, n_args)
+    flat_a = jnp.broadcast_to(args, zs.shape[:-1] + (n_args,)).reshape(flat_z.shape[0], n_args)
     J = symplectic_matrix(n // 2, model.dtype)
 
     def one(z, a):

@@ -9,9 +9,10 @@ from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
-import jax.scipy.linalg as jsl
 import optimistix as optx
 from jaxtyping import Array
+
+from ._linalg import cho_solve, spd_solve
 
 
 def verlet_step(
@@ -26,17 +27,16 @@ def verlet_step(
     forcing, F^- = F^+ = dt/2 (-D v)), which keeps the step second order and, for D PSD,
     contractive in the kinetic energy; the v1 equation is linear, so it is one solve.
     """
-    cho = (chol_M, True)
     g0 = grad_U(q)
     f0 = -g0 if damping is None else -g0 - damping @ v
-    q1 = q + dt * v + 0.5 * dt**2 * jsl.cho_solve(cho, f0)
+    q1 = q + dt * v + 0.5 * dt**2 * cho_solve(chol_M, f0)
     g1 = grad_U(q1)
     if damping is None:
-        v1 = v - 0.5 * dt * jsl.cho_solve(cho, g0 + g1)
+        v1 = v - 0.5 * dt * cho_solve(chol_M, g0 + g1)
     else:
         m = chol_M @ chol_M.T
         rhs = m @ v - 0.5 * dt * (g0 + g1) - 0.5 * dt * (damping @ v)
-        v1 = jnp.linalg.solve(m + 0.5 * dt * damping, rhs)
+        v1 = spd_solve(m + 0.5 * dt * damping, rhs)
     return q1, v1
 
 

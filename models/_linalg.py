@@ -1,0 +1,49 @@
+"""Cholesky factorisation and solves for the small SPD matrices of the models (dof x dof).
+
+Unrolled over the (static, small) size: on CPU, XLA lowers batched LAPACK calls to a loop of
+tiny library calls and compiles them slowly, whereas the unrolled form is a few vectorised
+elementwise operations that vmap and differentiate cheaply. Larger matrices use jnp.linalg.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+from jaxtyping import Array
+
+_UNROLL = 12  # spring_pendulum(k=4) has 12 degrees of freedom
+
+
+def cholesky(a: Array) -> Array:
+    """Lower-triangular C with C C^T = a, for symmetric positive-definite a."""
+    n = a.shape[0]
+    if n > _UNROLL:
+        return jnp.linalg.cholesky(a)
+    c = [[None] * n for _ in range(n)]
+    for j in range(n):
+        s = a[j, j] - sum((c[j][k] ** 2 for k in range(j)), start=0.0)
+        c[j][j] = jnp.sqrt(s)
+        for i in range(j + 1, n):
+            s = a[i, j] - sum((c[i][k] * c[j][k] for k in range(j)), start=0.0)
+            c[i][j] = s / c[j][j]
+    zero = jnp.zeros((), a.dtype)
+    return jnp.stack([jnp.stack([c[i][j] if j <= i else zero for j in range(n)]) for i in range(n)])
+
+
+def cho_solve(c: Array, b: Array) -> Array:
+    """x with (C C^T) x = b for a lower-triangular Cholesky factor C; b of shape (n,)."""
+    n = c.shape[0]
+    if n > _UNROLL:
+        return jsl.cho_solve((c, True), b)
+    y = []
+    for i in range(n):  # C y = b
+        y.append((b[i] - sum((c[i, k] * y[k] for k in range(i)), start=0.0)) / c[i, i])
+    x = [None] * n
+    for i in reversed(range(n)):  # C^T x = y
+        x[i] = (y[i] - sum((c[k, i] * x[k] for k in range(i + 1, n)), start=0.0)) / c[i, i]
+    return jnp.stack(x)
+
+
+def spd_solve(a: Array, b: Array) -> Array:
+    """x with a x = b for symmetric positive-definite a."""
+    return cho_solve(cholesky(a), b)
