@@ -19,6 +19,7 @@ import pandas as pd
 import pytest
 
 import bench._runner as runner
+import models
 from bench import _store
 from bench._experiments import Experiment, RunConfig, expand, register
 
@@ -40,6 +41,20 @@ TWO = register(
         title="test: two models",
         axes={"model": ["node", "node_so"]},
         fixed={"system": "chain_pendulum", "k": 1, "steps": 10},
+    ),
+    replace=True,
+)
+
+ALL = register(
+    Experiment(
+        name="test_all_smoke",
+        title="test: every model on every system",
+        axes={
+            "system": ["chain_pendulum", "spring_pendulum", "relativistic_particle"],
+            "k": [2, None],
+            "model": models.available(),
+        },
+        include=lambda c: (c.system == "relativistic_particle") == (c.k is None),
     ),
     replace=True,
 )
@@ -307,3 +322,26 @@ def test_ray_two_run_sweep(tmp_path):
     df = _store.load_runs(tmp_path / "res")
     assert set(df["config_hash"]) == {c.config_hash for c in configs}
     print(f"ray two-run sweep: {time.perf_counter() - t0:.1f} s")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("executor", ["local", "ray"])
+def test_smoke_every_model_and_system(executor, tmp_path):
+    if executor == "ray":
+        pytest.importorskip("ray")
+    configs = expand(ALL, "smoke")
+    assert len(configs) == 3 * len(models.available())
+    t0 = time.perf_counter()
+    rows = runner.sweep(
+        configs,
+        tmp_path,
+        experiment="test_all_smoke",
+        profile="smoke",
+        executor=executor,
+        progress=False,
+        cache_root=tmp_path / "cache",
+    )
+    failed = [(r["system"], r["model"], r["error"]) for r in rows if r["status"] == "failed"]
+    assert not failed
+    assert len(_store.load_runs(tmp_path)) == len(configs)
+    print(f"{executor}: {len(configs)} smoke runs in {time.perf_counter() - t0:.0f} s")
