@@ -31,7 +31,14 @@ vin (VIN seed)                27     {vin, resnet, node_so} x n_train {8, 32, 12
 Unique runs in quick: 24 + 12 + 18 + 24 + 9 + 6 + 27 = 120. The quick profile uses k = 2 only
 in Fig. 2 because the separable HNN's cost grows with the dof (spring k = 3, 4 would cost
 more than the whole rest of the sweep); the scatter over systems and models still gives 24
-points. The measured estimate is in the report and in ``estimate_seconds``.
+points.
+
+Estimate: ``estimate_seconds("quick")`` gives about 22 min with the calibration's per-step
+costs and 12 s of per-run overhead. Measured on 2026-11-22 on this machine while the team's
+tests ran beside it (load average 8-10 on 2 cores), quick chain-2, seed 0: NODE+SO 9 s training
++ 15 s compile, 105 s wall (first run: includes the dataset); separable HNN 96 s training +
+103 s compile, 276 s wall. With those costs the quick sweep would take about 2 h, so the
+30-minute budget is NOT yet verified; re-measure on an idle machine before trimming cells.
 """
 
 from __future__ import annotations
