@@ -72,6 +72,7 @@ def test_list(capsys):
         assert word in out
 
 
+@pytest.mark.slow  # a real run: data, training and evaluation compiles (30-130 s here)
 def test_run_prints_metrics_and_adds_row(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("DECON_CACHE", str(tmp_path / "cache"))
     argv = ["--results", str(tmp_path / "res"), "run", "--system", "chain_pendulum", "--k", "1",
