@@ -81,13 +81,13 @@ def _one_line(err: BaseException, limit: int = 300) -> str:
     return f"{type(err).__name__}: {text}".replace("\n", " ").strip()[:limit]
 
 
-def guard(case: str, fn: Callable[[], list[Row]]) -> list[Row]:
+def guard(case: str, fn: Callable[[], list[Row]], variant: str = "*") -> list[Row]:
     """Run ``fn``; an exception becomes one ``failed`` row, a non-finite ``ok`` a ``diverged``."""
     try:
         rows = list(fn())
     except Exception as err:  # noqa: BLE001 - every failure must become a recorded outcome
-        traceback.print_exc()
-        return [Row(case, "*", "*", "failed", message=_one_line(err))]
+        traceback.print_exc(limit=3)
+        return [Row(case, variant, "*", "failed", message=_one_line(err))]
     checked = []
     for r in rows:
         if r.outcome == "ok" and not math.isfinite(r.value):
@@ -862,7 +862,7 @@ def case_long_horizon(size) -> list[Row]:
                 )
             return out
 
-        rows += guard("long_horizon", one)
+        rows += guard("long_horizon", one, f"{name}/*")
     return rows
 
 
@@ -1005,7 +1005,90 @@ def case_high_energy_models(size) -> list[Row]:
                 )
             return out
 
-        rows += guard("high_energy_models", one)
+        rows += guard("high_energy_models", one, f"{name}/*")
+    return rows
+
+
+def _as_float64_model(model, name: str, size: StabilitySize):
+    """``model``'s parameters in a float64 build of the same model (same static structure)."""
+    import models
+
+    scene = model.scene
+    m64 = models.make(name, scene, key=jax.random.PRNGKey(0), width=size.width, dtype="float64")
+    p64, static64 = eqx.partition(m64, eqx.is_array)
+    leaves = [
+        x.astype(jnp.float64) for x in jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_array))
+    ]
+    params = jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(p64), leaves)
+    return eqx.combine(params, static64)
+
+
+def case_model_precision(size) -> list[Row]:
+    """The same small models rolled out in float32 and, with the same weights, in float64.
+
+    RK4 over min(long_steps, 1000) steps of dt = 0.03 from the chain pendulum's states: the
+    relative difference between the two rollouts at the end, and the first time it exceeds
+    1e-3 (how fast rounding is amplified by the learned dynamics).
+    """
+    import models
+
+    size = _size(size)
+    sysm = systems.make("chain_pendulum", k=2)
+    n = min(size.long_steps, 1000)
+    ts = _grid(n)
+    z0 = np.asarray(sysm.sample_initial(jax.random.PRNGKey(5), size.n_traj))
+    rows = []
+    for name in size.models:
+
+        def one(name=name):
+            model, info = _train_small(name, size)
+            fn = eqx.filter_jit(models.rollout_batch)
+            integ = models.Integrator("rk4")
+            z32 = np.asarray(
+                fn(model, jnp.asarray(z0, jnp.float32), jnp.asarray(ts, jnp.float32), None, integ)
+            )
+            m64 = _as_float64_model(model, name, size)
+            z64 = np.asarray(fn(m64, jnp.asarray(z0), jnp.asarray(ts), None, integ))
+            v = f"{name}/float32_vs_float64"
+            common = dict(system="chain_pendulum", method="rk4", param=float(n), dtype="both")
+            bad = first_bad_step(np.concatenate([z32, z64]))
+            if bad is not None:
+                return [
+                    Row(
+                        "model_precision",
+                        v,
+                        "final_difference",
+                        "diverged",
+                        step=bad,
+                        message=info,
+                        **common,
+                    )
+                ]
+            diff = relative_error(z32, z64)
+            over = diff > 1e-3
+            t_sep = np.where(over.any(axis=1), ts[np.argmax(over, axis=1)], ts[-1])
+            return [
+                Row(
+                    "model_precision",
+                    v,
+                    "final_difference",
+                    "ok",
+                    float(np.median(diff[:, -1])),
+                    message=info,
+                    **common,
+                ),
+                Row(
+                    "model_precision",
+                    v,
+                    "separation_time",
+                    "ok",
+                    float(np.median(t_sep)),
+                    message=info,
+                    **common,
+                ),
+            ]
+
+        rows += guard("model_precision", one, f"{name}/*")
     return rows
 
 
@@ -1018,6 +1101,7 @@ CASES: dict[str, Callable[[StabilitySize], list[Row]]] = {
     "lnn_singular": case_lnn_singular,
     "long_horizon": case_long_horizon,
     "high_energy_models": case_high_energy_models,
+    "model_precision": case_model_precision,
 }
 
 
