@@ -314,7 +314,9 @@ def label(df: pd.DataFrame) -> pd.Series:
     """A short text per configuration: ``rk4x2``, ``adaptive@1e-09``, ``w256``, ``s3000``..."""
 
     def one(r):
-        if r.get("eval_integrator") == "adaptive":
+        if r.get("model") in DISCRETE:
+            ev = "native"  # a discrete model is its own integrator
+        elif r.get("eval_integrator") == "adaptive":
             ev = f"adaptive@{float(r['eval_rtol']):.0e}"
         else:
             ev = f"{r.get('eval_integrator')}x{int(r.get('eval_substeps', 1))}"
@@ -382,7 +384,10 @@ def tradeoff_section(results_dir="results", profile: str | None = None) -> str:
         "### Pareto front per model (error vs rollout seconds per trajectory)",
         "",
     ]
-    lines += _md(tradeoff_table(runs))
+    if "rollout_seconds_per_traj" in agg:
+        lines += _md(tradeoff_table(runs))
+    else:
+        lines.append("(no `rollout_seconds_per_traj` column in the runs table)")
     for cost, what in (
         ("rollout_seconds_per_traj", "rollout seconds"),
         ("nfe", "evaluations"),
