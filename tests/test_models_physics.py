@@ -1,0 +1,333 @@
+"""Structural (physics) checks of each bias: conservation, dissipation, symplecticity, the
+Euler-Lagrange solve against closed forms, and the variational integrators' order and symmetry."""
+
+from __future__ import annotations
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.random as jr
+import numpy as np
+import pytest
+
+import models
+from models import AbstractContinuousModel, Scene
+
+jax.config.update("jax_enable_x64", True)
+
+W = 16  # tiny networks: these tests check structure, not capacity
+CHAIN2 = Scene(dof=2, angular=(True, True))
+STRUCTURED = ("hnn", "hnn_so", "lnn", "vin", "vin_implicit")
+VELOCITY_ONLY = ("lnn", "vin", "vin_implicit")
+G = 9.81
+
+
+def _apply(model, z, args):
+    if isinstance(model, AbstractContinuousModel):
+        return model.vector_field(0.0, z, args)
+    return model.step(z, 0.03, args)
+
+
+def _states(key, n, dof, dtype=jnp.float64):
+    return jr.normal(key, (n, 2 * dof), dtype)
+
+
+# --------------------------------------------------------------------------- energy
+
+
+def _energy_fn(model):
+    if isinstance(model, models.AbstractContinuousModel) and hasattr(model, "hamiltonian"):
+        return model.hamiltonian
+    return model.energy
+
+
+@functools.cache
+def _energy_rate(name, canonical, damped):
+    scene = Scene(dof=2, angular=(True, True), damped=damped, canonical=canonical)
+    model = models.make(name, scene, key=jr.PRNGKey(5), width=W, dtype="float64")
+    E = _energy_fn(model)
+
+    @jax.jit
+    @jax.vmap
+    def rate(z):
+        g = jax.grad(E)(z, None)
+        f = model.vector_field(0.0, z, None)
+        return g @ f, jnp.linalg.norm(g) * jnp.linalg.norm(f)
+
+    return rate(_states(jr.PRNGKey(6), 32, 2))
+
+
+@pytest.mark.parametrize(
+    "name,canonical",
+    [("hnn", False), ("hnn", True), ("hnn_so", False), ("hnn_so", True), ("lnn", False)],
+)
+def test_learned_energy_conserved_by_its_field(name, canonical):
+    rate, scale = _energy_rate(name, canonical, False)
+    assert float(jnp.max(jnp.abs(rate) / scale)) < 1e-10
+
+
+@pytest.mark.parametrize(
+    "name,canonical",
+    [("hnn", False), ("hnn", True), ("hnn_so", False), ("hnn_so", True), ("lnn", False)],
+)
+def test_dissipation_makes_learned_energy_decrease(name, canonical):
+    rate, scale = _energy_rate(name, canonical, True)
+    assert float(jnp.max(rate / scale)) < 1e-10
+    assert float(jnp.mean(rate / scale)) < -1e-4  # and it does dissipate
+
+
+def test_separable_hamiltonian_form():
+    model = models.make("hnn_so", CHAIN2, key=jr.PRNGKey(7), width=W, dtype="float64")
+    part = model.hamiltonian_part
+    q, p = jnp.array([0.4, -1.1]), jnp.array([0.7, 0.2])
+    H = lambda p_: part(q, p_, jnp.zeros((0,)))
+    # H - V quadratic in p, with Hessian M^-1(q) positive definite
+    np.testing.assert_allclose(H(2 * p) - H(0 * p), 4 * (H(p) - H(0 * p)), rtol=1e-12)
+    hess = jax.hessian(H)(p)
+    np.testing.assert_allclose(hess, part.inverse_mass.matrix(q, None), rtol=1e-12)
+    assert bool(jnp.all(jnp.linalg.eigvalsh(hess) > 0))
+    # in velocity coordinates the learned energy is 1/2 v^T M v + V
+    v = jnp.array([0.3, -0.5])
+    z = jnp.concatenate([q, v])
+    mom = model.momentum(q, v, None)
+    np.testing.assert_allclose(
+        model.hamiltonian(z, None), 0.5 * v @ mom + part.potential_energy(q, None), rtol=1e-12
+    )
+
+
+# --------------------------------------------------------------------------- symplecticity
+
+
+@pytest.mark.parametrize("name", ["hnn", "hnn_so"])
+def test_hamiltonian_fields_are_symplectic(name):
+    scene = Scene(dof=2, angular=(True, False), canonical=True)
+    model = models.make(name, scene, key=jr.PRNGKey(8), width=W, dtype="float64")
+    zs = _states(jr.PRNGKey(9), 8, 2)
+    assert float(eqx.filter_jit(models.symplectic_error)(model, zs, None)) < 1e-10
+
+
+def test_node_is_not_symplectic_and_symreg_penalises_it():
+    node = models.make("node", CHAIN2, key=jr.PRNGKey(8), width=W, dtype="float64")
+    reg = models.make(
+        "node_symreg", CHAIN2, key=jr.PRNGKey(8), width=W, dtype="float64", weight=3.0
+    )
+    zs = _states(jr.PRNGKey(9), 8, 2).reshape(2, 4, 4)  # (trajectory, time, state)
+    sym = eqx.filter_jit(models.symplectic_error)
+    err = float(sym(node, zs, None))
+    assert err > 1e-6
+    assert float(node.penalty(zs, None)) == 0.0
+    np.testing.assert_allclose(float(eqx.filter_jit(reg.penalty)(zs, None)), 3.0 * err, rtol=1e-12)
+    # the error is a mean over states, so the flattened batch gives the same value
+    np.testing.assert_allclose(float(sym(node, zs.reshape(8, 4), None)), err)
+    with pytest.raises(ValueError):
+        models.symplectic_error(models.make("vin", CHAIN2, key=jr.PRNGKey(0), width=W), zs, None)
+
+
+# --------------------------------------------------------------------------- Lagrangian
+
+M1, M2, L1, L2 = 1.1722, 1.0391, 1.0359, 1.0822  # the reference chain-2 masses and lengths
+
+
+def _double_pendulum_L(q, v):
+    d = q[0] - q[1]
+    return (
+        0.5 * (M1 + M2) * L1**2 * v[0] ** 2
+        + 0.5 * M2 * L2**2 * v[1] ** 2
+        + M2 * L1 * L2 * v[0] * v[1] * jnp.cos(d)
+        + (M1 + M2) * G * L1 * jnp.cos(q[0])
+        + M2 * G * L2 * jnp.cos(q[1])
+    )
+
+
+def _double_pendulum_acc(q, v):
+    """The closed form (absolute angles from the downward vertical)."""
+    t1, t2 = q
+    w1, w2 = v
+    d = t1 - t2
+    den = 2 * M1 + M2 - M2 * jnp.cos(2 * d)
+    a1 = (
+        -G * (2 * M1 + M2) * jnp.sin(t1)
+        - M2 * G * jnp.sin(t1 - 2 * t2)
+        - 2 * jnp.sin(d) * M2 * (w2**2 * L2 + w1**2 * L1 * jnp.cos(d))
+    ) / (L1 * den)
+    a2 = (
+        2
+        * jnp.sin(d)
+        * (w1**2 * L1 * (M1 + M2) + G * (M1 + M2) * jnp.cos(t1) + w2**2 * L2 * M2 * jnp.cos(d))
+    ) / (L2 * den)
+    return jnp.stack([a1, a2])
+
+
+class _FeatureLagrangian(eqx.Module):
+    """The double pendulum's L written on the model's inputs (cos q1, cos q2, sin q1, sin q2,
+    v1, v2): swapped in for the LNN's network, it makes the LNN the true system."""
+
+    m1: float = M1
+    m2: float = M2
+    l1: float = L1
+    l2: float = L2
+
+    def __call__(self, x):
+        c1, c2, s1, s2, v1, v2 = x
+        m1, m2, l1, l2 = self.m1, self.m2, self.l1, self.l2
+        cd = c1 * c2 + s1 * s2
+        return jnp.stack(
+            [
+                0.5 * (m1 + m2) * l1**2 * v1**2
+                + 0.5 * m2 * l2**2 * v2**2
+                + m2 * l1 * l2 * v1 * v2 * cd
+                + (m1 + m2) * G * l1 * c1
+                + m2 * G * l2 * c2
+            ]
+        )
+
+
+@pytest.mark.parametrize("solve", ["solve", "pinv", "regularised"])
+def test_euler_lagrange_solve_gives_true_accelerations(solve):
+    zs = _states(jr.PRNGKey(10), 16, 2)
+    eps = 1e-9 if solve == "regularised" else 1e-3
+    acc = jax.vmap(
+        lambda z: models.acceleration_from_lagrangian(
+            _double_pendulum_L, z[:2], z[2:], solve=solve, eps=eps
+        )
+    )(zs)
+    np.testing.assert_allclose(
+        acc, jax.vmap(_double_pendulum_acc)(zs[:, :2], zs[:, 2:]), rtol=1e-7, atol=1e-7
+    )
+
+
+def test_lnn_with_true_lagrangian_is_the_true_system():
+    lnn = models.make("lnn", CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64")
+    field = eqx.filter_jit(jax.vmap(lambda m, z: m.vector_field(0.0, z, None), (None, 0)))
+    zs = _states(jr.PRNGKey(11), 8, 2)
+    true_lnn = eqx.tree_at(lambda m: m.net, lnn, _FeatureLagrangian())
+    closed = jax.vmap(_double_pendulum_acc)(zs[:, :2], zs[:, 2:])
+    np.testing.assert_allclose(field(true_lnn, zs)[:, 2:], closed, rtol=1e-8, atol=1e-8)
+    # third route: the systems package's own equations of motion, at its own parameters
+    systems = pytest.importorskip("systems")
+    sys = systems.make("chain_pendulum", k=2)
+    (m1, m2), (l1, l2) = (np.asarray(sys.masses), np.asarray(sys.lengths))
+    sys_lnn = eqx.tree_at(lambda m: m.net, lnn, _FeatureLagrangian(m1, m2, l1, l2))
+    truth = jax.jit(jax.vmap(lambda z: sys.vector_field(0.0, z, None)))(zs)
+    np.testing.assert_allclose(field(sys_lnn, zs), truth, rtol=1e-8, atol=1e-8)
+
+
+PEND = Scene(dof=1, angular=(True,))
+
+
+class _TruePotential(eqx.Module):
+    def __call__(self, x):  # x = (cos q, sin q); unit mass and length
+        return jnp.stack([-G * x[0]])
+
+
+class _UnitMass(eqx.Module):
+    def factor(self, q, args):
+        return jnp.eye(1)
+
+    def matrix(self, q, args):
+        return jnp.eye(1)
+
+
+class _TrueResidualLagrangian(eqx.Module):
+    def __call__(self, x):  # L = 1/2 v^2 (the model's prior) + g cos q
+        return jnp.stack([G * x[0]])
+
+
+def _true_vin():
+    vin = models.make("vin", PEND, key=jr.PRNGKey(0), width=W, dtype="float64")
+    return eqx.tree_at(lambda m: (m.potential, m.mass), vin, (_TruePotential(), _UnitMass()))
+
+
+def _true_vin_implicit():
+    vin = models.make("vin_implicit", PEND, key=jr.PRNGKey(0), width=W, dtype="float64")
+    return eqx.tree_at(lambda m: m.net, vin, _TrueResidualLagrangian())
+
+
+@functools.cache
+def _pendulum_reference(T):
+    import diffrax
+
+    def f(t, z, args):
+        return jnp.stack([z[1], -G * jnp.sin(z[0])])
+
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(f),
+        diffrax.Dopri8(),
+        0.0,
+        T,
+        1e-3,
+        jnp.array([1.0, 0.5]),
+        stepsize_controller=diffrax.PIDController(rtol=1e-13, atol=1e-13),
+    )
+    return sol.ys[0]
+
+
+@eqx.filter_jit
+def _run(model, z0, dt, n):
+    def body(z, _):
+        if isinstance(model, models.AbstractDiscreteModel) and hasattr(model, "step_with_status"):
+            z1, ok = model.step_with_status(z, dt, None)
+        else:
+            z1, ok = model.step(z, dt, None), True
+        return z1, ok
+
+    return jax.lax.scan(body, z0, None, length=n)
+
+
+@pytest.mark.parametrize("make_model", [_true_vin, _true_vin_implicit], ids=["vin", "implicit"])
+def test_vin_with_true_lagrangian_is_second_order(make_model):
+    model = make_model()
+    T = 1.2
+    z0 = jnp.array([1.0, 0.5])
+    errors = []
+    for n in (40, 80):
+        zn, ok = _run(model, z0, T / n, n)
+        assert bool(jnp.all(ok))  # every Newton solve converged
+        errors.append(float(jnp.linalg.norm(zn - _pendulum_reference(T))))
+    ratio = errors[0] / errors[1]
+    assert 3.5 < ratio < 4.5, (errors, ratio)
+
+
+def test_vin_implicit_agrees_with_explicit_vin():
+    z0 = jnp.array([1.0, 0.5])
+    diffs = []
+    for n in (40, 80):
+        a, _ = _run(_true_vin(), z0, 1.2 / n, n)
+        b, _ = _run(_true_vin_implicit(), z0, 1.2 / n, n)
+        diffs.append(float(jnp.linalg.norm(a - b)))
+    assert diffs[0] < 0.05 and 3.0 < diffs[0] / diffs[1] < 5.0
+
+
+@pytest.mark.parametrize("make_model", [_true_vin, _true_vin_implicit], ids=["vin", "implicit"])
+def test_vin_is_time_reversible(make_model):
+    model = make_model()
+    z0 = jnp.array([1.0, 0.5])
+    flip = jnp.array([1.0, -1.0])
+    zn, _ = _run(model, z0, 0.05, 60)
+    back, _ = _run(model, zn * flip, 0.05, 60)
+    np.testing.assert_allclose(back * flip, z0, atol=1e-9)
+
+
+def test_forced_vin_dissipates_kinetic_energy():
+    scene = Scene(dof=2, angular=(False, False), damped=True)
+    vin = models.make("vin", scene, key=jr.PRNGKey(0), width=W, dtype="float64")
+    free = eqx.tree_at(lambda m: m.potential, vin, lambda x: jnp.zeros((1,)))
+    plain = eqx.tree_at(lambda m: m.dissipation, free, None, is_leaf=lambda x: x is None)
+    z0 = jnp.array([0.1, -0.3, 1.0, -2.0])
+    _, plain_traj = _run_traj(plain, z0)
+    _, damped_traj = _run_traj(free, z0)
+    e_plain = jax.vmap(lambda z: plain.energy(z, None))(plain_traj)
+    e_damped = jax.vmap(lambda z: free.energy(z, None))(damped_traj)
+    np.testing.assert_allclose(e_plain, e_plain[0], rtol=1e-12)  # free particle: conserved
+    assert bool(jnp.all(jnp.diff(e_damped) < 0))
+
+
+@eqx.filter_jit
+def _run_traj(model, z0):
+    def body(z, _):
+        z1 = model.step(z, 0.1, None)
+        return z1, z1
+
+    return jax.lax.scan(body, z0, None, length=20)
