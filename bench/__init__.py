@@ -1,8 +1,10 @@
 """decon-bench: metrics, training, the sweep runner, the CLI, tables, figures and the report."""
 
+from ._env import configure_compilation_cache as _configure_compilation_cache
 from ._env import configure_threads as _configure_threads
 
 _configure_threads()
+_configure_compilation_cache()
 
 from . import _experiments as experiments  # noqa: E402
 from . import _metrics as metrics  # noqa: E402

@@ -1,3 +1,4 @@
-from bench._env import configure_threads
+from bench._env import configure_compilation_cache, configure_threads
 
 configure_threads()
+configure_compilation_cache()
