@@ -1188,8 +1188,10 @@ def stability_figure(results_dir="results") -> list[Path]:
         ax.loglog(g.param, g.value, "o-", label=method)
     e = df[(df.case == "stiffness") & (df.metric == "final_error") & (df.outcome == "diverged")]
     for _, r in e.iterrows():
+        same = d[(d.method == r.method) & (d.param == r.param)]
+        y = float(same.value.iloc[0]) if len(same) else 1.0
         ax.annotate(
-            f"{r.method} diverged @ step {int(r.step)}", (r.param, 4 * 100), fontsize=7, rotation=20
+            f"{r.method} diverged @ step {int(r.step)}", (r.param, y), fontsize=7, rotation=20
         )
     ax.set(
         xlabel="spring constant",
