@@ -46,6 +46,7 @@ def _ids(cases):
 
 
 def _random_states(system, seed=0, n=8):
+    """Random states; one n for most tests so that each sampler compiles once per system."""
     return np.asarray(system.sample_initial(jax.random.PRNGKey(seed), n))
 
 
@@ -132,8 +133,8 @@ def test_conformance(name, params):
     s = systems.make(name, **params)
     assert isinstance(s, systems.AbstractSystem)
     assert len(s.angular) == s.dof and s.default_args().shape == (s.n_args,)
-    z = _random_states(s, n=5)
-    assert z.shape == (5, 2 * s.dof) and np.all(np.isfinite(z))
+    z = _random_states(s)
+    assert z.shape == (8, 2 * s.dof) and np.all(np.isfinite(z))
     assert s.sample_args(jax.random.PRNGKey(1), 5).shape == (5, s.n_args)
     term = diffrax.ODETerm(s.vector_field)  # the field plugs straight into diffrax
 
@@ -153,7 +154,7 @@ def test_conformance(name, params):
 # ----------------------------------------------------------------------- closed forms
 def test_single_pendulum_closed_form():
     s = systems.make("chain_pendulum", k=1, masses=[0.7], lengths=[1.3])
-    z = _random_states(s, n=16)
+    z = _random_states(s)
     acc = _batched(s.acceleration, s)(z)[:, 0]
     np.testing.assert_allclose(acc, -G / 1.3 * np.sin(z[:, 0]), rtol=1e-10, atol=1e-12)
 
@@ -161,7 +162,7 @@ def test_single_pendulum_closed_form():
 def test_double_pendulum_closed_form():
     m1, m2, l1, l2 = 1.3, 0.8, 0.9, 1.4
     s = systems.make("chain_pendulum", k=2, masses=[m1, m2], lengths=[l1, l2])
-    z = _random_states(s, n=16)
+    z = _random_states(s)
     t1, t2, w1, w2 = z.T
     d = t1 - t2
     den = 2 * m1 + m2 - m2 * np.cos(2 * d)
@@ -181,7 +182,7 @@ def test_double_pendulum_closed_form():
 
 def test_chain_energy_is_t_plus_v():
     s = systems.make("chain_pendulum", k=2)
-    z = _random_states(s, n=6)
+    z = _random_states(s)
     (m1, m2), (l1, l2) = np.asarray(s.masses), np.asarray(s.lengths)
     t1, t2, w1, w2 = z.T
     kin = 0.5 * (m1 + m2) * l1**2 * w1**2 + 0.5 * m2 * l2**2 * w2**2
@@ -192,11 +193,11 @@ def test_chain_energy_is_t_plus_v():
 
 def test_chain_positions_respect_links():
     s = systems.make("chain_pendulum", k=3)
-    z = _random_states(s, n=4)
+    z = _random_states(s)
     pos = np.asarray(jvmap(s.positions)(z))
-    links = np.diff(np.concatenate([np.zeros((4, 1, 2)), pos], axis=1), axis=1)
+    links = np.diff(np.concatenate([np.zeros((8, 1, 2)), pos], axis=1), axis=1)
     np.testing.assert_allclose(
-        np.linalg.norm(links, axis=-1), np.broadcast_to(s.lengths, (4, 3)), rtol=1e-12
+        np.linalg.norm(links, axis=-1), np.broadcast_to(s.lengths, (8, 3)), rtol=1e-12
     )
 
 
@@ -205,7 +206,7 @@ def test_potential_range():
     up = s.potential_energy(jnp.full(3, jnp.pi))
     down = s.potential_energy(jnp.zeros(3))
     assert s.potential_range() == pytest.approx(float(up - down), rel=1e-12)
-    v = jvmap(lambda z: s.potential_energy(z[:3]))(_random_states(s, n=64))
+    v = jvmap(lambda z: s.potential_energy(z[:3]))(_random_states(s))
     assert np.all((v >= down - 1e-12) & (v <= up + 1e-12))
     assert math.isnan(systems.make("spring_pendulum", k=2).potential_range())
     assert math.isnan(systems.make("relativistic_particle").potential_range())
@@ -215,7 +216,7 @@ def test_potential_range():
 def test_spring_closed_form_force(k):
     kappa, masses = 7.0, np.array([0.9, 1.6])[:k]
     s = systems.make("spring_pendulum", k=k, masses=masses, spring_constant=kappa)
-    z = _random_states(s, n=8)
+    z = _random_states(s)
     x = z[:, : 3 * k].reshape(8, k, 3)
     force = -masses[None, :, None] * G * np.array([0.0, 0.0, 1.0])
     force = force + np.zeros_like(x)
@@ -308,7 +309,7 @@ def test_initial_state_spread():
 def test_friction_subtracts_f_qdot(name, params):
     plain = systems.make(name, **params)
     damped = systems.make(name, friction=0.4, **params)
-    z = _random_states(plain, n=8)
+    z = _random_states(plain)
     a0 = _batched(plain.acceleration, plain)(z)
     a1 = _batched(damped.acceleration, damped)(z)
     np.testing.assert_allclose(a1, a0 - 0.4 * z[:, plain.dof :], rtol=1e-10, atol=1e-10)
@@ -321,7 +322,7 @@ def trajectories():
     out = {}
     for name, params in CONSERVATIVE:
         s = systems.make(name, **params)
-        z0 = s.sample_initial(jax.random.PRNGKey(7), N)
+        z0 = _random_states(s, seed=7)[:N]
         args = s.sample_args(jax.random.PRNGKey(8), N) if s.n_args else None
         out[(name, params.get("k"))] = (s, args, np.asarray(s.simulate_batch(z0, TS, args)))
     return out
@@ -382,7 +383,8 @@ def test_small_angle_period(trajectories):
 )
 def test_damped_energy_decays_monotonically(name, params):
     s = systems.make(name, **params)
-    zs = np.asarray(s.simulate_batch(s.sample_initial(jax.random.PRNGKey(2), N), TS))
+    undamped = systems.make(name.removeprefix("damped_"), **params)
+    zs = np.asarray(s.simulate_batch(_random_states(undamped, seed=2)[:N], TS))
     e = _energy_along(s, zs, None)
     assert np.all(np.diff(e, axis=1) <= 1e-9)
     assert np.all(e[:, -1] < e[:, 0] - 1.0)
@@ -397,7 +399,7 @@ def test_simulate_traced_once_per_shape(trajectories):
     _, _, zs = trajectories[("chain_pendulum", 2)]
     before = _base._solve_batch._cached._cache_size()
     other = systems.make("chain_pendulum", k=2, masses=[0.8, 1.1], lengths=[1.0, 0.7])
-    again = other.simulate_batch(other.sample_initial(jax.random.PRNGKey(11), N), TS)
+    again = other.simulate_batch(_random_states(other, seed=11)[:N], TS)
     assert _base._solve_batch._cached._cache_size() == before  # masses are traced, not baked
     assert not np.allclose(again, zs)
 
