@@ -95,6 +95,7 @@ class ChainPendulum(AbstractSystem):
         omega2 = jnp.linalg.solve(jtj, jtv[..., None])[..., 0]
         return jnp.concatenate([theta2, omega2], axis=-1)
 
+
 def chain_pendulum(k, masses=None, lengths=None, g=G, friction=0.0) -> ChainPendulum:
     """A chain pendulum of k links; masses/lengths default to the reference table."""
     k = check_count("k", k)
