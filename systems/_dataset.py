@@ -167,17 +167,6 @@ def _simulate(system, z0s, ts, args):
     return np.asarray(system.simulate_batch(z0s, ts, args))
 
 
-def _trajectories(system, config, key, n):
-    k_init, k_args, k_start = jax.random.split(key, 3)
-    z0 = system.sample_initial(k_init, n)
-    if config.random_args:
-        args = system.sample_args(k_args, n)
-    else:
-        args = jnp.broadcast_to(system.default_args(), (n, system.n_args))
-    ts = np.arange(config.n_points) * config.dt
-    return _simulate(system, z0, ts, args), np.asarray(args, dtype=np.float64), k_start
-
-
 def _windows(traj, key, length):
     n, points, _ = traj.shape
     starts = np.asarray(jax.random.randint(key, (n,), 0, points - length + 1))
@@ -191,18 +180,28 @@ def _generate(system, config: DatasetConfig) -> dict[str, np.ndarray]:
 
     # Draw all n_generated initial states so that the kept ones do not depend on n_train.
     k_init, k_args, k_start, k_noise = jax.random.split(k_train, 4)
-    z0 = system.sample_initial(k_init, config.n_generated)[: config.n_train]
+    z0_train = system.sample_initial(k_init, config.n_generated)[: config.n_train]
+    k_init_test, k_args_test, k_start_test = jax.random.split(k_test, 3)
+    z0_test = system.sample_initial(k_init_test, config.n_test)
     if config.random_args:
         args_train = system.sample_args(k_args, config.n_generated)[: config.n_train]
+        args_test = system.sample_args(k_args_test, config.n_test)
     else:
         args_train = jnp.broadcast_to(system.default_args(), (config.n_train, system.n_args))
-    ts = np.arange(config.n_points) * config.dt
-    train = _simulate(system, z0, ts, args_train)
+        args_test = jnp.broadcast_to(system.default_args(), (config.n_test, system.n_args))
     args_train = np.asarray(args_train, dtype=np.float64)
-    z_train = _windows(train, k_start, config.chunk)
+    args_test = np.asarray(args_test, dtype=np.float64)
 
-    test, args_test, k_test_start = _trajectories(system, config, k_test, config.n_test)
-    z_test = _windows(test, k_test_start, config.test_chunks * config.chunk)
+    # One batch (one compile) for train and test; the keys above keep them independent.
+    ts = np.arange(config.n_points) * config.dt
+    traj = _simulate(
+        system,
+        jnp.concatenate([z0_train, z0_test]),
+        ts,
+        np.concatenate([args_train, args_test]),
+    )
+    z_train = _windows(traj[: config.n_train], k_start, config.chunk)
+    z_test = _windows(traj[config.n_train :], k_start_test, config.test_chunks * config.chunk)
 
     if config.coordinates == "momentum":
         z_train = _to_momentum(system, z_train, args_train)

@@ -13,7 +13,7 @@ import systems
 from systems import _dataset
 from systems._dataset import DatasetConfig, make_dataset
 
-# Small sizes, equal train and test counts and one trajectory length, so that each system's
+# Small sizes and one batch size (n_train + n_test) and trajectory length, so that each system's
 # ground-truth solver compiles once in this file.
 SMALL = dict(n_generated=6, n_train=4, n_test=4, chunk=3, dt=0.1, duration=2.0, test_chunks=3)
 
@@ -99,7 +99,7 @@ def test_make_dataset_rejects_non_config(tmp_path):
 def test_windows_are_consecutive_random_and_in_range(fake, tmp_path):
     c = _config(n_generated=40, n_train=30, n_test=30, test_chunks=4)
     d = make_dataset(c, cache_dir=tmp_path)
-    assert fake == [30, 30]  # only the kept training trajectories are simulated
+    assert fake == [60]  # the kept training and the test trajectories, in one batch
     t_train = d.z_train[:, :, 0]
     t_test = d.z_test[:, :, 0]
     for t, length in [(t_train, 3), (t_test, 12)]:
@@ -150,9 +150,9 @@ def test_default_cache_dir_from_env(fake, tmp_path, monkeypatch):
 def test_cache_hit_does_not_simulate(tmp_path, monkeypatch, fake):
     c = _config()
     first = make_dataset(c, cache_dir=tmp_path)
-    assert fake == [4, 4]
+    assert fake == [8]
     second = make_dataset(c, cache_dir=tmp_path)
-    assert fake == [4, 4]  # loaded, not simulated
+    assert fake == [8]  # loaded, not simulated
     for name in _dataset._ARRAYS:
         np.testing.assert_array_equal(getattr(first, name), getattr(second, name))
     assert [p.name for p in (tmp_path / "datasets").iterdir()] == [f"{c.hash()}.npz"]
@@ -177,9 +177,9 @@ def test_corrupt_cache_is_rebuilt(tmp_path, fake, damage):
         arrays["z_train"] = arrays["z_train"] + 1.0
         with open(path, "wb") as fh:
             np.savez(fh, **arrays)
-    assert fake == [4, 4]
+    assert fake == [8]
     rebuilt = make_dataset(c, cache_dir=tmp_path)
-    assert fake == [4, 4, 4, 4]  # simulated again, not loaded
+    assert fake == [8, 8]  # simulated again, not loaded
     np.testing.assert_array_equal(rebuilt.z_train, good.z_train)
     assert _dataset._load(path, c) is not None  # and the file was overwritten with good data
 
