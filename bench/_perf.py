@@ -253,11 +253,11 @@ def bench_model(name, dataset, config, repeats, peak_gflops):
 def flag_sweep(models_arg, repeats):
     """ms per step of the first model under XLA thread settings, each in a fresh process."""
     # bench/_env.py adds its flags unless XLA_FLAGS names intra_op_parallelism_threads; XLA
-    # ignores that bare token (it is not an XLA flag), so it serves as a "leave alone" marker.
+    # ignores that bare token (not an XLA flag) when a "--" flag is present, so it serves as a
+    # "leave alone" marker.
     keep = "intra_op_parallelism_threads=unset"
     variants = {
-        "bench_env": None,  # whatever bench/_env.py sets
-        "no_flags": keep,
+        "bench_env": None,  # whatever bench/_env.py sets (XLA's default threading)
         "eigen_single": f"--xla_cpu_multi_thread_eigen=false {keep}",
         "one_core": "AFFINITY1",
     }
@@ -268,7 +268,7 @@ def flag_sweep(models_arg, repeats):
         cmd = [
             sys.executable,
             "-m",
-            "bench._perf",
+            "bench.perf",
             "--models",
             models_arg,
             "--repeats",
@@ -403,3 +403,7 @@ def main(argv=None) -> int:
     for name, why in skipped:
         say(f"skipped {name}: {why[:300]}")
     return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

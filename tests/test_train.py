@@ -249,3 +249,16 @@ def test_learned_h_leapfrog_drift(hnn64, iterations):
     else:
         # the explicit variant (documented) is not reversible here: the error grows steadily
         assert drift > 0.5 * spread
+
+
+@pytest.mark.slow
+def test_perf_smoke(tmp_path):
+    from bench._perf import main
+
+    out = tmp_path / "perf.csv"
+    assert main(["--models", "resnet", "--quick", "--block", "2", "--out", str(out)]) == 0
+    import pandas as pd
+
+    row = pd.read_csv(out).iloc[0]
+    assert row["model"] == "resnet" and row["ms_per_step_median"] > 0
+    assert row["step_gflop"] > 0 and row["threads"] >= 1
