@@ -11,8 +11,10 @@ blocks, each waited for); the compile time; the median ms of a 40 x 100-step tes
 step; and the FLOP floor = FLOPs / measured float32 matmul peak. The load average is recorded
 beside each measurement because the machine may be shared.
 
-``python -m bench._perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
+``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
 writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
+``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the
+``compile_cache`` column); ``DECON_JAX_CACHE=0`` measures cold compiles.
 """
 
 from __future__ import annotations
@@ -362,6 +364,8 @@ def main(argv=None) -> int:
         "jax_version": jax.__version__,
         "threads": THREADS,
         "xla_flags": os.environ.get("XLA_FLAGS", ""),
+        # compile_s is a persistent-cache hit when on (DECON_JAX_CACHE=0 for cold compiles)
+        "compile_cache": "on" if os.environ.get("JAX_COMPILATION_CACHE_DIR") else "off",
     }
     hnn_so = by_name.get("hnn_so", {}).get("ms_per_step_median", np.nan)
     for r in rows:
