@@ -1,8 +1,8 @@
-"""Thread configuration for XLA on CPU.
+"""Process settings for XLA on the CPU: cores (thread pools) and the compilation cache.
 
-XLA's CPU client sizes its thread pools from the host; threads beyond the cores cost 3-5x on
-small training steps (measured on the reference code), so we pin one intra-op thread per core.
-This must run before jax is imported, which is why ``bench/__init__.py`` calls it first.
+Threads beyond the cores cost 3-5x on small training steps (measured on the reference code), so
+sweep workers are pinned to their own cores. These must run before jax creates its backend,
+which is why ``bench/__init__.py`` calls them first.
 """
 
 from __future__ import annotations
@@ -18,19 +18,27 @@ def cpu_count() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def configure_threads(n: int | None = None) -> int:
-    """Set XLA's CPU thread flags to ``n`` threads (default: the available cores).
+def configure_threads(n: int | None = None, cores: list[int] | None = None) -> int:
+    """Give this process ``n`` cores (default: all available), before jax starts its backend.
 
-    Flags already present in ``XLA_FLAGS`` are kept; ours are only added when absent.
-    Returns the thread count in effect.
+    XLA's CPU client sizes its thread pools from the process's CPU affinity mask, and it has no
+    flag for the intra-op thread count (``intra_op_parallelism_threads`` is TensorFlow's, which
+    XLA ignores or rejects). So the one working control is the mask itself: ``cores`` pins the
+    process to those core ids, ``n`` to the first ``n`` available. Parallel sweep workers each
+    take their own cores this way, so that two workers never run four threads on two cores.
+    Returns the number of cores in effect.
     """
-    n = cpu_count() if n is None else int(n)
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "intra_op_parallelism_threads" not in flags:
-        flags += f" --xla_cpu_multi_thread_eigen=true intra_op_parallelism_threads={n}"
-    os.environ["XLA_FLAGS"] = flags.strip()
-    os.environ.setdefault("OMP_NUM_THREADS", str(n))
-    return n
+    try:
+        available = sorted(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - no affinity API (macOS): nothing to pin
+        return cpu_count()
+    if cores is None and n is not None and n < len(available):
+        cores = available[: max(1, int(n))]
+    if cores is not None:
+        os.sched_setaffinity(0, set(cores))
+    count = cpu_count()
+    os.environ.setdefault("OMP_NUM_THREADS", str(count))
+    return count
 
 
 def cache_root() -> str:

@@ -48,7 +48,7 @@ class RunConfig:
     model_options: tuple = ()
     width: int = 256
     depth: int = 2
-    activation: str = "tanh"
+    activation: str | None = None  # None: each model's own default (softplus for lnn, else tanh)
     coordinates: str = "velocity"
     random_args: bool = False
     noise: float = 0.0

@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import re
 import sys
 import time
 import traceback
@@ -324,28 +323,6 @@ def _execute_dict(d: dict, cache_root: str | None = None) -> dict:
 
 
 # ---------------------------------------------------------------------------------- sweeps
-def _flags_with_threads(n: int) -> str:
-    """XLA_FLAGS with our thread settings replaced by ``n`` threads."""
-    from ._env import configure_threads
-
-    old = os.environ.get("XLA_FLAGS", "")
-    stripped = re.sub(
-        r"(--)?(intra_op_parallelism_threads|xla_cpu_multi_thread_eigen)=\S+", "", old
-    )
-    saved_omp = os.environ.get("OMP_NUM_THREADS")
-    try:
-        os.environ["XLA_FLAGS"] = " ".join(stripped.split())
-        os.environ.pop("OMP_NUM_THREADS", None)
-        configure_threads(n)
-        return os.environ["XLA_FLAGS"]
-    finally:
-        os.environ["XLA_FLAGS"] = old
-        if saved_omp is None:
-            os.environ.pop("OMP_NUM_THREADS", None)
-        else:
-            os.environ["OMP_NUM_THREADS"] = saved_omp
-
-
 def _label(c: RunConfig) -> str:
     k = "" if c.k is None else f"-{c.k}"
     f = f" f={c.friction:g}" if c.friction else ""
@@ -422,23 +399,27 @@ def _sweep_pool(todo, finish, cache_root, workers, cores):
     import multiprocessing as mp
 
     ctx = mp.get_context("spawn")
-    flags = _flags_with_threads(max(1, cores // workers))
-    # Spawned children read the environment at start: give them their share of the cores.
-    saved = {k: os.environ.get(k) for k in ("XLA_FLAGS", "OMP_NUM_THREADS")}
-    os.environ["XLA_FLAGS"] = flags
-    os.environ["OMP_NUM_THREADS"] = str(max(1, cores // workers))
-    try:
-        pool = ctx.Pool(workers)
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+    # Each worker takes its own share of the cores (an affinity mask, which sizes XLA's thread
+    # pools) in its initializer, before it imports jax: no oversubscription.
+    available = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    share = max(1, len(available) // workers) if available else 1
+    slots = ctx.Queue()
+    for i in range(workers):
+        slots.put(available[i * share : (i + 1) * share] or None)
+    pool = ctx.Pool(workers, initializer=_pin_worker, initargs=(slots,))
     with pool:
         jobs = [(c.to_dict(), str(cache_root)) for c in todo]
         for row in pool.imap_unordered(_star_execute, jobs):
             finish(row)
+
+
+def _pin_worker(slots) -> None:
+    from ._env import configure_threads
+
+    cores = slots.get()
+    if cores:
+        configure_threads(cores=cores)
+        os.environ["OMP_NUM_THREADS"] = str(len(cores))
 
 
 def _star_execute(job):
@@ -451,7 +432,6 @@ def _sweep_ray(todo, finish, cache_root, address, cores):
     except ImportError as e:  # pragma: no cover
         raise ValueError("the ray executor needs the 'ray' extra: pip install -e '.[ray]'") from e
     env = {
-        "XLA_FLAGS": _flags_with_threads(1),
         "OMP_NUM_THREADS": "1",
         "DECON_CACHE": str(cache_root),
         # Workers start elsewhere: let them import this checkout whether or not it is installed.

@@ -94,11 +94,17 @@ def test_figures_report_without_modules_or_results(capsys, tmp_path):
         assert code == 0, capsys.readouterr()
 
 
-def test_env_keeps_threads_first():
-    # bench/__init__ must set XLA's thread flags before anything imports jax.
+def test_env_pins_cores_and_compilation_cache():
+    # XLA sizes its thread pools from the affinity mask: configure_threads(1) must shrink it,
+    # and `import bench` must turn on the persistent compilation cache before jax starts.
+    code = (
+        "import os, bench, bench._env as e; n = e.configure_threads(1); "
+        "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'])"
+    )
     out = subprocess.run(
-        [sys.executable, "-c", "import bench, os; print(os.environ['XLA_FLAGS'])"],
-        cwd=ROOT, capture_output=True, text=True, timeout=120,
-        env={k: v for k, v in os.environ.items() if k != "XLA_FLAGS"},
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120,
+        env={k: v for k, v in os.environ.items() if not k.startswith("JAX_COMPILATION")},
     )  # fmt: skip
-    assert "intra_op_parallelism_threads" in out.stdout
+    n, mask, cache = out.stdout.split()
+    assert (n, mask) == ("1", "1"), out.stderr
+    assert cache.endswith(os.path.join("decon-bench", "jax"))
