@@ -5,9 +5,10 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 EXTRAS ?= ray,dev
 PROFILE ?= quick
+WORKERS ?= 0
 PYTEST_ARGS ?=
 
-.PHONY: install test test-slow lint format bench perf figures report clean
+.PHONY: install test test-slow lint format bench stability perf figures report clean
 
 install: $(STAMP)
 
@@ -33,7 +34,10 @@ format: $(STAMP)
 	$(PY) -m ruff check --fix systems models bench tests
 
 bench: $(STAMP)
-	$(PY) -m bench bench --profile $(PROFILE)
+	$(PY) -m bench bench --profile $(PROFILE) --workers $(WORKERS)
+
+stability: $(STAMP)
+	$(PY) -m bench stability --profile $(PROFILE)
 
 perf: $(STAMP)
 	$(PY) -m bench perf

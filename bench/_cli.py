@@ -91,8 +91,15 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("report", help="write results/REPORT.md")
     sub.add_parser("perf", help="performance measurements (bench._perf)")
 
-    b = sub.add_parser("bench", help="sweep every experiment, then figures, then report")
+    st = sub.add_parser("stability", help="numerical stability cases (results/stability.csv)")
+    st.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
+    st.add_argument("--case", action="append", default=None, help="run only these cases")
+
+    b = sub.add_parser(
+        "bench", help="sweep every experiment, the stability cases, then figures and report"
+    )
     _sweep_opts(b, default_profile="quick")
+    b.add_argument("--skip-stability", action="store_true", help="do not run the stability cases")
     return p
 
 
@@ -274,15 +281,50 @@ def _cmd_perf(args) -> int:
     return 0
 
 
+def _cmd_stability(args) -> int:
+    from . import _stability
+
+    check_choice("profile", args.profile, list(PROFILES))
+    if args.case:
+        for c in args.case:
+            check_choice("stability case", c, list(_stability.CASES))
+    df = _stability.run_stability(Path(args.results), args.profile, args.case)
+    counts = df["outcome"].value_counts().to_dict() if len(df) else {}
+    print(f"stability: {len(df)} rows {counts} -> {Path(args.results) / 'stability.csv'}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
+    import time
+
     names = _sweep_names(args)
     if not names:
         _check_sweep_args(args)
         print("no experiments yet")
         return 0
+    start = time.time()
     _do_sweep(args, names)
+    swept = time.time()
+    if not args.skip_stability:
+        args.case = None
+        _cmd_stability(args)
+    meta = {
+        "start": start,
+        "end": time.time(),
+        "wall_seconds": time.time() - start,
+        "sweep_seconds": swept - start,
+        "stability_seconds": time.time() - swept,
+        "profile": args.profile,
+        "executor": args.executor,
+        "workers": args.workers,
+        "experiments": names,
+    }
+    results = Path(args.results)
+    results.mkdir(parents=True, exist_ok=True)
+    (results / "bench_meta.json").write_text(json.dumps(meta, indent=1))
     _cmd_figures(args)
     _cmd_report(args)
+    print(f"bench: {meta['wall_seconds'] / 60:.1f} min (sweep and stability), report written")
     return 0
 
 
@@ -300,6 +342,7 @@ def main(argv: list[str] | None = None) -> int:
             "figures": _cmd_figures,
             "report": _cmd_report,
             "perf": _cmd_perf,
+            "stability": _cmd_stability,
             "bench": _cmd_bench,
         }[args.verb](args)
     except (UsageError, ValueError) as e:

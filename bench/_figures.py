@@ -526,6 +526,13 @@ def make_figures(results_dir: Path) -> list[Path]:
         except Exception as e:  # noqa: BLE001 - one broken figure must not stop the others
             plt.close("all")
             print(f"figure {name} failed: {type(e).__name__}: {e}")
+    for module, entry in (("_tradeoff", "tradeoff_figure"), ("_stability", "stability_figure")):
+        try:
+            mod = __import__(f"bench.{module}", fromlist=[entry])
+            written += list(getattr(mod, entry)(results_dir) or [])
+        except Exception as e:  # noqa: BLE001
+            plt.close("all")
+            print(f"figure {entry} failed: {type(e).__name__}: {e}")
     return written
 
 

@@ -163,6 +163,67 @@ def _experiment_table(rows: pd.DataFrame) -> list[str]:
     return out
 
 
+def _perf_section(results_dir: Path) -> list[str]:
+    """The performance table of ``results/perf.csv`` (written by ``python -m bench perf``)."""
+    path = results_dir / "perf.csv"
+    head = ["## Performance (training step and test rollout)", ""]
+    if not path.exists():
+        return head + ["No `perf.csv` yet: `python -m bench perf`.", ""]
+    df = pd.read_csv(path)
+    cols = [
+        c
+        for c in (
+            "model",
+            "ms_per_step_median",
+            "reference_step_ms",
+            "speedup_step",
+            "flop_floor_ms",
+            "rollout_ms_median",
+            "reference_rollout_ms",
+            "speedup_rollout",
+            "compile_s",
+        )
+        if c in df
+    ]
+    when = df["date"].iloc[0] if "date" in df else "?"
+    load = f", load average {df['load_avg'].median():.1f}" if "load_avg" in df else ""
+    lines = head + [
+        f"Measured by `python -m bench perf` ({when}{load}) at the reference setting: chain-2, "
+        "2 x 256 tanh, batch 200, chunk 5, RK4 (3/8) one step per dt, float32. Reference = the "
+        "paper's PyTorch code on this machine class (REFERENCE.md); speedup = reference / ours; "
+        "FLOP floor = the step's FLOPs (XLA cost analysis) over the measured matmul peak.",
+        "",
+        "| " + " | ".join(cols) + " |",
+        "|" + "---|" * len(cols),
+    ]
+    for _, r in df.iterrows():
+        lines.append("| " + " | ".join(_fmt(r[c]) if c != "model" else r[c] for c in cols) + " |")
+    return lines + [""]
+
+
+def _extra_sections(results_dir: Path) -> list[str]:
+    """Trade-off, stability and performance sections (issue 6), where their data exist."""
+    out: list[str] = []
+    try:
+        from ._tradeoff import tradeoff_section
+
+        out += [tradeoff_section(results_dir), ""]
+        if (results_dir / "figures" / "tradeoff.png").exists():
+            out += ["![tradeoff](figures/tradeoff.png) ([PDF](figures/tradeoff.pdf))", ""]
+    except Exception as e:  # noqa: BLE001 - a broken section must not lose the report
+        out += ["## Speed/accuracy trade-off", "", f"(section failed: {_md_escape(str(e))})", ""]
+    try:
+        from ._stability import stability_section
+
+        out += [stability_section(results_dir), ""]
+        if (results_dir / "figures" / "stability.png").exists():
+            out += ["![stability](figures/stability.png) ([PDF](figures/stability.pdf))", ""]
+    except Exception as e:  # noqa: BLE001
+        out += ["## Numerical stability", "", f"(section failed: {_md_escape(str(e))})", ""]
+    out += _perf_section(results_dir)
+    return out
+
+
 def write_report(results_dir: Path) -> Path:
     """Write ``results_dir/REPORT.md`` from the stored runs and return its path."""
     results_dir = Path(results_dir)
@@ -231,6 +292,7 @@ def write_report(results_dir: Path) -> Path:
             lines += [f"![{name}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
         else:
             lines += ["(figure not generated: run `python -m bench figures`)", ""]
+    lines += _extra_sections(results_dir)
     lines += ["## What the suite does not copy from the reference", "", DEFECTS]
     path = results_dir / "REPORT.md"
     path.write_text("\n".join(lines))
