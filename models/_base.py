@@ -50,6 +50,25 @@ class AbstractContinuousModel(AbstractModel):
         """qddot(q, v); only second-order models define it."""
         raise NotImplementedError(f"{type(self).__name__} is not a second-order model")
 
+    # The coordinates the integrator works in. ``rollout`` (fixed-step Runge-Kutta and
+    # adaptive) integrates dy/dt = internal_field(t, y, args) from y0 = encode(z0) and maps
+    # every saved state back with decode; the continuous flow must be the same as that of
+    # vector_field in z, i.e. internal_field(t, encode(z)) = D encode(z) vector_field(t, z).
+    # A model overrides the three together when its field is cheaper in other coordinates
+    # (the Hamiltonian models: canonical (q, p) instead of (q, qdot)).
+
+    def encode(self, z, args) -> Array:
+        """y = phi(z): the integrator's coordinates of a state z (identity by default)."""
+        return z
+
+    def decode(self, y, args) -> Array:
+        """z = phi^-1(y) (identity by default)."""
+        return y
+
+    def internal_field(self, t, y, args) -> Array:
+        """dy/dt in the integrator's coordinates (by default vector_field itself)."""
+        return self.vector_field(t, y, args)
+
 
 class AbstractDiscreteModel(AbstractModel):
     """A learned map z_n -> z_{n+1} over one time step dt: the integrator is the model."""

@@ -2,7 +2,12 @@
 
 ``rollout(model, z0, ts, args, integrator)`` returns the states at the times ``ts``:
 
-- continuous models (``dz/dt = F(t, z, args)``) with a fixed-step method take ``substeps``
+- continuous models (``dz/dt = F(t, z, args)``) with a Runge-Kutta or adaptive method are
+  integrated in the model's own coordinates: ``dy/dt = model.internal_field(t, y, args)``
+  from ``y0 = model.encode(z0, args)``, every saved state mapped back with ``model.decode``
+  (identity maps by default; the Hamiltonian models in velocity scenes use canonical
+  ``y = (q, p)``, where the field is just ``J grad H``). ``zs[0]`` is ``z0`` itself;
+- with a fixed-step method they take ``substeps``
   equal steps ``h = (ts[i+1] - ts[i]) / substeps`` per interval (so non-uniform ``ts`` work),
   written as a ``jax.lax.scan`` over intervals with the Runge-Kutta stages by hand (the
   cheapest program for XLA: no solver state, no step-size control);
@@ -162,12 +167,12 @@ def _adaptive(model, z0, ts, args, integrator):
         integrator.solver
     ]()
     sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(lambda t, z, a: model.vector_field(t, z, a).astype(z.dtype)),
+        diffrax.ODETerm(lambda t, y, a: model.internal_field(t, y, a).astype(y.dtype)),
         solver,
         t0=ts[0],
         t1=ts[-1],
         dt0=ts[1] - ts[0],
-        y0=z0,
+        y0=model.encode(z0, args).astype(z0.dtype),
         args=args,
         saveat=diffrax.SaveAt(ts=ts),
         stepsize_controller=diffrax.PIDController(rtol=integrator.rtol, atol=integrator.atol),
@@ -182,7 +187,15 @@ def _adaptive(model, z0, ts, args, integrator):
         "num_accepted_steps": sol.stats["num_accepted_steps"],
         "num_rejected_steps": sol.stats["num_rejected_steps"],
     }
-    return sol.ys, stats
+    return _decoded(model, z0, sol.ys, args), stats
+
+
+def _decoded(model, z0, ys, args):
+    """States z of the integrator's states ys (T, n): z0 itself first, then decode(ys[1:])."""
+    if ys.shape[0] == 1:
+        return z0[None]
+    rest = jax.vmap(lambda y: model.decode(y, args))(ys[1:]).astype(z0.dtype)
+    return jnp.concatenate([z0[None], rest], axis=0)
 
 
 def rollout(
@@ -255,13 +268,14 @@ def rollout(
     else:
         step = _STEPS[integrator.method]
 
-        def f(t, z):
-            return model.vector_field(t, z, args).astype(dtype)
+        def f(t, y):
+            return model.internal_field(t, y, args).astype(dtype)
 
         def advance(c, t, h):
             return (step(f, t, c[0], h),)
 
-        zs = _scan_intervals(advance, (z0,), ts, m)
+        ys = _scan_intervals(advance, (model.encode(z0, args).astype(dtype),), ts, m)
+        zs = _decoded(model, z0, ys, args)
 
     if not return_stats:
         return zs

@@ -140,6 +140,9 @@ class HNN(AbstractContinuousModel):
 
     with dM/dt the derivative of M(q) along dq/dt (one jvp), solved with the Cholesky factor.
     With friction Q = -D(q) dH/dp, dH/dt = -(dH/dp)^T D dH/dp <= 0.
+
+    ``rollout`` integrates the same flow in canonical y = (q, p) (``encode``/``decode``,
+    ``internal_field`` = J grad H + Q), where the mass network is not evaluated per stage.
     """
 
     scene: Scene = eqx.field(static=True)
@@ -186,14 +189,43 @@ class HNN(AbstractContinuousModel):
             if self.dissipation is not None:
                 pdot = pdot + self.dissipation.force(q, qdot, args)
             return jnp.concatenate([qdot, pdot])
-        c = self.mass.factor(q, args)
-        p = c @ (c.T @ x)
+        # one linearisation of C(q): its value and its derivative along qdot, no second pass
+        c, dfactor = jax.linearize(lambda q_: self.mass.factor(q_, args), q)
+        ctx = c.T @ x
+        p = c @ ctx
         qdot, pdot = hamiltonian_field(H, q, p)
         if self.dissipation is not None:
             pdot = pdot + self.dissipation.force(q, qdot, args)
-        _, dm_v = jax.jvp(lambda q_: self.mass.matrix(q_, args) @ x, (q,), (qdot,))
+        dc = dfactor(qdot)
+        dm_v = dc @ ctx + c @ (dc.T @ x)  # (dM/dt) qdot, dM = dC C^T + C dC^T
         vdot = cho_solve(c, pdot - dm_v)
         return jnp.concatenate([qdot, vdot])
+
+    def encode(self, z, args):
+        """(q, qdot) -> (q, p = M(q) qdot); identity in a canonical scene."""
+        if self.mass is None:
+            return z
+        q, v = _split(as_dtype(z, self.dtype))
+        return jnp.concatenate([q, self.momentum(q, v, as_dtype(args, self.dtype))])
+
+    def decode(self, y, args):
+        """(q, p) -> (q, qdot = M(q)^-1 p), a Cholesky solve; identity in a canonical scene."""
+        if self.mass is None:
+            return y
+        q, p = _split(as_dtype(y, self.dtype))
+        c = self.mass.factor(q, as_dtype(args, self.dtype))
+        return jnp.concatenate([q, cho_solve(c, p)])
+
+    def internal_field(self, t, y, args):
+        """In y = (q, p): dq/dt = dH/dp, dp/dt = -dH/dq + Q(q, dH/dp); no mass network."""
+        if self.mass is None:
+            return self.vector_field(t, y, args)
+        q, p = _split(as_dtype(y, self.dtype))
+        args = as_dtype(args, self.dtype)
+        qdot, pdot = hamiltonian_field(lambda q_, p_: self.hamiltonian_part(q_, p_, args), q, p)
+        if self.dissipation is not None:
+            pdot = pdot + self.dissipation.force(q, qdot, args)
+        return jnp.concatenate([qdot, pdot])
 
 
 class SeparableHNN(AbstractContinuousModel):
@@ -206,6 +238,10 @@ class SeparableHNN(AbstractContinuousModel):
 
     with (dM^-1/dt) p one jvp of q -> M^-1(q) p along qdot. p = M qdot is a Cholesky solve
     with M^-1. (In a canonical scene ``make`` builds :class:`HNN` with a separable H.)
+
+    ``rollout`` integrates the same flow in y = (q, p) instead (``encode``/``decode``,
+    ``internal_field`` = J grad H + Q): one gradient of H per stage instead of M^-1, grad H
+    and a jvp of M^-1.
     """
 
     second_order: ClassVar[bool] = True
@@ -249,6 +285,27 @@ class SeparableHNN(AbstractContinuousModel):
     def vector_field(self, t, z, args):
         q, v = _split(as_dtype(z, self.dtype))
         return jnp.concatenate([v, self.acceleration(q, v, args)])
+
+    def encode(self, z, args):
+        """(q, qdot) -> (q, p = M(q) qdot), a Cholesky solve with M^-1(q)."""
+        q, v = _split(as_dtype(z, self.dtype))
+        return jnp.concatenate([q, self.momentum(q, v, as_dtype(args, self.dtype))])
+
+    def decode(self, y, args):
+        """(q, p) -> (q, qdot = M^-1(q) p)."""
+        q, p = _split(as_dtype(y, self.dtype))
+        minv = self.hamiltonian_part.inverse_mass.matrix(q, as_dtype(args, self.dtype))
+        return jnp.concatenate([q, minv @ p])
+
+    def internal_field(self, t, y, args):
+        """In y = (q, p): dq/dt = dH/dp = M^-1 p, dp/dt = -dH/dq + Q(q, dH/dp): one gradient
+        of H, so the inverse-mass network runs once forward and once backward per stage."""
+        q, p = _split(as_dtype(y, self.dtype))
+        args = as_dtype(args, self.dtype)
+        qdot, pdot = hamiltonian_field(lambda q_, p_: self.hamiltonian_part(q_, p_, args), q, p)
+        if self.dissipation is not None:
+            pdot = pdot + self.dissipation.force(q, qdot, args)
+        return jnp.concatenate([qdot, pdot])
 
 
 # --------------------------------------------------------------------------- Lagrangian
