@@ -276,7 +276,7 @@ def _cmd_report(args) -> int:
 def _cmd_perf(args) -> int:
     fn = _optional_entry("bench._perf", "main", "perf")
     if fn is not None:
-        out = fn()
+        out = fn([])  # its own defaults; `python -m bench.perf --help` lists its options
         return int(out or 0)
     return 0
 
