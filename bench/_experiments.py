@@ -131,9 +131,9 @@ class RunConfig:
                 if isinstance(v, str):
                     v = json.loads(v)
                 kw[name] = tuple(tuple(p) for p in v)
-        for name in ("k", "dissipation"):
-            if name in kw and _is_missing(kw[name]):
-                kw[name] = None
+        for f in dataclasses.fields(cls):  # optional fields come back from tables as NaN
+            if f.default is None and f.name in kw and _is_missing(kw[f.name]):
+                kw[f.name] = None
         if "dissipation" in kw and kw["dissipation"] is not None:
             kw["dissipation"] = bool(kw["dissipation"])
         return cls(**kw)
