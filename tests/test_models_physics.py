@@ -198,8 +198,20 @@ def test_euler_lagrange_solve_gives_true_accelerations(solve):
     )
 
 
+def test_lnn_kinetic_prior_is_exactly_c_v_squared():
+    kw = dict(key=jr.PRNGKey(3), width=W, dtype="float64")
+    pure = models.make("lnn", CHAIN2, kinetic_prior=0.0, **kw)
+    prior = models.make("lnn", CHAIN2, **kw)  # default c = 0.1
+    q, v = jnp.array([0.3, -1.2]), jnp.array([0.7, 2.0])
+    gap = prior.lagrangian(q, v, None) - pure.lagrangian(q, v, None)
+    np.testing.assert_allclose(gap, 0.1 * (v @ v), rtol=1e-12)
+
+
 def test_lnn_with_true_lagrangian_is_the_true_system():
-    lnn = models.make("lnn", CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64")
+    # the pure form (no kinetic prior): the swapped-in network is the whole Lagrangian
+    lnn = models.make(
+        "lnn", CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64", kinetic_prior=0.0
+    )
     field = eqx.filter_jit(jax.vmap(lambda m, z: m.vector_field(0.0, z, None), (None, 0)))
     zs = _states(jr.PRNGKey(11), 8, 2)
     true_lnn = eqx.tree_at(lambda m: m.net, lnn, _FeatureLagrangian())
