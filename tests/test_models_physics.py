@@ -209,9 +209,7 @@ def test_lnn_kinetic_prior_is_exactly_c_v_squared():
 
 def test_lnn_with_true_lagrangian_is_the_true_system():
     # the pure form (no kinetic prior): the swapped-in network is the whole Lagrangian
-    lnn = models.make(
-        "lnn", CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64", kinetic_prior=0.0
-    )
+    lnn = models.make("lnn", CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64", kinetic_prior=0.0)
     field = eqx.filter_jit(jax.vmap(lambda m, z: m.vector_field(0.0, z, None), (None, 0)))
     zs = _states(jr.PRNGKey(11), 8, 2)
     true_lnn = eqx.tree_at(lambda m: m.net, lnn, _FeatureLagrangian())
