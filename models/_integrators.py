@@ -177,6 +177,10 @@ def _adaptive(model, z0, ts, args, integrator):
         saveat=diffrax.SaveAt(ts=ts),
         stepsize_controller=diffrax.PIDController(rtol=integrator.rtol, atol=integrator.atol),
         max_steps=integrator.max_steps,
+        # A rollout that blows up or runs out of steps is an outcome to record, not an error:
+        # diffrax then fills the unreached save points with inf, which the metrics count as
+        # failed predictions from that time on.
+        throw=False,
     )
     tableau = solver.tableau
     per_step = tableau.num_stages - (1 if tableau.fsal else 0)

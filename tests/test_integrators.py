@@ -127,6 +127,16 @@ def test_fixed_step_hits_saved_times(osc):
     assert zs.shape == (5, 2) and zs.dtype == jnp.float64
 
 
+def test_adaptive_out_of_steps_is_recorded_not_raised(osc):
+    # a solve that cannot finish returns non-finite states from where it stopped (the metrics
+    # count them as failed predictions) instead of raising inside a sweep
+    ts = jnp.linspace(0.0, 10.0, 21)
+    zs = rollout(osc, Z0, ts, None, Integrator("adaptive", rtol=1e-12, atol=1e-14, max_steps=4))
+    finite = np.isfinite(np.asarray(zs)).all(axis=1)
+    assert finite[0] and not finite[-1]
+    np.testing.assert_allclose(zs[0], Z0)
+
+
 @pytest.mark.parametrize("solver", ["tsit5", "dopri5", "dopri8"])
 def test_adaptive_meets_tolerance(osc, solver):
     ts = jnp.linspace(0.0, 10.0, 21)
