@@ -34,6 +34,7 @@ import numpy as np
 from . import _metrics as M
 from . import _store
 from ._env import cpu_count
+from ._errors import one_line
 from ._experiments import RunConfig
 
 EXECUTORS = ("local", "ray")
@@ -311,7 +312,7 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
         np.savez_compressed(art / "curves.npz", **full)
     except Exception as e:  # one run never stops the sweep
         row["status"] = "failed"
-        row["error"] = f"{type(e).__name__}: {e}".splitlines()[0][:500]
+        row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
     _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
@@ -461,7 +462,7 @@ def _sweep_ray(todo, finish, cache_root, address, cores):
                 row = ray.get(ready[0])
             except Exception as e:  # a worker that died: record, keep going
                 row = base_row(c)
-                row["error"] = f"{type(e).__name__}: {e}".splitlines()[0][:500]
+                row["error"] = one_line(e, 500)
             finish(row)
     finally:
         if started:

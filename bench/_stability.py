@@ -39,6 +39,8 @@ import numpy as np
 
 import systems
 
+from ._errors import one_line
+
 OUTCOMES = ("ok", "diverged", "failed")
 DT = 0.03
 # A trajectory is called diverged where |z| exceeds this multiple of the largest |z| of the
@@ -72,22 +74,13 @@ class Row:
 COLUMNS = tuple(f.name for f in fields(Row))
 
 
-def _one_line(err: BaseException, limit: int = 300) -> str:
-    """The error's own message on one line (equinox runtime errors wrap theirs in a stack)."""
-    text = str(err)
-    for line in text.splitlines():
-        if "EquinoxRuntimeError:" in line or "XlaRuntimeError:" in line:
-            return line.strip()[:limit]
-    return f"{type(err).__name__}: {text}".replace("\n", " ").strip()[:limit]
-
-
 def guard(case: str, fn: Callable[[], list[Row]], variant: str = "*") -> list[Row]:
     """Run ``fn``; an exception becomes one ``failed`` row, a non-finite ``ok`` a ``diverged``."""
     try:
         rows = list(fn())
     except Exception as err:  # noqa: BLE001 - every failure must become a recorded outcome
         traceback.print_exc(limit=3)
-        return [Row(case, variant, "*", "failed", message=_one_line(err))]
+        return [Row(case, variant, "*", "failed", message=one_line(err))]
     checked = []
     for r in rows:
         if r.outcome == "ok" and not math.isfinite(r.value):
@@ -758,7 +751,7 @@ def _lnn_model_probe(size) -> list[Row]:
                     variant,
                     "accel_finite",
                     "failed",
-                    message=_one_line(err),
+                    message=one_line(err),
                     method=solve,
                 )
             )
@@ -890,7 +883,7 @@ def _long_rollout(model, info, name, label, method, sysm, z0, ts, truth, bound, 
                 variant,
                 "divergence_rate",
                 "failed",
-                message=_one_line(err),
+                message=one_line(err),
                 **common,
             )
         ]
@@ -1143,7 +1136,7 @@ def run_stability(results_dir="results", profile: str = "quick", cases=None):
     try:
         df.to_parquet(results_dir / "stability.parquet", index=False)
     except Exception as err:  # noqa: BLE001 - parquet is a convenience copy of the CSV
-        print(f"[stability] parquet not written: {_one_line(err)}")
+        print(f"[stability] parquet not written: {one_line(err)}")
     stability_figure(results_dir)
     return df
 
