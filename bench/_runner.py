@@ -38,6 +38,7 @@ from ._errors import one_line
 from ._experiments import RunConfig
 
 EXECUTORS = ("local", "ray")
+EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 per interval
 # Test states used for the symplectic error (a Jacobian per state: keep it small).
 _SYMPLECTIC_STATES = 64
 
@@ -193,8 +194,14 @@ def _evaluate(config, system, data, model, cache_root):
 
     import models
 
+    # An adaptive evaluation of a stiff learned field can take millions of steps; a test
+    # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
+    # (non-finite states) instead of holding the sweep.
     integ = models.Integrator(
-        config.eval_integrator, substeps=config.eval_substeps, rtol=config.eval_rtol
+        config.eval_integrator,
+        substeps=config.eval_substeps,
+        rtol=config.eval_rtol,
+        max_steps=EVAL_MAX_STEPS,
     )
     dtype = jnp.dtype(config.dtype)
     z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
