@@ -52,9 +52,14 @@ ALL = register(
         axes={
             "system": ["chain_pendulum", "spring_pendulum", "relativistic_particle"],
             "k": [2, None],
+            "friction": [0.0, 0.4],
             "model": models.available(),
         },
-        include=lambda c: (c.system == "relativistic_particle") == (c.k is None),
+        # chain and spring, damped and not, and the relativistic particle: five scenes
+        include=lambda c: (
+            (c.system == "relativistic_particle") == (c.k is None)
+            and not (c.system == "relativistic_particle" and c.friction > 0)
+        ),
     ),
     replace=True,
 )
@@ -330,7 +335,7 @@ def test_smoke_every_model_and_system(executor, tmp_path):
     if executor == "ray":
         pytest.importorskip("ray")
     configs = expand(ALL, "smoke")
-    assert len(configs) == 3 * len(models.available())
+    assert len(configs) == 5 * len(models.available())
     t0 = time.perf_counter()
     rows = runner.sweep(
         configs,
