@@ -302,9 +302,13 @@ def _cmd_bench(args) -> int:
         _check_sweep_args(args)
         print("no experiments yet")
         return 0
+    from . import _store
+
+    before = len(_store.done_hashes(Path(args.results)))
     start = time.time()
     _do_sweep(args, names)
     swept = time.time()
+    executed = len(_store.done_hashes(Path(args.results))) - before
     if not args.skip_stability:
         args.case = None
         _cmd_stability(args)
@@ -313,6 +317,7 @@ def _cmd_bench(args) -> int:
         "end": time.time(),
         "wall_seconds": time.time() - start,
         "sweep_seconds": swept - start,
+        "runs_executed": executed,  # runs already stored were skipped, not timed
         "stability_seconds": time.time() - swept,
         "profile": args.profile,
         "executor": args.executor,

@@ -84,9 +84,13 @@ def _meta(results_dir: Path, runs: pd.DataFrame) -> list[str]:
         except (TypeError, ValueError):
             wall = None
     if wall is not None:
-        lines.append(f"- sweep wall time: {float(wall) / 60:.1f} min (bench_meta.json)")
+        n_exec = meta.get("runs_executed")
+        which = f", {n_exec} runs executed, the rest already stored" if n_exec is not None else ""
+        lines.append(f"- sweep wall time: {float(wall) / 60:.1f} min (bench_meta.json{which})")
     else:
         lines.append("- sweep wall time: not recorded (no results/bench_meta.json)")
+    if meta.get("note"):
+        lines.append(f"- note: {meta['note']}")
     if len(runs):
         parts = [c for c in ("train_seconds", "compile_seconds", "rollout_seconds") if c in runs]
         total = float(np.nansum(runs[parts].to_numpy(float))) if parts else math.nan
