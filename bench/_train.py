@@ -240,6 +240,11 @@ def prepare(model, dataset, config: TrainConfig):
     if config.dtype == "float64" and not jax.config.jax_enable_x64:
         raise ValueError("float64 training needs jax_enable_x64 (import systems enables it)")
     ts, z, args = _check_dataset(dataset)
+    scene = getattr(model, "scene", None)
+    if scene is not None and scene.n_args < args.shape[1]:
+        # the data carry the system's parameters (e.g. the relativistic particle's default g);
+        # a model whose scene takes none must see args of shape (0,), as at evaluation
+        args = args[:, : scene.n_args]
     dtype = jnp.dtype(config.dtype)
     return (jnp.asarray(z, dtype), jnp.asarray(args, dtype), jnp.asarray(ts, dtype))
 
