@@ -262,3 +262,19 @@ def test_perf_smoke(tmp_path):
     row = pd.read_csv(out).iloc[0]
     assert row["model"] == "resnet" and row["ms_per_step_median"] > 0
     assert row["step_gflop"] > 0 and row["threads"] >= 1
+
+
+def test_prepare_drops_parameters_the_scene_does_not_take():
+    # the relativistic particle's data carry its default g even without random_args; a model
+    # built for a scene with n_args = 0 must train on args of shape (0,), as it is evaluated
+    data = dataclasses.make_dataclass("D", ["ts_train", "z_train", "args_train"])(
+        np.arange(3) * 0.1, np.zeros((4, 3, 2)), np.ones((4, 1))
+    )
+    scene = models.Scene(dof=1, angular=(False,))
+    model = models.make("node_symreg", scene, key=jax.random.PRNGKey(0), width=4)
+    z, args, ts = train_mod.prepare(model, data, TrainConfig(steps=1, batch=2))
+    assert args.shape == (4, 0) and z.shape == (4, 3, 2)
+    with_g = models.make(
+        "node", models.Scene(dof=1, angular=(False,), n_args=1), key=jax.random.PRNGKey(0), width=4
+    )
+    assert train_mod.prepare(with_g, data, TrainConfig(steps=1, batch=2))[1].shape == (4, 1)
