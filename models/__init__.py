@@ -5,23 +5,19 @@ Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract mode
 solve), :func:`n_parameters`, and the integrators (``Integrator``, ``rollout``, ...).
 """
 
-from bench._env import configure_threads
-
-configure_threads()
-
-from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel  # noqa: E402
-from ._models import available, make, n_parameters  # noqa: E402
-from ._scalar import acceleration_from_lagrangian  # noqa: E402
-from ._scene import Scene  # noqa: E402
-from ._symplectic import symplectic_error  # noqa: E402
-
-try:  # the integrators live in their own module, written alongside this package
-    from ._integrators import Integrator, count_evaluations, rollout, rollout_batch  # noqa: F401
-except ImportError:  # pragma: no cover - only while _integrators.py does not exist yet
-    pass
+from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
+from ._integrators import Integrator, count_evaluations, rollout, rollout_batch
+from ._models import available, make, n_parameters
+from ._scalar import acceleration_from_lagrangian
+from ._scene import Scene
+from ._symplectic import symplectic_error
 
 __all__ = [
     "AbstractContinuousModel",
+    "Integrator",
+    "count_evaluations",
+    "rollout",
+    "rollout_batch",
     "AbstractDiscreteModel",
     "AbstractModel",
     "Scene",
