@@ -420,7 +420,7 @@ def sweep(
         raise StorageError(
             f"could not write{where}: {err.strerror or err} (disk full or a file-size limit?); "
             f"{experiment} stopped after {len(new_rows)} new of {len(todo)} runs; the rows "
-            f"stored in {results_dir} are whole: run the sweep again to resume"
+            f"stored in {results_dir} are whole: run it again to resume"
         ) from e
     finally:
         bar.close()

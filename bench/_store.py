@@ -70,8 +70,10 @@ def _atomic_write_bytes(path: Path, data: bytes) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and not e.filename:  # name the file the disk refused
+            raise OSError(e.errno, e.strerror, str(path)) from e
         raise
     _fsync_dir(path.parent)
 
@@ -185,6 +187,8 @@ def scan_rows(results_dir, *, set_aside: bool = True) -> tuple[list[dict], list[
     rows, damaged = [], []
     rows_dir = Path(results_dir) / ROWS
     for path in sorted(rows_dir.glob("*.json")):
+        if path.name.startswith("."):  # a temporary being written (or left by a kill)
+            continue
         try:
             row, problem = _parse_row(path)
         except FileNotFoundError:  # removed meanwhile (e.g. another process set it aside)

@@ -268,6 +268,8 @@ def _save(path: Path, config: DatasetConfig, arrays) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and not e.filename:  # name the file the disk refused
+            raise OSError(e.errno, e.strerror, str(path)) from e
         raise

@@ -114,6 +114,8 @@ def test_damaged_row_files_named_set_aside_and_rerun(stored, monkeypatch):
     edited["rollout_error"] = 1e-9  # valid JSON, wrong content: the checksum says so
     paths[3].write_text(json.dumps(edited))
     damaged = {p.name: p.read_bytes() for p in paths[:4]}
+    partial = rows_dir / ".tmp-partial.json"  # a row being written (or left by a kill)
+    partial.write_text(good[:10])
 
     with pytest.warns(_store.DamagedRowWarning) as caught:
         done = _store.done_hashes(res)
@@ -127,6 +129,7 @@ def test_damaged_row_files_named_set_aside_and_rerun(stored, monkeypatch):
     aside = rows_dir / _store.DAMAGED
     assert {p.name: p.read_bytes() for p in aside.glob("*.json")} == damaged
     assert sorted(p.name for p in _store.unread_rows(res)) == sorted(damaged)
+    assert partial.exists() and str(partial) not in messages  # a temporary is not a row
 
     # The next sweep reruns exactly the four runs whose rows were lost.
     executed = []
@@ -287,7 +290,7 @@ def test_full_disk_while_a_row_is_written_stops_and_resumes(tmp_path, monkeypatc
                          text=True, timeout=120)  # fmt: skip
     line = _one_error_line(out.stderr)
     assert out.returncode == 1, out.stderr
-    assert "could not write" in line and "File too large" in line and "run the sweep again" in line
+    assert "could not write" in line and "File too large" in line and "run it again" in line
     configs = expand(RESUME, "smoke")
     rows_dir = res / _store.ROWS
     stored = {p.stem for p in rows_dir.glob("*.json")}
@@ -382,7 +385,8 @@ def test_full_disk_real_sweep_dataset_then_resume(tmp_path):
                          timeout=300)  # fmt: skip
     line = _one_error_line(out.stderr)
     assert out.returncode == 1 and "File too large" in line, out.stderr
-    assert not list((res / _store.ROWS).glob("*.json")) if (res / _store.ROWS).exists() else True
+    assert f"could not write {tmp_path / 'cache' / 'datasets'}" in line
+    assert not list(res.glob(f"{_store.ROWS}/*.json"))
     assert not list((tmp_path / "cache" / "datasets").glob("*"))
     out = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
