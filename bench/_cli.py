@@ -278,7 +278,7 @@ class NoRuns(Exception):
     """No stored runs to draw or report: one line, exit code 1."""
 
 
-def _stored_runs(args, verb: str) -> None:
+def _stored_runs(args, verb: str, action: str) -> None:
     """Raise NoRuns when the results hold no runs; warn about row files that did not read."""
     from . import _store
 
@@ -295,7 +295,7 @@ def _stored_runs(args, verb: str) -> None:
     if runs.empty:
         profiles = ", ".join(PROFILES)
         raise NoRuns(
-            f"no runs stored in {results} for any profile ({profiles}): nothing to {verb}; "
+            f"no runs stored in {results} for any profile ({profiles}): nothing to {action}; "
             "run `python -m bench sweep --all --profile <profile>` first"
         )
 
@@ -303,7 +303,7 @@ def _stored_runs(args, verb: str) -> None:
 def _cmd_figures(args) -> int:
     fn = _optional_entry("bench._figures", "make_figures", "figures")
     if fn is not None:
-        _stored_runs(args, "draw")
+        _stored_runs(args, "figures", "draw")
         fn(Path(args.results))
     return 0
 
@@ -311,7 +311,7 @@ def _cmd_figures(args) -> int:
 def _cmd_report(args) -> int:
     fn = _optional_entry("bench._report", "write_report", "report")
     if fn is not None:
-        _stored_runs(args, "report")
+        _stored_runs(args, "report", "report")
         fn(Path(args.results))
     return 0
 

@@ -148,7 +148,7 @@ def _parse_row(path: Path) -> tuple[dict | None, str | None]:
     try:
         row = json.loads(text)
     except ValueError as e:
-        return None, f"not JSON ({e.msg} at character {e.pos} of {len(text)}: truncated?)"
+        return None, f"not JSON ({e}; {len(text)} characters: truncated?)"
     if not isinstance(row, dict):
         return None, f"not a row (a JSON {type(row).__name__})"
     stored = row.pop(CHECKSUM, None)  # rows written before checksums have none

@@ -161,7 +161,9 @@ def test_report_and_figures_say_how_many_rows_they_could_not_read(stored, monkey
     for verb in ("report", "figures"):
         assert main(["--results", str(res), verb]) == 0
         err = capsys.readouterr().err
-        assert "warning: 2 stored row file(s) could not be read and are left out of the" in err
+        assert (
+            f"warning: 2 stored row file(s) could not be read and are left out of the {verb}" in err
+        )
     assert seen == [3, 3]
 
 
