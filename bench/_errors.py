@@ -7,8 +7,11 @@ import os
 import re
 
 # Write failures that will repeat for every run (full disk, quota, file-size limit, read-only
-# or forbidden folder): they stop a sweep instead of being recorded as a failed run.
-STORAGE_ERRNOS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS, errno.EACCES})
+# or forbidden folder, a folder under a file): they stop a sweep instead of being recorded as
+# a failed run.
+STORAGE_ERRNOS = frozenset(
+    {errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.ENOTDIR}
+)
 _ERRNO_TEXT = re.compile(r"\[Errno (\d+)\]")
 
 

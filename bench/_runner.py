@@ -366,7 +366,7 @@ def sweep(
     from ._experiments import check_choice, check_runnable
 
     check_choice("executor", executor, EXECUTORS)
-    results_dir = Path(results_dir)
+    results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
     cache_root = Path(cache_root or default_cache_root()).resolve()
     done = _store.done_hashes(results_dir)
     todo, seen = [], set()
@@ -374,6 +374,8 @@ def sweep(
         if c.config_hash not in done and c.config_hash not in seen:
             seen.add(c.config_hash)
             todo.append(c)
+    if todo:
+        _store.check_results_dir(cache_root, what="cache folder ($DECON_CACHE)")
     for c in todo:
         try:
             check_runnable(c)

@@ -78,35 +78,34 @@ def _atomic_write_bytes(path: Path, data: bytes) -> None:
     _fsync_dir(path.parent)
 
 
-def check_results_dir(results_dir, *, create: bool = True) -> Path:
+def check_results_dir(results_dir, *, create: bool = True, what: str = "results folder") -> Path:
     """The results folder, usable: created if missing (``create``) and writable.
 
     Raises :class:`ResultsDirError` (a ValueError) with one line naming the path and the
     problem: a file, a folder under a file, a folder that cannot be created or written.
+    ``what`` names the folder in the message (the runner checks its cache folder this way).
     """
     path = Path(results_dir)
     for p in (path, *path.parents):
         if p.exists() and not p.is_dir():
-            what = "is a file" if p == path else f"is under {p}, which is a file"
-            raise ResultsDirError(f"results folder {path} {what}, not a folder")
+            where = "is a file" if p == path else f"is under {p}, which is a file"
+            raise ResultsDirError(f"{what} {path} {where}, not a folder")
     rows = path / ROWS
     if rows.exists() and not rows.is_dir():
-        raise ResultsDirError(f"results folder {path}: {rows} is a file, not a folder")
+        raise ResultsDirError(f"{what} {path}: {rows} is a file, not a folder")
     if not path.exists():
         if not create:
             return path
         try:
             path.mkdir(parents=True, exist_ok=True)
         except OSError as e:
-            raise ResultsDirError(
-                f"results folder {path} cannot be created: {e.strerror or e}"
-            ) from None
+            raise ResultsDirError(f"{what} {path} cannot be created: {e.strerror or e}") from None
     try:  # os.access says yes to root everywhere: write a probe file instead
         fd, probe = tempfile.mkstemp(dir=path, prefix=".tmp-probe-")
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
-        raise ResultsDirError(f"results folder {path} is not writable: {e.strerror or e}") from None
+        raise ResultsDirError(f"{what} {path} is not writable: {e.strerror or e}") from None
     return path
 
 

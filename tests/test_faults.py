@@ -184,6 +184,12 @@ def test_unusable_results_folder_one_line_exit_2(tmp_path, capsys):
             line = _one_error_line(capsys.readouterr().err)
             assert code == 2 and str(path) in line and needle in line, (argv, line)
     assert afile.read_text() == "not a folder"
+    # The Python API says the same, and checks the cache folder before any run.
+    with pytest.raises(ValueError, match=f"results folder {afile} is a file"):
+        runner.sweep(expand(RESUME, "smoke"), afile, progress=False)
+    with pytest.raises(ValueError, match=r"cache folder \(\$DECON_CACHE\) .* is under"):
+        runner.sweep(expand(RESUME, "smoke"), tmp_path / "res", cache_root=afile / "c")
+    assert not list((tmp_path / "res").glob(f"{_store.ROWS}/*"))
 
 
 def test_unwritable_results_folder_subprocess(tmp_path):
