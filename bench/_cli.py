@@ -1,7 +1,11 @@
 """Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
 
-Verbs: list, run, sweep, figures, report, perf, bench. A bad name or value prints one line
-``error: ...`` on stderr and exits with code 2, without a traceback.
+Verbs: list, run, sweep, figures, report, perf, bench. A bad name or value, a run that can
+never run (e.g. leapfrog on a first-order model) or a results folder that cannot be used
+prints one line ``error: ...`` on stderr and exits with code 2, without a traceback. A write
+that fails during a sweep (full disk) stops it with one line and exit code 1 (run it again to
+resume); ``report`` and ``figures`` on a folder without runs say so and exit with code 1. A
+damaged row file is named in a one-line ``warning: ...`` and set aside (see bench._store).
 """
 
 from __future__ import annotations
@@ -10,13 +14,16 @@ import argparse
 import importlib
 import json
 import math
+import signal
 import sys
+import warnings
 from pathlib import Path
 
 from ._experiments import (
     PROFILES,
     RunConfig,
     check_choice,
+    check_runnable,
     field_names,
     profile_defaults,
 )
@@ -149,10 +156,9 @@ def _config_from_args(args) -> RunConfig:
             kw[key] = json.loads(value)
         except ValueError:
             kw[key] = value
-    cfg = RunConfig(**kw).validate()
-    # Surface the system's own ValueErrors (e.g. a parameter it does not take) before training.
-    systems.make(cfg.system, **cfg.system_kwargs())
-    return cfg
+    # Everything that would make the run fail before training (the system's parameters, the
+    # dataset shape, the model for the scene, the integrators the model allows) is a ValueError.
+    return check_runnable(RunConfig(**kw))
 
 
 def _print_row(row: dict) -> None:
@@ -212,6 +218,7 @@ def _cmd_run(args) -> int:
     from . import _runner
 
     cfg = _config_from_args(args)
+    _usable_results(args)
     row = _runner.sweep(
         [cfg], args.results, experiment="adhoc", profile=args.profile, progress=False
     )
@@ -242,6 +249,7 @@ def _do_sweep(args, names) -> int:
     if not names:
         print("no experiments yet")
         return 0
+    _usable_results(args)
     res = _runner.run_experiments(
         names,
         args.profile,
@@ -259,9 +267,43 @@ def _do_sweep(args, names) -> int:
     return 0
 
 
+def _usable_results(args) -> Path:
+    """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
+    from . import _store
+
+    return _store.check_results_dir(args.results, create=True)
+
+
+class NoRuns(Exception):
+    """No stored runs to draw or report: one line, exit code 1."""
+
+
+def _stored_runs(args, verb: str, action: str) -> None:
+    """Raise NoRuns when the results hold no runs; warn about row files that did not read."""
+    from . import _store
+
+    results = _store.check_results_dir(args.results, create=False)
+    runs = _store.load_runs(results)  # damaged row files are named and set aside here
+    unread = _store.unread_rows(results)
+    if unread:
+        print(
+            f"warning: {len(unread)} stored row file(s) could not be read and are left out of "
+            f"the {verb} (kept in {results / _store.ROWS / _store.DAMAGED}; the next sweep "
+            "reruns their runs)",
+            file=sys.stderr,
+        )
+    if runs.empty:
+        profiles = ", ".join(PROFILES)
+        raise NoRuns(
+            f"no runs stored in {results} for any profile ({profiles}): nothing to {action}; "
+            "run `python -m bench sweep --all --profile <profile>` first"
+        )
+
+
 def _cmd_figures(args) -> int:
     fn = _optional_entry("bench._figures", "make_figures", "figures")
     if fn is not None:
+        _stored_runs(args, "figures", "draw")
         fn(Path(args.results))
     return 0
 
@@ -269,6 +311,7 @@ def _cmd_figures(args) -> int:
 def _cmd_report(args) -> int:
     fn = _optional_entry("bench._report", "write_report", "report")
     if fn is not None:
+        _stored_runs(args, "report", "report")
         fn(Path(args.results))
     return 0
 
@@ -288,6 +331,7 @@ def _cmd_stability(args) -> int:
     if args.case:
         for c in args.case:
             check_choice("stability case", c, list(_stability.CASES))
+    _usable_results(args)
     df = _stability.run_stability(Path(args.results), args.profile, args.case)
     counts = df["outcome"].value_counts().to_dict() if len(df) else {}
     print(f"stability: {len(df)} rows {counts} -> {Path(args.results) / 'stability.csv'}")
@@ -333,26 +377,55 @@ def _cmd_bench(args) -> int:
     return 0
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    from ._store import DamagedRowWarning
+
+    if issubclass(category, DamagedRowWarning):
+        print(f"warning: {message}", file=sys.stderr if file is None else file)
+    else:
+        _show_warning(message, category, filename, lineno, file, line)
+
+
+_show_warning = warnings.showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit code (2 for bad input)."""
+    """Entry point; returns the exit code (2 for bad input, 1 for no runs or a failed write)."""
+    from ._errors import StorageError
+
+    if hasattr(signal, "SIGXFSZ"):  # a file-size limit: an OSError (EFBIG), not a core dump
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     try:
-        args = _parser().parse_args(argv)
-        if args.verb == "list":
-            return _cmd_list(args)
-        if args.verb == "run":
-            return _cmd_run(args)
-        if args.verb == "sweep":
-            return _do_sweep(args, _sweep_names(args))
-        return {
-            "figures": _cmd_figures,
-            "report": _cmd_report,
-            "perf": _cmd_perf,
-            "stability": _cmd_stability,
-            "bench": _cmd_bench,
-        }[args.verb](args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return _main(argv)
     except (UsageError, ValueError) as e:
         print(f"error: {str(e).splitlines()[0] if str(e) else type(e).__name__}", file=sys.stderr)
         return 2
+    except (NoRuns, StorageError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    except OSError as e:  # any other failed read or write: one line, no traceback
+        where = f"{e.filename}: " if e.filename else ""
+        print(f"error: {where}{e.strerror or e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def _main(argv) -> int:
+    args = _parser().parse_args(argv)
+    if args.verb == "list":
+        return _cmd_list(args)
+    if args.verb == "run":
+        return _cmd_run(args)
+    if args.verb == "sweep":
+        return _do_sweep(args, _sweep_names(args))
+    return {
+        "figures": _cmd_figures,
+        "report": _cmd_report,
+        "perf": _cmd_perf,
+        "stability": _cmd_stability,
+        "bench": _cmd_bench,
+    }[args.verb](args)

@@ -34,7 +34,7 @@ import numpy as np
 from . import _metrics as M
 from . import _store
 from ._env import cpu_count
-from ._errors import one_line
+from ._errors import StorageError, one_line, storage_error
 from ._experiments import RunConfig
 
 EXECUTORS = ("local", "ray")
@@ -317,7 +317,9 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
         row.update(metrics)
         row["curves"] = curves
         np.savez_compressed(art / "curves.npz", **full)
-    except Exception as e:  # one run never stops the sweep
+    except Exception as e:  # one run never stops the sweep...
+        if storage_error(e):  # ...but a full disk does (bench._errors), recording nothing
+            raise
         row["status"] = "failed"
         row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
@@ -353,11 +355,18 @@ def sweep(
 
     ``workers``: local processes (1 = in-process; None = one per core). Each finished row is
     written atomically as it arrives and the tables are rebuilt, so a killed sweep resumes.
+
+    Before anything runs, every run to execute is checked by
+    :func:`bench._experiments.check_runnable` (ValueError for a run that can never run, e.g.
+    leapfrog on a first-order model). A write that fails for want of space or permission (in
+    a run or when storing its row) stops the sweep with :class:`bench._errors.StorageError`;
+    the rows stored so far are whole and the next sweep resumes. A damaged row file counts
+    as not done (see :func:`bench._store.scan_rows`): its run is executed again.
     """
-    from ._experiments import check_choice
+    from ._experiments import check_choice, check_runnable
 
     check_choice("executor", executor, EXECUTORS)
-    results_dir = Path(results_dir)
+    results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
     cache_root = Path(cache_root or default_cache_root()).resolve()
     done = _store.done_hashes(results_dir)
     todo, seen = [], set()
@@ -365,6 +374,13 @@ def sweep(
         if c.config_hash not in done and c.config_hash not in seen:
             seen.add(c.config_hash)
             todo.append(c)
+    if todo:
+        _store.check_results_dir(cache_root, what="cache folder ($DECON_CACHE)")
+    for c in todo:
+        try:
+            check_runnable(c)
+        except ValueError as e:
+            raise ValueError(f"run {_label(c)} ({c.config_hash}): {e}") from None
     new_rows: list[dict] = []
     if not todo:
         if progress:
@@ -398,6 +414,16 @@ def sweep(
                     finish(execute_run(c, cache_root=cache_root, progress=False))
             else:
                 _sweep_pool(todo, finish, cache_root, workers, cores)
+    except Exception as e:
+        err = storage_error(e)
+        if err is None:
+            raise
+        where = f" {err.filename}" if err.filename else ""
+        raise StorageError(
+            f"could not write{where}: {err.strerror or err} (disk full or a file-size limit?); "
+            f"{experiment} stopped after {len(new_rows)} new of {len(todo)} runs; the rows "
+            f"stored in {results_dir} are whole: run it again to resume"
+        ) from e
     finally:
         bar.close()
     return new_rows
@@ -468,6 +494,8 @@ def _sweep_ray(todo, finish, cache_root, address, cores):
             try:
                 row = ray.get(ready[0])
             except Exception as e:  # a worker that died: record, keep going
+                if storage_error(e):  # a full disk: stop (sweep raises StorageError)
+                    raise
                 row = base_row(c)
                 row["error"] = one_line(e, 500)
             finish(row)

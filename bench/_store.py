@@ -6,18 +6,25 @@ Layout under ``results_dir``::
     runs.parquet, runs.csv     one row per config_hash, rebuilt from .rows/
     curves.parquet             (config_hash, t, rel_error, energy_violation, z_true_i, z_pred_i)
 
-A row file is written to a temporary name and ``os.replace``d into place, and the tables are
-rebuilt the same way, so a process killed at any moment leaves either the whole row or none,
-and a hash can never appear twice. ``.rows/`` is meant to be committed: results reload from a
-fresh clone.
+A row file is written to a temporary name, fsynced and ``os.replace``d into place, and the
+tables are rebuilt the same way, so a process killed at any moment (or a full disk) leaves
+either the whole row or none, and a hash can never appear twice. Each row carries the sha256
+of its own content (``_row_sha256``, checked on read and not a column). A row file that does
+not read back (truncated, not JSON, wrong fields, checksum mismatch) is named in a
+:class:`DamagedRowWarning` and moved aside to ``.rows/.damaged/`` (never deleted): its run then
+counts as not done and the next sweep reruns it. ``.rows/`` is meant to be committed: results
+reload from a fresh clone.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
 import tempfile
+import time
+import warnings
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -25,10 +32,36 @@ import numpy as np
 import pandas as pd
 
 ROWS = ".rows"
+DAMAGED = ".damaged"  # under .rows/: row files that did not read back, kept for inspection
 CURVE_KEYS = ("t", "rel_error", "energy_violation", "z_true", "z_pred")
+STATUSES = ("ok", "diverged", "failed")
+CHECKSUM = "_row_sha256"
+
+
+class DamagedRowWarning(UserWarning):
+    """A stored row file could not be read; it was moved aside and its run will be rerun."""
+
+
+class ResultsDirError(ValueError):
+    """A results folder that cannot be used (a file, under a file, not writable)."""
+
+
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def _atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write to a temporary file, fsync, rename: ``path`` holds all of ``data`` or its old
+    content, never a prefix (a full disk leaves no partial file; the temporary is removed)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix)
     try:
@@ -37,9 +70,43 @@ def _atomic_write_bytes(path: Path, data: bytes) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and not e.filename:  # name the file the disk refused
+            raise OSError(e.errno, e.strerror, str(path)) from e
         raise
+    _fsync_dir(path.parent)
+
+
+def check_results_dir(results_dir, *, create: bool = True, what: str = "results folder") -> Path:
+    """The results folder, usable: created if missing (``create``) and writable.
+
+    Raises :class:`ResultsDirError` (a ValueError) with one line naming the path and the
+    problem: a file, a folder under a file, a folder that cannot be created or written.
+    ``what`` names the folder in the message (the runner checks its cache folder this way).
+    """
+    path = Path(results_dir)
+    for p in (path, *path.parents):
+        if p.exists() and not p.is_dir():
+            where = "is a file" if p == path else f"is under {p}, which is a file"
+            raise ResultsDirError(f"{what} {path} {where}, not a folder")
+    rows = path / ROWS
+    if rows.exists() and not rows.is_dir():
+        raise ResultsDirError(f"{what} {path}: {rows} is a file, not a folder")
+    if not path.exists():
+        if not create:
+            return path
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise ResultsDirError(f"{what} {path} cannot be created: {e.strerror or e}") from None
+    try:  # os.access says yes to root everywhere: write a probe file instead
+        fd, probe = tempfile.mkstemp(dir=path, prefix=".tmp-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise ResultsDirError(f"{what} {path} is not writable: {e.strerror or e}") from None
+    return path
 
 
 def _jsonable(x):
@@ -56,28 +123,123 @@ def _jsonable(x):
     return x
 
 
+def _canonical(row: dict) -> str:
+    return json.dumps(row, sort_keys=True, separators=(",", ":"))
+
+
 def write_row(results_dir, row: dict) -> Path:
-    """Atomically write one finished run as ``.rows/<config_hash>.json``."""
+    """Atomically write one finished run as ``.rows/<config_hash>.json``, with its checksum."""
     path = Path(results_dir) / ROWS / f"{row['config_hash']}.json"
-    text = json.dumps(_jsonable(row), sort_keys=True, separators=(",", ":"))
-    _atomic_write_bytes(path, text.encode())
+    payload = _jsonable({a: b for a, b in row.items() if a != CHECKSUM})
+    payload[CHECKSUM] = hashlib.sha256(_canonical(payload).encode()).hexdigest()
+    _atomic_write_bytes(path, _canonical(payload).encode())
     return path
 
 
-def read_rows(results_dir) -> list[dict]:
-    """Every stored row (unreadable files, e.g. from a foreign tool, are skipped)."""
-    rows = []
-    for path in sorted((Path(results_dir) / ROWS).glob("*.json")):
-        try:
-            rows.append(json.loads(path.read_text()))
-        except (OSError, ValueError):
+def _parse_row(path: Path) -> tuple[dict | None, str | None]:
+    """(row, None) for a good row file, (None, what is wrong) otherwise."""
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        return None, "not text"
+    if not text.strip():
+        return None, "empty"
+    try:
+        row = json.loads(text)
+    except ValueError as e:
+        return None, f"not JSON ({e}; {len(text)} characters: truncated?)"
+    if not isinstance(row, dict):
+        return None, f"not a row (a JSON {type(row).__name__})"
+    stored = row.pop(CHECKSUM, None)  # rows written before checksums have none
+    if stored is not None and hashlib.sha256(_canonical(row).encode()).hexdigest() != stored:
+        return None, "checksum mismatch (content changed after writing)"
+    if row.get("config_hash") != path.stem:
+        return None, f"config_hash {row.get('config_hash')!r} is not the file name's"
+    if row.get("status") not in STATUSES:
+        return None, f"status {row.get('status')!r} is not one of {', '.join(STATUSES)}"
+    for key, kind in (("system", str), ("model", str), ("seed", int)):
+        if not isinstance(row.get(key), kind) or isinstance(row.get(key), bool):
+            return None, f"field {key!r} missing or not a {kind.__name__}"
+    curves = row.get("curves")
+    if curves is not None and not isinstance(curves, dict):
+        return None, "field 'curves' is not an object"
+    return row, None
+
+
+def _set_aside(path: Path) -> Path:
+    dest_dir = path.parent / DAMAGED
+    dest_dir.mkdir(exist_ok=True)
+    dest = dest_dir / path.name
+    if dest.exists():  # an earlier damaged copy of the same run: keep both
+        dest = dest_dir / f"{path.stem}.{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}.json"
+    os.replace(path, dest)
+    return dest
+
+
+def scan_rows(results_dir, *, set_aside: bool = True) -> tuple[list[dict], list[tuple[Path, str]]]:
+    """(good rows, [(damaged file, what is wrong)]) of ``.rows/``.
+
+    Each damaged file is named in a :class:`DamagedRowWarning` and, with ``set_aside``, moved to
+    ``.rows/.damaged/`` so that its run counts as not done (the path in the list is then the
+    new one). A file that cannot be moved (read-only results) is left in place and skipped.
+    """
+    rows, damaged = [], []
+    rows_dir = Path(results_dir) / ROWS
+    for path in sorted(rows_dir.glob("*.json")):
+        if path.name.startswith("."):  # a temporary being written (or left by a kill)
             continue
-    return rows
+        try:
+            row, problem = _parse_row(path)
+        except FileNotFoundError:  # removed meanwhile (e.g. another process set it aside)
+            continue
+        except OSError as e:
+            row, problem = None, f"unreadable ({e.strerror or e})"
+        if row is not None:
+            rows.append(row)
+            continue
+        where = path
+        note = "left in place"
+        if set_aside:
+            try:
+                where = _set_aside(path)
+                note = f"moved to {where}"
+            except OSError as e:
+                note = f"could not be moved aside ({e.strerror or e})"
+        warnings.warn(
+            f"damaged row file {path}: {problem}; {note}; its run counts as not done "
+            "and the next sweep reruns it",
+            DamagedRowWarning,
+            stacklevel=2,
+        )
+        damaged.append((where, problem))
+    return rows, damaged
+
+
+def read_rows(results_dir) -> list[dict]:
+    """Every stored row that reads back (damaged files are set aside, see :func:`scan_rows`)."""
+    return scan_rows(results_dir)[0]
 
 
 def done_hashes(results_dir) -> set[str]:
-    """config_hash of every finished run (whatever its status)."""
-    return {p.stem for p in (Path(results_dir) / ROWS).glob("*.json")}
+    """config_hash of every finished run (whatever its status) whose row file reads back."""
+    return {r["config_hash"] for r in read_rows(results_dir)}
+
+
+def unread_rows(results_dir) -> list[Path]:
+    """Damaged row files in ``.rows/.damaged/`` (or left in ``.rows/``) whose run has no good
+    row yet: the runs the tables are missing until the next sweep reruns them."""
+    rows_dir = Path(results_dir) / ROWS
+    if not rows_dir.is_dir():
+        return []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DamagedRowWarning)
+        rows, damaged = scan_rows(results_dir, set_aside=False)
+    done = {r["config_hash"] for r in rows}
+    out = [p for p, _ in damaged]
+    for p in sorted((rows_dir / DAMAGED).glob("*.json")):
+        if p.name.split(".")[0] not in done:
+            out.append(p)
+    return out
 
 
 def _flat(row: dict) -> dict:
@@ -101,9 +263,8 @@ def rows_frame(rows: Sequence[dict]) -> pd.DataFrame:
     """The runs table of some rows: one row per config_hash, lists as JSON strings."""
     df = pd.DataFrame([_flat(r) for r in rows])
     if len(df):
-        df = df.drop_duplicates("config_hash", keep="first").sort_values(
-            ["experiment", "system", "model", "seed", "config_hash"], na_position="last"
-        )
+        by = [c for c in ("experiment", "system", "model", "seed", "config_hash") if c in df]
+        df = df.drop_duplicates("config_hash", keep="first").sort_values(by, na_position="last")
         for col in df.columns:  # JSON null -> NaN, "inf" -> inf, where a column is numeric
             if df[col].dtype == object and df[col].map(_numeric_or_null).all():
                 df[col] = pd.to_numeric(df[col], errors="coerce").astype(float)

@@ -253,6 +253,8 @@ def _load(path: Path, config: DatasetConfig):
 
 
 def _save(path: Path, config: DatasetConfig, arrays) -> None:
+    """Write to a temporary file, fsync, rename: a write that fails (a full disk, a file-size
+    limit) raises and leaves no file at ``path`` and no temporary behind."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
     try:
@@ -263,7 +265,11 @@ def _save(path: Path, config: DatasetConfig, arrays) -> None:
                 config=np.array(config.canonical_json()),
                 **arrays,
             )
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and not e.filename:  # name the file the disk refused
+            raise OSError(e.errno, e.strerror, str(path)) from e
         raise

@@ -88,10 +88,7 @@ def test_run_prints_metrics_and_adds_row(capsys, tmp_path, monkeypatch):
     assert len(pd.read_parquet(tmp_path / "res" / "runs.parquet")) == 1
 
 
-def test_figures_report_without_modules_or_results(capsys, tmp_path):
-    for verb in ("figures", "report"):
-        code = main(["--results", str(tmp_path), verb])
-        assert code == 0, capsys.readouterr()
+# report and figures on a folder without runs: tests/test_faults.py
 
 
 def test_env_pins_cores_and_compilation_cache():

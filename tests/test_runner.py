@@ -1,16 +1,10 @@
-"""Experiments, the store and the sweep runner: expansion, hashing, atomic rows, resume.
+"""Experiments, the store and the sweep runner: expansion, hashing, atomic rows.
 
-This module doubles as a test-only experiments module: a sweep subprocess started with
-``DECON_EXTRA_EXPERIMENTS=tests.test_runner`` imports it and so knows the experiments below.
-With ``DECON_TEST_FAKE_RUN=<log file>`` it also swaps the runner's ``execute_run`` for a fake
-that sleeps and logs each execution (the kill/resume test is about bookkeeping, not physics).
+Faults from outside a run (a sweep killed and resumed, damaged rows, a full disk) are in
+tests/test_faults.py.
 """
 
 import json
-import os
-import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -25,16 +19,6 @@ from bench._experiments import Experiment, RunConfig, expand, register
 
 ROOT = Path(__file__).resolve().parents[1]
 
-RESUME = register(
-    Experiment(
-        name="test_resume",
-        title="test: resume after a kill",
-        axes={"model": ["node"]},
-        fixed={"system": "chain_pendulum", "k": 1},
-        profile_overrides={"smoke": {"seeds": list(range(6))}},
-    ),
-    replace=True,
-)
 TWO = register(
     Experiment(
         name="test_two",
@@ -63,21 +47,6 @@ ALL = register(
     ),
     replace=True,
 )
-
-
-def _fake_execute_run(config, cache_root=None, progress=False):
-    log = os.environ["DECON_TEST_FAKE_RUN"]
-    with open(log, "a") as f:
-        f.write(config.config_hash + "\n")
-    time.sleep(float(os.environ.get("DECON_TEST_FAKE_SLEEP", "0.7")))
-    row = runner.base_row(config)
-    row.update(status="ok", rollout_error=0.01 * (config.seed + 1))
-    row["curves"] = {"t": [0.0, 0.03], "rel_error": [0.0, 0.01], "energy_violation": [0, 0]}
-    return row
-
-
-if os.environ.get("DECON_TEST_FAKE_RUN"):
-    runner.execute_run = _fake_execute_run
 
 
 # ------------------------------------------------------------------------- experiments
@@ -257,54 +226,7 @@ def test_failed_run_recorded_with_traceback(tmp_path):
     )
 
 
-# ------------------------------------------------------------------------- kill/resume
-def _sweep_cmd(res):
-    return [
-        sys.executable,
-        "-m",
-        "bench",
-        "--results",
-        str(res),
-        "sweep",
-        "test_resume",
-        "--profile",
-        "smoke",
-        "--no-progress",
-    ]
-
-
-def test_resume_after_kill(tmp_path):
-    log = tmp_path / "executed.log"
-    res = tmp_path / "results"
-    env = {
-        **os.environ,
-        "DECON_EXTRA_EXPERIMENTS": "tests.test_runner",
-        "DECON_TEST_FAKE_RUN": str(log),
-        "DECON_CACHE": str(tmp_path / "cache"),
-    }
-    proc = subprocess.Popen(
-        _sweep_cmd(res), cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    )
-    rows_dir = res / ".rows"
-    deadline = time.time() + 60
-    while time.time() < deadline and len(list(rows_dir.glob("*.json"))) < 2:
-        time.sleep(0.05)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    killed_rows = {p.stem for p in rows_dir.glob("*.json")}
-    assert 1 <= len(killed_rows) < 6, "kill landed outside the sweep"
-    out = subprocess.run(
-        _sweep_cmd(res), cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
-    )
-    assert out.returncode == 0, out.stderr
-    expected = {c.config_hash for c in expand(RESUME, "smoke")}
-    df = pd.read_parquet(res / "runs.parquet")
-    assert len(df) == 6 and set(df["config_hash"]) == expected and (df["status"] == "ok").all()
-    executed = log.read_text().split()
-    # Rows stored before the kill were not executed again; at most the run in flight was.
-    assert all(executed.count(h) == 1 for h in killed_rows)
-    assert len(executed) <= 6 + 1
-    assert not list(rows_dir.glob(".tmp*"))
+# Kill and resume, damaged rows, a full disk: tests/test_faults.py
 
 
 # --------------------------------------------------------------------------------- ray
