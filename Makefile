@@ -18,7 +18,7 @@ TOOLS  := .cache/tools
 UV     := $(TOOLS)/bin/uv
 UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
-	--generate-hashes --annotation-style line --custom-compile-command "make lock"
+	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
 .PHONY: install lock upgrade test test-slow lint format bench stability perf figures report clean
 
