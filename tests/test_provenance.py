@@ -53,6 +53,28 @@ def test_git_commit_is_this_checkout():
     assert isinstance(prov["git_dirty"], bool)
 
 
+def test_dirty_means_changes_outside_results(tmp_path, monkeypatch):
+    def git(*args):
+        subprocess.run(["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@t",
+                        *args], check=True, capture_output=True)  # fmt: skip
+
+    git("init", "-q")
+    (tmp_path / "code.py").write_text("x = 1\n")
+    git("add", "code.py")
+    git("commit", "-qm", "c")
+    monkeypatch.setattr(P, "_REPO", tmp_path.resolve())
+    commit, dirty = P._git_state()
+    assert re.fullmatch(r"[0-9a-f]{40}", commit) and dirty is False
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "row.json").write_text("{}")  # a sweep writing its rows
+    assert P._git_state() == (commit, False)
+    (tmp_path / "code.py").write_text("x = 2\n")
+    assert P._git_state() == (commit, True)
+    # A package folder that is not the top of the work tree has no history of its own here.
+    monkeypatch.setattr(P, "_REPO", (tmp_path / "results").resolve())
+    assert P._git_state() == (P.UNKNOWN, None)
+
+
 def _row(h, profile="quick", **prov):
     return {"config_hash": h, "experiment": "e", "system": "s", "model": "m", "seed": 0,
             "profile": profile, "status": "ok", "rollout_error": 0.1, **prov}  # fmt: skip
