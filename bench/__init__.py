@@ -17,15 +17,18 @@ from ._experiments import (  # noqa: E402
     get,
     register,
 )
+from ._provenance import PROVENANCE_COLUMNS, compare_provenance, provenance_markdown  # noqa: E402
 from ._runner import execute_run, sweep  # noqa: E402
 from ._store import aggregate, load_curves, load_runs, runs_of  # noqa: E402
 
 __all__ = [
     "PROFILES",
+    "PROVENANCE_COLUMNS",
     "Experiment",
     "RunConfig",
     "aggregate",
     "available",
+    "compare_provenance",
     "execute_run",
     "expand",
     "experiments",
@@ -33,6 +36,7 @@ __all__ = [
     "load_curves",
     "load_runs",
     "metrics",
+    "provenance_markdown",
     "register",
     "runs_of",
     "sweep",

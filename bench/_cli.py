@@ -347,6 +347,7 @@ def _cmd_bench(args) -> int:
         print("no experiments yet")
         return 0
     from . import _store
+    from ._provenance import provenance
 
     before = len(_store.done_hashes(Path(args.results)))
     start = time.time()
@@ -367,6 +368,7 @@ def _cmd_bench(args) -> int:
         "executor": args.executor,
         "workers": args.workers,
         "experiments": names,
+        "provenance": provenance(),  # this process's versions, device and commit
     }
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)

@@ -36,6 +36,7 @@ from . import _store
 from ._env import cpu_count
 from ._errors import StorageError, one_line, storage_error
 from ._experiments import RunConfig
+from ._provenance import provenance
 
 EXECUTORS = ("local", "ray")
 EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 per interval
@@ -324,6 +325,7 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
         row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
+    row.update(provenance())  # versions, device and commit: bench._provenance
     _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
     return row
 

@@ -1,0 +1,243 @@
+"""Provenance of a result: the software and hardware that produced a run.
+
+Every run row (and ``bench_meta.json``) carries :data:`PROVENANCE_COLUMNS`:
+
+- ``python_version`` and ``<package>_version`` for each of :data:`PACKAGES` (the installed
+  distribution's version, from its metadata);
+- ``backend`` (``jax.default_backend()``: ``cpu``, ``gpu``, ``tpu``) and ``device`` (the GPU's
+  ``device_kind``, e.g. ``NVIDIA H100 80GB HBM3``, or on CPU the processor's model name);
+- ``git_commit`` (the full hash of this checkout's ``HEAD``) and ``git_dirty`` (whether the
+  working tree differs from it outside ``results/``; ``None`` when not known).
+
+A value that could not be determined is :data:`UNKNOWN`. :func:`provenance` computes them once
+per process. Rows written before provenance existed simply lack the columns (NaN in the runs
+table); :func:`provenance_markdown` counts them as "not recorded" and :func:`compare_provenance`
+says so, without guessing.
+
+Command line (``python -m bench.provenance``):
+
+``show``                     this process's provenance as JSON
+``compare DIR_A DIR_B``      warnings where two results folders differ in versions or devices
+``backfill DIR KEY=VALUE..`` give the rows of DIR that lack provenance the values known for
+                             them (the rest ``unknown``) and rebuild its tables
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import platform
+import subprocess
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+PACKAGES = ("jax", "jaxlib", "equinox", "diffrax", "optax", "optimistix", "numpy")
+VERSION_COLUMNS = ("python_version", *(f"{p}_version" for p in PACKAGES))
+DEVICE_COLUMNS = ("backend", "device")
+GIT_COLUMNS = ("git_commit", "git_dirty")
+PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *GIT_COLUMNS)
+UNKNOWN = "unknown"
+_REPO = Path(__file__).resolve().parents[1]
+
+
+def _version(package: str) -> str:
+    from importlib import metadata
+
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        module = sys.modules.get(package)
+        return str(getattr(module, "__version__", UNKNOWN))
+
+
+def _cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine() or UNKNOWN
+
+
+def _device() -> tuple[str, str]:
+    """(backend, device name) of JAX's default backend (initialises it)."""
+    try:
+        import jax
+
+        backend = jax.default_backend()
+        if backend == "cpu":
+            return backend, _cpu_name()
+        return backend, str(jax.devices()[0].device_kind)
+    except Exception:  # noqa: BLE001 - provenance never stops a run
+        return UNKNOWN, UNKNOWN
+
+
+def _git(*args: str) -> str | None:
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(_REPO), *args], capture_output=True, text=True, timeout=10
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout if out.returncode == 0 else None
+
+
+def _git_state() -> tuple[str, bool | None]:
+    """(commit, dirty) of the checkout this package was imported from.
+
+    Only when the package's own folder is the top of a git work tree (an installed copy inside
+    some other repository is not this code's history). ``dirty``: tracked or untracked
+    (not ignored) changes outside ``results/``, which a sweep itself writes to.
+    """
+    out = _git("rev-parse", "--show-toplevel", "HEAD")
+    lines = (out or "").split()
+    if len(lines) != 2 or Path(lines[0]).resolve() != _REPO:
+        return UNKNOWN, None
+    status = _git("status", "--porcelain", "--", ".", ":(exclude)results")
+    return lines[1], None if status is None else bool(status.strip())
+
+
+@functools.cache
+def provenance() -> dict[str, str | bool | None]:
+    """This process's provenance, one value per :data:`PROVENANCE_COLUMNS` (computed once).
+
+    Asks JAX for its default backend, which initialises it: call it where JAX runs anyway.
+    """
+    out: dict[str, str | bool | None] = {"python_version": platform.python_version()}
+    out.update({f"{p}_version": _version(p) for p in PACKAGES})
+    out["backend"], out["device"] = _device()
+    out["git_commit"], out["git_dirty"] = _git_state()
+    return out
+
+
+# ------------------------------------------------------------------------ tables and checks
+def _values(df, column: str) -> tuple[list[tuple[str, int]], int]:
+    """(value, count) of the recorded values of ``column``, and the number not recorded."""
+    if column not in df:
+        return [], len(df)
+    col = df[column]
+    missing = int(col.isna().sum())
+    counts = col.dropna().map(_label).value_counts()
+    return [(str(v), int(n)) for v, n in counts.items()], missing
+
+
+def _label(v) -> str:
+    if isinstance(v, bool | np.bool_):
+        return "dirty" if v else "clean"
+    return str(v)
+
+
+def _cell(values: list[tuple[str, int]], missing: int, total: int, short: bool = False) -> str:
+    parts = []
+    for v, n in values:
+        text = v[:10] if short and v != UNKNOWN else v
+        parts.append(text if n == total else f"{text} ({n})")
+    if missing:
+        parts.append("not recorded" if missing == total else f"not recorded ({missing})")
+    return ", ".join(parts).replace("|", "\\|") or "-"
+
+
+def provenance_markdown(runs, by: str = "profile") -> str:
+    """A markdown table of the provenance of the runs, one column per ``by`` value (profile).
+
+    Each cell lists the distinct values recorded for that field with their run counts where
+    they are not unanimous; rows written before provenance existed count as "not recorded".
+    """
+    if runs is None or len(runs) == 0:
+        return "No runs."
+    groups = sorted(runs[by].fillna("?").astype(str).unique()) if by in runs else ["all"]
+    header = "| field | " + " | ".join(f"{by} `{g}`" for g in groups) + " |"
+    lines = [header, "|" + " --- |" * (len(groups) + 1)]
+    parts = [runs[runs[by].fillna("?").astype(str) == g] if by in runs else runs for g in groups]
+    lines.append("| runs | " + " | ".join(str(len(p)) for p in parts) + " |")
+    for column in PROVENANCE_COLUMNS:
+        cells = [_cell(*_values(p, column), len(p), short=column == "git_commit") for p in parts]
+        lines.append(f"| {column} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def compare_provenance(df_a, df_b, names: Sequence[str] = ("a", "b")) -> list[str]:
+    """Warnings (one line each) where two runs tables differ in provenance.
+
+    For each of :data:`PROVENANCE_COLUMNS` except ``git_dirty``: a warning when both sides
+    recorded the field and the sets of values differ, else when either side has runs without
+    it (not recorded or ``unknown``), since then the two cannot be shown to match. An empty
+    list: every run of both sides recorded every field, with the same sets of values.
+    """
+    a_name, b_name = names
+    warnings = []
+    for column in (c for c in PROVENANCE_COLUMNS if c != "git_dirty"):
+        va, ma = _values(df_a, column)
+        vb, mb = _values(df_b, column)
+        sa = {v for v, _ in va if v != UNKNOWN}
+        sb = {v for v, _ in vb if v != UNKNOWN}
+        ua = ma + sum(n for v, n in va if v == UNKNOWN)
+        ub = mb + sum(n for v, n in vb if v == UNKNOWN)
+        if sa and sb and sa != sb:
+            show = ", ".join(sorted(sa)), ", ".join(sorted(sb))
+            warnings.append(f"{column} differs: {show[0]} ({a_name}) vs {show[1]} ({b_name})")
+        elif ua or ub:
+            unk = " and ".join(f"{n} runs of {s}" for n, s in ((ua, a_name), (ub, b_name)) if n)
+            known = "; ".join(
+                f"{s}: {', '.join(sorted(v))}" for v, s in ((sa, a_name), (sb, b_name)) if v
+            )
+            warnings.append(f"{column} not recorded for {unk}" + (f" ({known})" if known else ""))
+    return warnings
+
+
+def compare_results(dir_a, dir_b) -> list[str]:
+    """:func:`compare_provenance` of the stored runs of two results folders."""
+    from ._store import load_runs
+
+    return compare_provenance(load_runs(dir_a), load_runs(dir_b), names=(str(dir_a), str(dir_b)))
+
+
+def backfill(results_dir, known: Mapping[str, object]) -> int:
+    """Add provenance to the stored rows of ``results_dir`` that have none; rebuild its tables.
+
+    ``known`` maps columns of :data:`PROVENANCE_COLUMNS` to the values known to have produced
+    those rows; every other column becomes :data:`UNKNOWN` (``git_dirty``: ``None``). Rows that
+    already carry provenance are left alone. Returns the number of rows changed.
+    """
+    from ._store import ROWS, read_rows, rebuild_tables, write_row
+
+    bad = sorted(set(known) - set(PROVENANCE_COLUMNS))
+    if bad:
+        raise ValueError(f"unknown provenance fields {bad}; allowed: {list(PROVENANCE_COLUMNS)}")
+    if not (Path(results_dir) / ROWS).is_dir():
+        raise ValueError(f"{results_dir} has no {ROWS}/ folder of stored rows")
+    changed = 0
+    for row in read_rows(results_dir):
+        if any(c in row for c in PROVENANCE_COLUMNS):
+            continue
+        for column in PROVENANCE_COLUMNS:
+            row[column] = known.get(column, None if column == "git_dirty" else UNKNOWN)
+        write_row(results_dir, row)
+        changed += 1
+    if changed:
+        rebuild_tables(results_dir)
+    return changed
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = list(sys.argv[1:] if argv is None else argv)
+    verb = args.pop(0) if args else ""
+    if verb == "show" and not args:
+        print(json.dumps(provenance(), indent=1))
+        return 0
+    if verb == "compare" and len(args) == 2:
+        warnings = compare_results(*args)
+        print("\n".join(f"warning: {w}" for w in warnings) or "same provenance")
+        return 0
+    if verb == "backfill" and args:
+        pairs = [a.split("=", 1) for a in args[1:]]
+        if any(len(p) != 2 for p in pairs):
+            raise ValueError("backfill takes DIR then KEY=VALUE pairs")
+        print(f"{backfill(args[0], dict(pairs))} rows given provenance")
+        return 0
+    print("usage: python -m bench.provenance show | compare DIR_A DIR_B | backfill DIR K=V ...")
+    return 2
