@@ -1025,9 +1025,10 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
 
     For each loss and each pair of models the per-seed log error difference is bootstrapped; a
     pair is *resolved* under a loss when its CI excludes 0. Reproduced only when every pair
-    resolved under one loss keeps its order under the other (the same sign of the mean
-    difference) and at least half the pairs are resolved under both; not reproduced when a pair
-    is resolved in opposite directions under the two losses; inconclusive otherwise.
+    resolved under one loss keeps its order under the other (its mean difference there is not
+    of the opposite sign) and at least half the pairs are resolved under both; not reproduced
+    when a pair is resolved in opposite directions under the two losses; inconclusive
+    otherwise.
     Headline: Kendall's tau between the two rankings of mean log error (bootstrapped over seeds).
     """
     p = select(plain(runs), system="chain_pendulum", ok=False)
@@ -1074,7 +1075,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             elif signs[0] or signs[1]:
                 s = signs[0] or signs[1]
                 other = means[1] if signs[0] else means[0]
-                (kept_one if other == s else flipped).append(name)
+                (flipped if other == -s else kept_one).append(name)
             else:
                 unresolved.append(name)
     if reversed_:
