@@ -75,7 +75,8 @@ def _cell_key(cfg) -> str:
 def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.DataFrame:
     """The runs of experiment ``name``: every stored run (any seed) whose configuration is one
     of the experiment's cells under ``profile``, shared runs included whichever experiment
-    produced them; without a profile, the rows tagged with that experiment."""
+    produced them, plus the rows tagged with the experiment (results of older declarations,
+    whose cells no longer expand); without a profile, the rows tagged with that experiment."""
     if not len(runs):
         return runs
     if profile is not None:
@@ -84,7 +85,10 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
 
             cells = {_cell_key(c) for c in expand(name, profile)}
             keys = [_cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
-            return runs[[k in cells for k in keys]].reset_index(drop=True)
+            match = pd.Series([k in cells for k in keys], index=runs.index)
+            if "experiment" in runs:  # rows of older declarations of the same experiment
+                match |= runs["experiment"] == name
+            return runs[match].reset_index(drop=True)
         except ValueError:
             pass
     if "experiment" in runs:
