@@ -356,7 +356,11 @@ def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
         )
         d = discrimination(g, name, scores=scores.loc[g.index] if scores is not None else None)
         mark = {"yes": "yes", "no": "**no**", "unknown": "unknown"}[d.status]
-        text = d.text().split(": ", 1)[1] if d.status != "unknown" else "no trivial-predictor runs"
+        text = (
+            d.text().split(f"discriminating {d.status} ", 1)[-1]
+            if d.status != "unknown"
+            else "no trivial-predictor runs"
+        )
         out.append(f"- discriminating: {mark} ({name}): {text}")
     return out
 
