@@ -56,11 +56,15 @@ __all__ = [
     "TRIVIAL_MODELS",
     "VERDICTS",
     "Verdict",
+    "discrimination",
     "evaluate_claims",
+    "initial_state",
     "option",
     "params_of",
     "scored",
     "select",
+    "succeeds",
+    "velocity_scores",
 ]
 
 REPRODUCED = "reproduced"
