@@ -23,13 +23,14 @@ Rules shared by all claims:
   contradicts when ``ci_low > 0`` and the mean exceeds ``delta`` (a significant, meaningful gain),
   and is undecided otherwise.
 * Trivial predictors (issue 10). Every experiment runs ``constant_velocity`` (and ``at_rest`` in
-  damped scenes) on the same test trajectories. A model *succeeds* when it beats the best
-  trivial predictor by :data:`TRIVIAL_FACTOR` (2x) on every seed. An experiment whose best model
-  does not is *not discriminating*: the test set cannot tell a model that works from one that
-  does not, and the verdict is "inconclusive" whatever its parts say. Factor 2: the paper's
-  effects are factors of 1.25 to 10; a model within 2x of holding the velocity fixed has learned
-  little that the test window can show. Without trivial-predictor runs (results older than
-  issue 10) discrimination is "unknown" and the verdict stands, flagged.
+  damped scenes) on the same test trajectories; only finished trivial runs count. A model
+  *succeeds* when it beats the best trivial predictor by :data:`TRIVIAL_FACTOR` (2x) on every
+  seed. An experiment whose best model does not is *not discriminating*: the test set cannot
+  tell a model that works from one that does not, and the verdict is "inconclusive" whatever
+  its parts say. Factor 2: the paper's effects are factors of 1.25 to 10; a model within 2x of
+  holding the velocity fixed has learned little that the test window can show. Without
+  finished trivial-predictor runs (results older than issue 10) discrimination is "unknown"
+  and the verdict stands, flagged.
 * The verdict is one of :data:`VERDICTS`: "reproduced" when every part holds; "partly
   reproduced" when some parts hold and others are contradicted; "not reproduced" when parts are
   contradicted and none holds; "inconclusive" otherwise (undecided parts), with fewer than two
@@ -455,7 +456,7 @@ class _Disc:
 
     def text(self) -> str:
         if self.status == "unknown":
-            return f"{self.group}: discriminating unknown (no trivial-predictor runs)"
+            return f"{self.group}: discriminating unknown (no finished trivial-predictor runs)"
         return (
             f"{self.group}: discriminating {self.status} (best {self.best} beats the best "
             f"trivial predictor by {math.exp(self.margin):.3g}x on its worst seed, needs "
@@ -464,8 +465,8 @@ class _Disc:
 
 
 def _trivial_log(rows: pd.DataFrame, metric: str = "rollout_error") -> pd.Series:
-    """Per-seed log error of the best trivial predictor among ``rows``."""
-    t = rows[rows["model"].isin(TRIVIAL_MODELS)] if len(rows) else rows
+    """Per-seed log error of the best finished trivial predictor among ``rows``."""
+    t = rows[rows["model"].isin(TRIVIAL_MODELS) & ~_bad(rows, metric)] if len(rows) else rows
     if not len(t):
         return pd.Series(dtype=float)
     s = np.log(scored(t, metric))
@@ -491,16 +492,18 @@ def discrimination(
     if not len(rows):
         return _Disc(group, "unknown")
     sc = scores.reindex(rows.index) if scores is not None else scored(rows, metric)
-    is_t = rows["model"].isin(TRIVIAL_MODELS)
+    # a trivial predictor that failed says nothing about the test set: only finished ones count
+    finished = ~_bad(rows, metric if scores is None else "rollout_error")
+    is_t = rows["model"].isin(TRIVIAL_MODELS) & finished
     if not is_t.any():
         return _Disc(group, "unknown")
     lt = np.log(sc[is_t]).groupby([rows["seed"][is_t], rows["model"][is_t]]).mean()
     triv = lt.groupby(level=0).min()
-    m = rows[~is_t]
+    m = rows[~rows["model"].isin(TRIVIAL_MODELS)]
     if not len(m):
         return _Disc(group, "unknown")
     key = _variant_key(m)
-    per = np.log(sc[~is_t]).groupby([key, m["seed"]]).mean()
+    per = np.log(sc[m.index]).groupby([key, m["seed"]]).mean()
     means = per.groupby(level=0).mean().sort_values()
     best = str(means.index[0])
     ok, margin = succeeds(per.loc[best], triv)
@@ -1156,15 +1159,11 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     for name, c in cells.items():
         rows = _cell(r, c)
         logs[name] = np.log(rows["_s"]).groupby(rows["seed"]).mean() if len(rows) else None
-    triv = (
-        np.log(r.loc[r["model"].isin(TRIVIAL_MODELS), "_s"])
-        .groupby([r["seed"], r["model"]])
-        .mean()
-        .groupby(level=0)
-        .min()
-        if r["model"].isin(TRIVIAL_MODELS).any()
-        else None
-    )
+    t_ok = r["model"].isin(TRIVIAL_MODELS) & ~_bad(r)
+    triv = None
+    if t_ok.any():
+        lt = np.log(r.loc[t_ok, "_s"]).groupby([r["seed"][t_ok], r["model"][t_ok]]).mean()
+        triv = lt.groupby(level=0).min()
     parts = []
     for other, label in (("hnn_p", "HNN(q,p)"), ("lnn", "pure LNN")):
         if logs["naive"] is None or logs[other] is None:

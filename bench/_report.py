@@ -359,7 +359,7 @@ def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
         text = (
             d.text().split(f"discriminating {d.status} ", 1)[-1]
             if d.status != "unknown"
-            else "no trivial-predictor runs"
+            else "no finished trivial-predictor runs"
         )
         out.append(f"- discriminating: {mark} ({name}): {text}")
     return out

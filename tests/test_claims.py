@@ -242,3 +242,11 @@ def test_success_needs_the_factor_on_every_seed():
     # 10x better on two seeds, 1.5x on the third: not a success
     assert C.succeeds(pd.Series(np.log([0.1, 0.1, 0.67]), index=[0, 1, 2]), triv)[0] is False
     assert C.succeeds(pd.Series(dtype=float), triv)[0] is None
+
+
+def test_failed_trivial_predictors_leave_discrimination_unknown(tables):
+    runs, curves = tables
+    bad = _fail(runs, runs["model"].isin(C.TRIVIAL_MODELS))
+    v = C.claim_3(bad, curves)
+    assert v.discriminating is None and v.verdict == C.REPRODUCED, v.detail
+    assert v.n_failed == 0  # trivial failures are not model failures
