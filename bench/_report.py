@@ -544,17 +544,26 @@ def write_report(results_dir: Path, compare=None) -> Path:
             lines += _discrimination_lines(rows)
             lines.append("")
         lines += _missing_cells(rows, name, profile)
+        bad = bad.assign(_label=_table_variant(bad)) if len(bad) else bad
         for _, r in bad.iterrows():
             err = r.get("error") or f"diverged at step {r.get('diverged_step')}"
+            coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
+            how = (
+                "not counted (a trivial predictor)"
+                if r["model"] in TRIVIAL_MODELS
+                else "scored as error 1"
+            )
             lines.append(
-                f"- {r['model']} on {r['system']} seed {r['seed']}: {r['status']} "
-                f"({_md_escape(str(err))[:200]})"
+                f"- {r['_label']}{coords} on {r['system']} seed {r['seed']}: {r['status']}, "
+                f"{how} ({_md_escape(str(err))[:200]})"
             )
         if len(bad):
             lines.append("")
         stem = figure_stem(name)
         if (figdir / f"{stem}.png").exists():
             lines += [f"![{name}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
+        elif not len(ok):
+            lines += ["(no figure: no finished runs)", ""]
         else:
             lines += ["(figure not generated: run `python -m bench figures`)", ""]
     lines += _extra_sections(results_dir)
