@@ -123,16 +123,17 @@ def _disc_mark(v) -> str:
 
 def _claims_table(verdicts) -> list[str]:
     out = [
-        "| claim | statement | verdict | effect | 95% CI | seeds | failed runs | discriminating "
-        "| detail |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| claim | statement | verdict | effect | 95% CI | seeds | profile | failed runs "
+        "| discriminating | detail |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for v in verdicts:
         ci = f"[{_fmt(v.ci_low)}, {_fmt(v.ci_high)}]" if np.isfinite(v.ci_low) else "-"
         effect = f"{_fmt(v.effect)} ({v.effect_name})" if v.effect_name else _fmt(v.effect)
         out.append(
             f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | "
-            f"{_md_escape(effect)} | {ci} | {v.n_seeds} | {v.n_failed} | {_disc_mark(v)} | "
+            f"{_md_escape(effect)} | {ci} | {v.n_seeds} | {v.profile or '-'} | {v.n_failed} | "
+            f"{_disc_mark(v)} | "
             f"{_md_escape(v.detail)} |"
         )
     return out
