@@ -58,10 +58,11 @@ vin (VIN seed)                27     {vin, resnet} x n_train {8, 32} noise 0; {v
 Unique runs at quick: 30 + 9 + 12 + 18 + 32 + 12 + 3 + 27 = 143, of which 31 are trivial
 predictors (about 4 s each: dataset and one rollout compile). ``estimate_seconds("quick")``:
 2080 s of run time, 17.3 min at 2 workers (the old declarations: 1990 s, 16.6 min). With the
-trade-off experiment (1248 s of run time, 10.4 min) the sweep is predicted at 27.8 min, i.e.
-about 26.6 min at the measured 0.96 ratio, plus 4.1 min of stability study: ``make bench`` at
-about 30.7 min, at the limit (today's cells: 29.9 min measured), resting on guessed costs for
-node_so_symreg, mixture_hnn and the trivial predictors. Cut to get there: k = 3 at quick for
+trade-off experiment (1248 s of run time, 10.4 min) the sweep is predicted at 27.7 min, i.e.
+about 26.5 min at the measured 0.96 ratio, plus 4.1 min of stability study: ``make bench`` at
+about 30.6 min (:func:`make_bench_seconds`), at the limit (today's cells: 29.9 min measured),
+resting on guessed costs for node_so_symreg, mixture_hnn and the trivial predictors (remeasure
+them after the first sweep and update :data:`WALL_S`). Cut to get there: k = 3 at quick for
 claim 4 (chain-3 and spring-3 would add about 250 s of run time), the plain NODE + penalty on
 (q, p) (node_symreg: paper only), the symplectic grid to 5 weights, one seed for the Rayleigh
 HNN and the double-pendulum demonstration, the plain NODE in Fig. 6, the learned-map HNN and
