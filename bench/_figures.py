@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from . import _store  # noqa: E402
-from ._claims import MODEL_LABELS, option, select  # noqa: E402
+from ._claims import MODEL_LABELS, TRIVIAL_MODELS, option, select  # noqa: E402
 
 __all__ = ["FIGURES", "experiment_rows", "load_tables", "make_figures", "pick_profile"]
 
@@ -40,7 +40,11 @@ COLORS = {
     "lnn": "#8c564b",
     "vin": "#e377c2",
     "resnet": "#7f7f7f",
+    "mixture_hnn": "#bcbd22",
+    "node_so_symreg": "#17becf",
 }
+# Trivial predictors are drawn as reference lines, never as bars or points.
+TRIVIAL_STYLE = {"constant_velocity": ("black", "--"), "at_rest": ("dimgray", ":")}
 
 
 # ----------------------------------------------------------------------------- tables
@@ -75,7 +79,8 @@ def _cell_key(cfg) -> str:
 def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.DataFrame:
     """The runs of experiment ``name``: every stored run (any seed) whose configuration is one
     of the experiment's cells under ``profile``, shared runs included whichever experiment
-    produced them; without a profile, the rows tagged with that experiment."""
+    produced them, plus the rows tagged with the experiment (results of older declarations,
+    whose cells no longer expand); without a profile, the rows tagged with that experiment."""
     if not len(runs):
         return runs
     if profile is not None:
@@ -84,7 +89,10 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
 
             cells = {_cell_key(c) for c in expand(name, profile)}
             keys = [_cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
-            return runs[[k in cells for k in keys]].reset_index(drop=True)
+            match = pd.Series([k in cells for k in keys], index=runs.index)
+            if "experiment" in runs:  # rows of older declarations of the same experiment
+                match |= runs["experiment"] == name
+            return runs[match].reset_index(drop=True)
         except ValueError:
             pass
     if "experiment" in runs:
@@ -182,7 +190,9 @@ MODEL_ORDER = (
     "hnn",
     "hnn_so",
     "hnn_so_diss",
+    "mixture_hnn",
     "node_symreg",
+    "node_so_symreg",
     "lnn",
     "vin",
     "resnet",
@@ -200,6 +210,38 @@ def _curve_mean(curves: pd.DataFrame, hashes, column: str) -> tuple[np.ndarray, 
     return g.index.to_numpy(float), g.to_numpy(float)
 
 
+def split_trivial(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(model rows, trivial-predictor rows)."""
+    t = runs["model"].isin(TRIVIAL_MODELS) if len(runs) else pd.Series(dtype=bool)
+    return runs[~t], runs[t]
+
+
+def _gmean(x) -> float:
+    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
+    x = x[np.isfinite(x) & (x > 0)]
+    return float(np.exp(np.mean(np.log(x)))) if len(x) else float("nan")
+
+
+def _trivial_lines(ax, trivial, metric="rollout_error", groups=None, gcol="system", vertical=False):
+    """Each trivial predictor's geometric-mean ``metric`` as a reference line: one segment per
+    bar group (``groups`` along x, by ``gcol``), or a full line (vertical with ``vertical``)."""
+    if trivial is None or not len(trivial) or metric not in trivial:
+        return
+    for m, g in trivial.groupby("model"):
+        color, ls = TRIVIAL_STYLE.get(m, ("black", "--"))
+        label = MODEL_LABELS.get(m, m)
+        if groups is None:
+            v = _gmean(g[metric])
+            if np.isfinite(v):
+                (ax.axvline if vertical else ax.axhline)(v, color=color, ls=ls, lw=1, label=label)
+            continue
+        for i, grp in enumerate(groups):
+            v = _gmean(g.loc[g[gcol] == grp, metric])
+            if np.isfinite(v):
+                ax.hlines(v, i - 0.45, i + 0.45, colors=color, linestyles=ls, lw=1.2, label=label)
+                label = None
+
+
 # ----------------------------------------------------------------------------- one per figure
 
 
@@ -207,10 +249,22 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
     """Fig. 2. Left: energy violation vs rollout error (log-log), one point per run, with the
     least-squares line of log EV on log error and its R^2. Right: energy violation vs time
     (geometric mean over runs) per model, from the curves."""
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     markers = {"chain_pendulum": "o", "spring_pendulum": "s"}
+    for s, g in trivial.groupby("system"):  # the trivial predictors' error: vertical lines
+        for m, gm in g.groupby("model"):
+            color, _ = TRIVIAL_STYLE.get(m, ("black", "--"))
+            ls = "--" if s == "chain_pendulum" else ":"
+            a.axvline(
+                _gmean(gm["rollout_error"]),
+                color=color,
+                ls=ls,
+                lw=1,
+                label=f"{MODEL_LABELS.get(m, m)}, {SYSTEM_LABELS.get(s, s)}",
+            )
     for m in _order(runs["model"], MODEL_ORDER):
         for s, g in runs[runs["model"] == m].groupby("system"):
             a.scatter(
@@ -266,11 +320,14 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
 def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
     """Fig. 3. Rollout error vs regulariser weight (weight 0 as a dashed line with its sem
     band), and rollout error vs the achieved symplectic error (log-log)."""
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     df = runs.assign(weight=option(runs, "weight").astype(float))
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
-    for s, g in df.groupby("system"):
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    _trivial_lines(a, trivial)
+    _trivial_lines(b, trivial)
+    for (s, model), g in df.groupby(["system", "model"]):
         ag = _agg(g, ["weight"], "rollout_error").sort_values("weight")
         pos = ag[ag["weight"] > 0]
         line = a.errorbar(
@@ -279,35 +336,41 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
             yerr=pos["sem"].fillna(0),
             marker="o",
             capsize=3,
-            label=SYSTEM_LABELS.get(s, s),
+            label=f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}",
         )
         zero = ag[ag["weight"] == 0]
         if len(zero):
             m0, e0 = zero["mean"].iloc[0], np.nan_to_num(zero["sem"].iloc[0])
             a.axhline(m0, ls="--", color=line[0].get_color(), lw=1)
             a.axhspan(m0 - e0, m0 + e0, color=line[0].get_color(), alpha=0.15)
-        b.scatter(
-            g["symplectic_error"],
-            g["rollout_error"],
-            c=np.log10(g["weight"] + 1e-6),
-            cmap="viridis",
-            s=20,
-        )
+        if "symplectic_error" in g:
+            b.scatter(
+                g["symplectic_error"],
+                g["rollout_error"],
+                c=np.log10(g["weight"] + 1e-7),
+                cmap="viridis",
+                vmin=-7,
+                vmax=3,
+                marker="o" if model == "node_so_symreg" else "^",
+                s=20,
+                label=f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}",
+            )
     a.set(
         xscale="log",
         yscale="log",
         xlabel="regulariser weight (dashed: weight 0)",
         ylabel="rollout error",
-        title="NODE + symplectic regulariser",
+        title="Symplectic regulariser on (q, p)",
     )
     a.legend(fontsize=8)
     b.set(
         xscale="log",
         yscale="log",
-        xlabel="symplectic error ||J DF - (J DF)^T||^2",
+        xlabel="achieved symplectic error ||J DF - (J DF)^T||^2 on (q, p)",
         ylabel="rollout error",
-        title="Error vs achieved symplecticity (colour: log10 w)",
+        title="Error vs achieved symplecticity (colour: log10 w, w=0 at -7)",
     )
+    b.legend(fontsize=7)
     return _save(fig, outdir, "fig3_symplectic")
 
 
@@ -319,15 +382,18 @@ def _model_bars(
     metric: str = "rollout_error",
     ylabel: str = "rollout error (geometric mean)",
 ) -> list[Path]:
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     df = runs.assign(variant=variant(runs))
     ag = _agg(df, ["system", "variant"], metric)
     fig, ax = plt.subplots(figsize=(7, 4))
+    groups = _order(df["system"], SYSTEM_ORDER)
+    _trivial_lines(ax, trivial, metric, groups)
     _bars(
         ax,
         ag,
-        _order(df["system"], SYSTEM_ORDER),
+        groups,
         _order(df["variant"], MODEL_ORDER),
         "system",
         "variant",
@@ -350,12 +416,13 @@ def fig_coordinates(runs, curves, outdir: Path) -> list[Path]:
 
 def fig_damped(runs, curves, outdir: Path) -> list[Path]:
     """Fig. 6: damped systems; rollout error, parameter count and training time per variant."""
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     df = runs.assign(variant=variant(runs))
     systems_ = _order(df["system"], SYSTEM_ORDER)
     members = _order(df["variant"], MODEL_ORDER)
-    lab = lambda m: "HNN (no dissipation)" if m == "hnn_so" else _label(m)
+    lab = lambda m: "HNN+SO (no dissipation)" if m == "hnn_so" else _label(m)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ax, metric, ylabel, log in (
         (axes[0], "rollout_error", "rollout error", True),
@@ -373,16 +440,20 @@ def fig_damped(runs, curves, outdir: Path) -> list[Path]:
             log=log,
             ylabel=ylabel,
         )
+    _trivial_lines(axes[0], trivial, "rollout_error", systems_)
+    axes[0].legend(fontsize=7)
     axes[0].set_title("Damped systems (friction > 0)")
     return _save(fig, outdir, "fig6_damped")
 
 
 def fig_loss(runs, curves, outdir: Path) -> list[Path]:
     """Fig. 8: rollout error per model with L1 and L2 training losses (mean +- sem)."""
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     ag = _agg(runs, ["model", "loss"], "rollout_error")
     fig, ax = plt.subplots(figsize=(7, 4))
+    _trivial_lines(ax, trivial)
     _bars(
         ax,
         ag,
@@ -400,7 +471,13 @@ def fig_loss(runs, curves, outdir: Path) -> list[Path]:
 
 def _coord_label(df: pd.DataFrame) -> pd.Series:
     names = {"velocity": "(q, qdot)", "momentum": "(q, p)"}
-    return df["model"].map(_label) + " " + df["coordinates"].map(names)
+    opts = {
+        "momentum_map=False": "naive ",
+        "momentum_map=True": "learned-map ",
+    }
+    mm = option(df, "momentum_map").map(lambda v: opts.get(f"momentum_map={v}", ""))
+    kp = option(df, "kinetic_prior").map(lambda v: f" prior {v:g}" if v == v else "")
+    return mm + df["model"].map(_label) + kp + " " + df["coordinates"].map(names)
 
 
 def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
@@ -408,12 +485,28 @@ def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
     trajectory's q(t), true vs predicted, of the lowest seed of each variant."""
     if not len(runs):
         return []
+    from ._claims import velocity_scores
+
+    scores, _ = velocity_scores(runs)
+    runs = runs.assign(score=scores)
+    runs, trivial = split_trivial(runs)
+    if not len(runs):
+        return []
     df = runs.assign(variant=_coord_label(runs))
-    ag = _agg(df, ["system", "variant"], "rollout_error")
+    ag = _agg(df, ["system", "variant"], "score")
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
     vs = list(dict.fromkeys(df["variant"]))
-    _bars(a, ag, ["relativistic_particle"], vs, "system", "variant", ylabel="rollout error")
-    a.set_title("Relativistic particle")
+    _trivial_lines(a, trivial, "score", ["relativistic_particle"])
+    _bars(
+        a,
+        ag,
+        ["relativistic_particle"],
+        vs,
+        "system",
+        "variant",
+        ylabel="rollout error on (q, qdot)",
+    )
+    a.set_title("Relativistic particle (every model scored on (q, qdot))")
     true_drawn = False
     for v in vs:
         h = df[df["variant"] == v].sort_values("seed")["config_hash"].iloc[0]
@@ -444,9 +537,11 @@ def fig_double_pendulum_energy(runs, curves, outdir: Path) -> list[Path]:
 def fig_vin(runs, curves, outdir: Path) -> list[Path]:
     """VIN seed. Left: rollout error vs number of training trajectories (log-log, dashed for
     noisy data). Right: relative error and energy violation vs time at the fewest data."""
+    runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    _trivial_lines(a, trivial)
     for (m, noise), g in runs.groupby(["model", "noise"]):
         ag = _agg(g, ["n_train"], "rollout_error").sort_values("n_train")
         a.errorbar(

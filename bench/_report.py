@@ -1,8 +1,11 @@
 """``results/REPORT.md``: machine, commit, profile, the eight verdicts, one table and figure per
 experiment, and the reference's defects that the suite does not copy.
 
-Entry point: :func:`write_report(results_dir) -> Path`. Everything in it is computed from the
-stored runs (``bench._store``); figures are linked, not regenerated (``make_figures`` does that).
+Entry point: :func:`write_report(results_dir, compare=None) -> Path`. Everything in it is
+computed from the stored runs (``bench._store``); figures are linked, not regenerated
+(``make_figures`` does that). ``compare`` lists other results folders (e.g. the paper-profile
+runs) whose verdicts are tabulated beside this folder's; by default, every subfolder of
+``results_dir`` that holds stored runs (``results/paper``, ``results/paper_gpu``).
 """
 
 from __future__ import annotations
@@ -18,9 +21,18 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._claims import CLAIM_EXPERIMENTS, evaluate_claims, option, select
+from ._claims import (
+    CLAIM_EXPERIMENTS,
+    MODEL_LABELS,
+    TRIVIAL_FACTOR,
+    TRIVIAL_MODELS,
+    discrimination,
+    evaluate_claims,
+    option,
+    select,
+)
 from ._env import cpu_count
-from ._figures import FIGURES, experiment_rows, figure_stem, load_tables, variant
+from ._figures import FIGURES, _cell_key, experiment_rows, figure_stem, load_tables, variant
 
 __all__ = ["write_report"]
 
@@ -105,19 +117,133 @@ def _status_counts(runs: pd.DataFrame) -> str:
     return f"{len(runs)} runs (" + ", ".join(f"{k}: {v}" for k, v in counts.items()) + ")"
 
 
+def _disc_mark(v) -> str:
+    return {True: "yes", False: "**no**", None: "unknown"}[v.discriminating]
+
+
 def _claims_table(verdicts) -> list[str]:
     out = [
-        "| claim | statement | verdict | effect | 95% CI | seeds | detail |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
+        "| claim | statement | verdict | effect | 95% CI | seeds | profile | failed runs "
+        "| discriminating | detail |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for v in verdicts:
         ci = f"[{_fmt(v.ci_low)}, {_fmt(v.ci_high)}]" if np.isfinite(v.ci_low) else "-"
         effect = f"{_fmt(v.effect)} ({v.effect_name})" if v.effect_name else _fmt(v.effect)
         out.append(
-            f"| {v.claim} | {_md_escape(v.title)} | **{v.verdict}** | {_md_escape(effect)} | "
-            f"{ci} | {v.n_seeds} | {_md_escape(v.detail)} |"
+            f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | "
+            f"{_md_escape(effect)} | {ci} | {v.n_seeds} | {v.profile or '-'} | {v.n_failed} | "
+            f"{_disc_mark(v)} | "
+            f"{_md_escape(v.detail)} |"
         )
     return out
+
+
+def compare_folders(results_dir: Path) -> list[Path]:
+    """Subfolders of ``results_dir`` holding stored runs (``paper`` first): the default
+    ``compare`` list of :func:`write_report`."""
+    found = []
+    for d in sorted(Path(results_dir).iterdir()) if Path(results_dir).exists() else []:
+        if d.is_dir() and any((d / f).exists() for f in ("runs.parquet", "runs.csv", ".rows")):
+            found.append(d)
+    return sorted(found, key=lambda d: (d.name != "paper", d.name))
+
+
+def _no_runs(v) -> bool:
+    """No comparable verdict: no runs at all, or a cell the claim needs is missing."""
+    return v is None or v.n_seeds == 0
+
+
+def _cell_text(v) -> str:
+    if v is None or v.detail == "no runs":
+        return "no runs"
+    if v.n_seeds == 0:
+        return f"**{v.verdict}** (cells missing)"
+    return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
+
+
+def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> str:
+    """The likely cause of two verdicts of one claim disagreeing."""
+    if _no_runs(a) or _no_runs(b):
+        return f"no runs or missing cells at {label_a if _no_runs(a) else label_b}: not comparable"
+    causes = []
+    if a.discriminating != b.discriminating:
+        causes.append(
+            f"test set: discriminating {_disc_mark(a)} at {label_a}, {_disc_mark(b)} at {label_b}"
+        )
+    if a.n_failed != b.n_failed:
+        causes.append(f"failed runs ({a.n_failed} vs {b.n_failed})")
+    if same_profile_metric:
+        causes.append(same_profile_metric)
+    if a.n_seeds != b.n_seeds and min(a.n_seeds, b.n_seeds) < 2:
+        causes.append("too few seeds on one side")
+    causes.append(
+        "budget (training steps, data, width and seeds differ between the profiles: "
+        "effects that need the longer training show only at the paper profile)"
+    )
+    return "; ".join(causes)
+
+
+def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
+    """Every claim's verdict here and in each other results folder, side by side."""
+    if not others:
+        return []
+    labels = [profile or "this folder"] + [f"{p or 'unknown'} (`{d.name}/`)" for d, p, _ in others]
+    head = ["claim", *labels, "agree", "likely cause of a disagreement"]
+    out = [
+        "## Verdicts at both budgets",
+        "",
+        "Each claim's verdict from these runs and from the other results folders (same rules; "
+        "a folder without a claim's runs says *no runs*). Where they disagree, the likely cause "
+        "is named: missing runs, a test set that does not discriminate, failed runs, the metric "
+        "(claim 4: geometric-mean error vs MSE), or the budget (the paper profile trains 8000 "
+        "steps on 800 trajectories at width 256 with 5 seeds; quick 1000 steps on 200 at width "
+        "128 with 3).",
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + " --- |" * len(head),
+    ]
+    maps = [{v.key: v for v in verdicts}] + [{v.key: v for v in vs} for _, _, vs in others]
+    keys = list(dict.fromkeys(k for m in maps for k in m))
+
+    def metric_note(m, key) -> str:
+        if not key.startswith("4 ("):
+            return ""
+        other = (
+            key.replace("geometric-mean error", "MSE")
+            if "geometric" in key
+            else key.replace("MSE", "geometric-mean error")
+        )
+        a, b = m.get(key), m.get(other)
+        if a and b and a.verdict != b.verdict and not (_no_runs(a) or _no_runs(b)):
+            return "metric: geometric-mean error and MSE disagree within a profile"
+        return ""
+
+    for key in keys:
+        vs = [m.get(key) for m in maps]
+        cells = [_cell_text(v) for v in vs]
+        real = [v for v in vs if not _no_runs(v)]
+        agree = (
+            "-" if len(real) < 2 else ("yes" if len({v.verdict for v in real}) == 1 else "**no**")
+        )
+        causes = []
+        for i in range(1, len(vs)):
+            if (
+                vs[0] is None
+                or vs[i] is None
+                or vs[0].verdict != vs[i].verdict
+                or _no_runs(vs[0]) != _no_runs(vs[i])
+            ):
+                if _no_runs(vs[0]) and _no_runs(vs[i]):
+                    continue
+                note = metric_note(maps[0], key) or metric_note(maps[i], key)
+                causes.append(_cause(vs[0], vs[i], labels[0], labels[i], note))
+        out.append(
+            "| "
+            + " | ".join([_md_escape(key), *cells, agree, _md_escape("; ".join(causes)) or "-"])
+            + " |"
+        )
+    return out + [""]
 
 
 # Columns that tell the cells of an experiment apart, in display order.
@@ -125,6 +251,7 @@ CELL_COLUMNS = (
     "system",
     "k",
     "friction",
+    "initial",
     "variant",
     "coordinates",
     "loss",
@@ -134,19 +261,48 @@ CELL_COLUMNS = (
 )
 
 
+def _table_variant(rows: pd.DataFrame) -> pd.Series:
+    """Model label key plus the model options other than the regulariser weight; the Rayleigh
+    HNN is marked as claim 5's extra row."""
+    base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh (extra, not judged)"})
+
+    def opts(v) -> str:
+        from ._claims import _parse_pairs
+
+        o = {a: b for a, b in _parse_pairs(v).items() if a != "weight"}
+        return "[" + ", ".join(f"{a}={b}" for a, b in sorted(o.items())) + "]" if o else ""
+
+    extra = rows["model_options"].map(opts) if "model_options" in rows else ""
+    return base + extra
+
+
+def _initial(rows: pd.DataFrame) -> pd.Series:
+    from ._claims import params_of
+
+    return params_of(rows).map(lambda p: p.get("initial", "-"))
+
+
 def _experiment_table(rows: pd.DataFrame) -> list[str]:
-    df = rows.assign(variant=variant(rows), weight=option(rows, "weight"))
-    cells = [c for c in CELL_COLUMNS if c in df and df[c].astype(str).nunique() > 1]
-    if not cells:
-        cells = ["variant"]
+    df = rows.assign(
+        variant=_table_variant(rows), weight=option(rows, "weight"), initial=_initial(rows)
+    )
+    cells = [
+        c
+        for c in CELL_COLUMNS
+        if c in df and (df[c].astype(str).nunique() > 1 or c in ("variant", "coordinates"))
+    ]
     for c in cells:
         df[c] = df[c].astype(object).where(df[c].notna(), "-")
     metrics = [
         ("rollout_error", "rollout error"),
+        ("rollout_error_velocity", "error on (q, qdot)"),
+        ("mse", "MSE"),
         ("energy_violation", "energy violation"),
         ("energy_pct_max_pe", "energy % max PE"),
+        ("symplectic_error", "symplectic error"),
         ("n_params", "params"),
         ("train_seconds", "train s"),
+        ("flops_per_step", "FLOPs/step"),
     ]
     metrics = [m for m in metrics if m[0] in df and pd.to_numeric(df[m[0]], "coerce").notna().any()]
     head = [*cells, "seeds", *[label for _, label in metrics]]
@@ -162,9 +318,87 @@ def _experiment_table(rows: pd.DataFrame) -> list[str]:
                 vals.append(f"{np.mean(x):.0f}")
                 continue
             vals.append(_pm(float(np.mean(x)) if len(x) else math.nan, sem))
-        label = [str(k) for k in key]
+        label = [
+            f"{k} (trivial)"
+            if c == "variant" and str(k).split("[")[0] in TRIVIAL_MODELS
+            else str(k)
+            for c, k in zip(cells, key, strict=True)
+        ]
         out.append("| " + " | ".join([*label, str(g["seed"].nunique()), *vals]) + " |")
     return out
+
+
+def _group_columns(rows: pd.DataFrame) -> list[str]:
+    return [c for c in ("system", "k", "friction", "initial") if c in rows]
+
+
+def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
+    """One "discriminating: yes/no" line per comparison group (system, k, friction, initial)."""
+    if not len(rows):
+        return []
+    df = rows.assign(initial=_initial(rows))
+    metric_rows = df
+    scores = None
+    if (
+        "rollout_error_velocity" in df
+        and (df["coordinates"] == "momentum").any()
+        and (df["coordinates"] == "velocity").any()
+    ):
+        from ._claims import velocity_scores
+
+        scores, _ = velocity_scores(df)
+    out = []
+    cols = _group_columns(df)
+    for key, g in metric_rows.groupby(cols, dropna=False, sort=True):
+        key = key if isinstance(key, tuple) else (key,)
+        name = ", ".join(
+            f"{c}={_fmt(k) if isinstance(k, float) else k}"
+            for c, k in zip(cols, key, strict=True)
+            if str(k) not in ("nan", "-", "0.0")
+        )
+        d = discrimination(g, name, scores=scores.loc[g.index] if scores is not None else None)
+        mark = {"yes": "yes", "no": "**no**", "unknown": "unknown"}[d.status]
+        text = (
+            d.text().split(f"discriminating {d.status} ", 1)[-1]
+            if d.status != "unknown"
+            else "no finished trivial-predictor runs"
+        )
+        out.append(f"- discriminating: {mark} ({name}): {text}")
+    return out
+
+
+def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[str]:
+    """The declared cells of experiment ``name`` at ``profile`` that have no stored run."""
+    if profile is None:
+        return []
+    try:
+        from ._experiments import RunConfig, expand
+
+        want = {}
+        for c in expand(name, profile):
+            want.setdefault(_cell_key(c), c)
+        have = {_cell_key(RunConfig.from_dict(r)) for r in rows.to_dict("records")}
+    except ValueError:
+        return []
+    missing = [c for k, c in want.items() if k not in have]
+    if not missing:
+        return []
+    labels = sorted(
+        {
+            f"{MODEL_LABELS.get(c.model, c.model)} on {c.system}"
+            + (f" k={c.k}" if c.k else "")
+            + (f" {dict(c.model_options)}" if c.model_options else "")
+            + (f" {dict(c.system_params)}" if c.system_params else "")
+            + (f" ({c.coordinates})" if c.coordinates != "velocity" else "")
+            + (f" noise={c.noise:g}" if c.noise else "")
+            + (f" n_train={c.n_train}" if name == "vin" else "")
+            for c in missing
+        }
+    )
+    shown = "; ".join(labels[:12]) + (
+        f"; ... ({len(labels) - 12} more)" if len(labels) > 12 else ""
+    )
+    return [f"No runs for {len(missing)} declared cells (every seed): {_md_escape(shown)}.", ""]
 
 
 def _perf_section(results_dir: Path) -> list[str]:
@@ -228,12 +462,28 @@ def _extra_sections(results_dir: Path) -> list[str]:
     return out
 
 
-def write_report(results_dir: Path) -> Path:
-    """Write ``results_dir/REPORT.md`` from the stored runs and return its path."""
+def _load_other(d: Path):
+    runs, curves, profile = load_tables(d)
+    return d, profile, evaluate_claims(runs, curves, profile)
+
+
+def write_report(results_dir: Path, compare=None) -> Path:
+    """Write ``results_dir/REPORT.md`` from the stored runs and return its path.
+
+    ``compare``: other results folders whose verdicts are tabulated beside these (default:
+    :func:`compare_folders`, the subfolders with stored runs); a folder that cannot be read is
+    named in the report and skipped."""
     results_dir = Path(results_dir)
     results_dir.mkdir(parents=True, exist_ok=True)
     runs, curves, profile = load_tables(results_dir)
     verdicts = evaluate_claims(runs, curves, profile)
+    others, other_errors = [], []
+    for d in compare_folders(results_dir) if compare is None else [Path(c) for c in compare]:
+        try:
+            others.append(_load_other(d))
+        except Exception as e:  # noqa: BLE001 - a broken folder must not lose the report
+            other_errors.append(f"- could not read `{d}`: {_md_escape(str(e))[:200]}")
+    n_failed = sum(v.n_failed for v in verdicts)
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     lines = [
         "# decon-bench report",
@@ -255,12 +505,21 @@ def write_report(results_dir: Path) -> Path:
         "",
         "Verdict rules are in the docstrings of `bench/_claims.py`: effects are per-seed log "
         "ratios of geometric-mean rollout errors (paired by seed) with a 95% percentile "
-        "bootstrap over seeds; a claim is *reproduced* when every part holds, *not reproduced* "
-        "when a part is contradicted, *inconclusive* otherwise or with fewer than 2 seeds. With "
-        "3 seeds the bootstrap interval is about [min, max] over seeds.",
+        "bootstrap over seeds. A claim is *reproduced* when every part holds, *partly "
+        "reproduced* when some parts hold and others are contradicted, *not reproduced* when "
+        "parts are contradicted and none holds, *inconclusive* otherwise, with fewer than 2 "
+        "seeds, or when the experiment is not discriminating: its best model must beat the best "
+        f"trivial predictor (constant velocity; at rest in damped scenes) by {TRIVIAL_FACTOR:g}x "
+        "on every seed (*unknown* where no trivial-predictor runs are stored). Failed and "
+        "diverged runs score the worst error, 1, and are counted. With 3 seeds the bootstrap "
+        "interval is about [min, max] over seeds.",
         "",
         *_claims_table(verdicts),
         "",
+        f"Failed or diverged runs scored as error 1 in the verdicts: {n_failed}.",
+        "",
+        *_comparison_section(verdicts, profile, others),
+        *other_errors,
     ]
     figdir = results_dir / "figures"
     for name in FIGURES:
@@ -275,25 +534,38 @@ def write_report(results_dir: Path) -> Path:
             pass
         if not len(rows):
             lines += ["No runs of this experiment are stored: figure and table skipped.", ""]
+            lines += _missing_cells(rows, name, profile)
             continue
         bad = rows[rows["status"] != "ok"] if "status" in rows else rows.iloc[0:0]
         ok = select(rows)
         lines.append(f"{_status_counts(rows)}; mean ± standard error over seeds.")
         lines.append("")
-        if len(ok):
-            lines += _experiment_table(ok)
+        if len(rows):
+            lines += _experiment_table(ok) if len(ok) else []
             lines.append("")
+            lines += _discrimination_lines(rows)
+            lines.append("")
+        lines += _missing_cells(rows, name, profile)
+        bad = bad.assign(_label=_table_variant(bad)) if len(bad) else bad
         for _, r in bad.iterrows():
             err = r.get("error") or f"diverged at step {r.get('diverged_step')}"
+            coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
+            how = (
+                "not counted (a trivial predictor)"
+                if r["model"] in TRIVIAL_MODELS
+                else "scored as error 1"
+            )
             lines.append(
-                f"- {r['model']} on {r['system']} seed {r['seed']}: {r['status']} "
-                f"({_md_escape(str(err))[:200]})"
+                f"- {r['_label']}{coords} on {r['system']} seed {r['seed']}: {r['status']}, "
+                f"{how} ({_md_escape(str(err))[:200]})"
             )
         if len(bad):
             lines.append("")
         stem = figure_stem(name)
         if (figdir / f"{stem}.png").exists():
             lines += [f"![{name}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
+        elif not len(ok):
+            lines += ["(no figure: no finished runs)", ""]
         else:
             lines += ["(figure not generated: run `python -m bench figures`)", ""]
     lines += _extra_sections(results_dir)

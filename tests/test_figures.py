@@ -1,22 +1,31 @@
 """Figures and the report from synthetic stored runs (no training): files exist, the report
-holds one verdict row per claim, and an experiment without runs is skipped with a note."""
+holds one verdict row per claim (claim 4: per metric and spring initial state), every
+experiment's table has its trivial-predictor row and a discriminating mark, the verdicts of a
+second results folder stand beside these, and an experiment without runs is skipped with a note."""
 
 import re
 
 import pytest
+from _synthetic import synthetic_tables
 
-from bench._claims import synthetic_tables
 from bench._figures import FIGURES, figure_stem, make_figures
 from bench._report import write_report
+
+
+def _store(d, runs, curves):
+    d.mkdir(parents=True, exist_ok=True)
+    runs.to_parquet(d / "runs.parquet", index=False)
+    curves.to_parquet(d / "curves.parquet", index=False)
 
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     d = tmp_path_factory.mktemp("results")
     runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2), noise=0.05)
-    runs = runs[runs["system"] != "relativistic_particle"]  # one experiment without runs
-    runs.to_parquet(d / "runs.parquet", index=False)
-    curves.to_parquet(d / "curves.parquet", index=False)
+    _store(d, runs[runs["system"] != "relativistic_particle"], curves)  # one without runs
+    # a second folder, "paper" runs of another profile's budget, built to contradict
+    other, other_curves = synthetic_tables("smoke", seeds=(0, 1, 2), scenario="contradict")
+    _store(d / "paper", other.assign(profile="paper"), other_curves)
     written = make_figures(d)
     report = write_report(d)
     return d, written, report.read_text()
@@ -33,19 +42,43 @@ def test_every_experiment_with_runs_has_png_and_pdf(results):
                 assert path in written and path.stat().st_size > 1000, path
 
 
+VERDICT = r"\*\*(reproduced|partly reproduced|not reproduced|inconclusive)\*\*"
+
+
 def test_report_has_a_verdict_row_per_claim(results):
     _, _, text = results
-    rows = re.findall(r"^\| (\d) \| .*\*\*(reproduced|not reproduced|inconclusive)\*\*", text, re.M)
-    assert sorted(int(c) for c, _ in rows) == list(range(1, 9))
-    verdicts = dict(rows)
+    claims = text.split("## Claims")[1].split("## Verdicts at both budgets")[0]
+    rows = re.findall(rf"^\| (\d)( \([^|]*\))? \| .*?{VERDICT}", claims, re.M)
+    assert sorted({int(c) for c, _, _ in rows}) == list(range(1, 9))
+    assert sum(c == "4" for c, _, _ in rows) == 4  # 2 metrics x 2 spring initial states
+    verdicts = {c: v for c, _, v in rows}
     # The synthetic table satisfies claims 1-6 and 8 by construction; claim 7 has no runs.
     assert verdicts["3"] == "reproduced" and verdicts["7"] == "inconclusive"
+
+
+def test_report_sets_both_budgets_side_by_side(results):
+    _, _, text = results
+    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
+    assert "| claim | smoke | paper (`paper/`) | agree |" in section
+    row3 = next(line for line in section.splitlines() if line.startswith("| 3 |"))
+    assert "**reproduced**" in row3 and "**not reproduced**" in row3 and "budget" in row3
+
+
+def test_every_experiment_table_has_trivial_row_and_discriminating_mark(results):
+    _, _, text = results
+    for name in FIGURES:
+        if name == "relativistic":
+            continue
+        section = text.split(f"## {name}")[1].split("\n## ")[0]
+        assert "(trivial) |" in section, name
+        assert "- discriminating: yes" in section, name
 
 
 def test_report_links_figures_and_notes_missing_experiment(results):
     _, _, text = results
     assert "](figures/fig4_second_order.png)" in text
     assert "No runs of this experiment are stored" in text
+    assert "No runs for 4 declared cells" in text  # relativistic, listed
     assert "profile: smoke" in text
     assert "reference_compatible" in text
 
@@ -53,4 +86,6 @@ def test_report_links_figures_and_notes_missing_experiment(results):
 def test_report_table_shows_mean_and_sem(results):
     _, _, text = results
     section = text.split("## second_order")[1].split("## ")[0]
-    assert re.search(r"\| chain_pendulum \| hnn_so \| 3 \| [0-9.e-]+ ± [0-9.e-]+", section)
+    assert re.search(
+        r"\| chain_pendulum \| - \| hnn_so \| velocity \| 3 \| [0-9.e-]+ ± [0-9.e-]+", section
+    )
