@@ -33,6 +33,7 @@ from ._claims import (
 )
 from ._env import cpu_count
 from ._figures import FIGURES, _cell_key, experiment_rows, figure_stem, load_tables, variant
+from ._provenance import compare_results, provenance_markdown
 
 __all__ = ["write_report"]
 
@@ -462,6 +463,16 @@ def _extra_sections(results_dir: Path) -> list[str]:
     return out
 
 
+def _provenance_section(results_dir: Path, runs: pd.DataFrame, others) -> list[str]:
+    """Versions, backend and commit of the runs per profile, and where compared folders differ."""
+    lines = ["## Provenance", "", provenance_markdown(runs), ""]
+    for d in others:
+        warnings = compare_results(results_dir, d)
+        if warnings:
+            lines += [f"Differences from `{d}`:", "", *[f"- {w}" for w in warnings], ""]
+    return lines
+
+
 def _load_other(d: Path):
     runs, curves, profile = load_tables(d)
     return d, profile, evaluate_claims(runs, curves, profile)
@@ -569,6 +580,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
         else:
             lines += ["(figure not generated: run `python -m bench figures`)", ""]
     lines += _extra_sections(results_dir)
+    lines += _provenance_section(results_dir, runs, [o[0] for o in others])
     lines += ["## What the suite does not copy from the reference", "", DEFECTS]
     path = results_dir / "REPORT.md"
     path.write_text("\n".join(lines))
