@@ -1,8 +1,10 @@
 """Registry of learned-dynamics models assembled from inductive biases.
 
 Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract model classes,
-:func:`symplectic_error`, :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange
-solve), :func:`n_parameters`, and the integrators (``Integrator``, ``rollout``, ...).
+:func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
+parameter-free reference predictors), :func:`coordinates` (what a model accepts),
+:func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve), :func:`n_parameters`,
+and the integrators (``Integrator``, ``rollout``, ...).
 """
 
 from bench._env import configure_threads
@@ -10,10 +12,11 @@ from bench._env import configure_threads
 configure_threads()
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel  # noqa: E402
-from ._models import available, make, n_parameters  # noqa: E402
+from ._models import available, coordinates, make, n_parameters, trivial_models  # noqa: E402
 from ._scalar import acceleration_from_lagrangian  # noqa: E402
 from ._scene import Scene  # noqa: E402
 from ._symplectic import symplectic_error  # noqa: E402
+from ._trivial import AbstractTrivialModel  # noqa: E402
 
 try:  # the integrators live in their own module, written alongside this package
     from ._integrators import Integrator, count_evaluations, rollout, rollout_batch  # noqa: F401
@@ -24,10 +27,13 @@ __all__ = [
     "AbstractContinuousModel",
     "AbstractDiscreteModel",
     "AbstractModel",
+    "AbstractTrivialModel",
     "Scene",
     "acceleration_from_lagrangian",
     "available",
+    "coordinates",
     "make",
     "n_parameters",
     "symplectic_error",
+    "trivial_models",
 ]
