@@ -229,3 +229,24 @@ def test_true_chain_field_is_symplectic_only_in_canonical_coordinates():
     node = models.make("node", CHAIN2_CANONICAL, key=jr.PRNGKey(1), width=W, dtype="float64")
     node = eqx.tree_at(lambda m: m.net.weights[-1], node, replace_fn=lambda w: 10.0 * w)
     assert float(sym(node, ys, None)) > 0.1
+
+
+# --------------------------------------------------------------------------- LNN seed's form
+
+
+def test_lnn_pure_form_on_the_relativistic_particle_is_finite_at_init():
+    """kinetic_prior=0 (the LNN seed's L = MLP) at smoke width on relativistic states: finite
+    accelerations at initialisation. (At quick width 128, seed 0 has one training chunk of 200
+    whose step-0 loss is non-finite: see the LNN docstring; that is not hidden here.)"""
+    scene = Scene(1, (False,), n_args=1)
+    particle = systems.make("relativistic_particle")
+    zs = particle.sample_initial(jr.PRNGKey(0), 64)
+    gs = particle.sample_args(jr.PRNGKey(1), 64)
+    for seed in range(3):
+        lnn = models.make(
+            "lnn", scene, key=jr.PRNGKey(seed), width=16, dtype="float64", kinetic_prior=0.0
+        )
+        acc = eqx.filter_jit(
+            jax.vmap(lambda m, z, g: m.acceleration(z[:1], z[1:], g), in_axes=(None, 0, 0))
+        )(lnn, zs, gs)
+        assert bool(jnp.all(jnp.isfinite(acc))), seed
