@@ -695,10 +695,11 @@ def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True):
 
 
 def _trivial(cls):
-    def _trivial_builder(s, width, depth, activation, dtype, *, key, dissipation):
+    def build(s, width, depth, activation, dtype, *, key, dissipation):
         return cls(s, dtype)
 
-    return _trivial_builder
+    build.trivial = True
+    return build
 
 
 # name -> (builder, {option: validator}, structured (takes dissipation), coordinates it
@@ -779,7 +780,7 @@ def available() -> list[str]:
 
 def trivial_models() -> list[str]:
     """Names of the registered trivial predictors (no parameters, nothing to train)."""
-    return [n for n, entry in _REGISTRY.items() if entry[0].__name__ == "_trivial_builder"]
+    return [n for n, entry in _REGISTRY.items() if getattr(entry[0], "trivial", False)]
 
 
 def coordinates(name: str) -> tuple[str, ...]:
