@@ -312,8 +312,12 @@ def main(argv=None) -> int:
     )
     parser.add_argument(
         "--models",
-        default=",".join(models.available()),
-        help="comma-separated model names (default: all registered)",
+        default=",".join(
+            n
+            for n in models.available()  # trainable, on the (q, qdot) scene timed here
+            if n not in models.trivial_models() and "velocity" in models.coordinates(n)
+        ),
+        help="comma-separated model names (default: all trainable velocity-scene models)",
     )
     parser.add_argument("--repeats", type=int, default=5, help="timed blocks per model")
     parser.add_argument("--block", type=int, default=20, help="training steps per timed block")

@@ -127,6 +127,18 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
 
     from ._train import TrainConfig, train
 
+    if isinstance(model, models.AbstractTrivialModel):  # no parameters: nothing to train
+        meta = {
+            "status": "ok",
+            "diverged_step": None,
+            "train_seconds": 0.0,
+            "compile_seconds": 0.0,
+            "steps_done": 0,
+            "final_loss": None,
+            "flops_per_step": 0.0,
+            "train_cached": False,
+        }
+        return model, meta
     pdir = Path(cache_root) / "params" / config.train_hash
     pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
     if pfile.exists() and meta_file.exists():
@@ -155,6 +167,7 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
         "train_seconds": float(res.train_seconds),
         "compile_seconds": float(res.compile_seconds),
         "steps_done": int(res.steps_done),
+        "flops_per_step": float(res.flops_per_step),
         "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
     }
     pdir.mkdir(parents=True, exist_ok=True)
@@ -188,6 +201,68 @@ def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
     return value
 
 
+def _nan_if_none(x) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def _true_maps(system):
+    """The TRUE system's (q, p) <-> (q, qdot) maps, as the trivial predictors take them
+    (args of shape (0,) mean the system's defaults)."""
+    import jax.numpy as jnp
+
+    def fix(a):
+        return None if a is None or jnp.size(a) == 0 else a
+
+    def velocity(q, p, a):
+        return system.velocity(q, p, fix(a))
+
+    def momentum(q, v, a):
+        return system.momentum(jnp.concatenate([q, v]), fix(a))
+
+    return velocity, momentum
+
+
+def to_velocity(system, zs, args=None) -> np.ndarray:
+    """States (N, T, 2d) in (q, p) mapped to (q, qdot) with the TRUE ``system.velocity``;
+    ``args`` None (the system's defaults) or (N, n_args). Non-finite states stay non-finite."""
+    import jax
+    import jax.numpy as jnp
+
+    zs = np.asarray(zs, dtype=np.float64)
+    n, t, w = zs.shape
+    d = w // 2
+    a = np.zeros((n, 0)) if args is None else np.asarray(args, dtype=np.float64).reshape(n, -1)
+    velocity, _ = _true_maps(system)
+    per_traj = jax.vmap(lambda q, p, x: velocity(q, p, x), in_axes=(0, 0, None))
+    finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
+    safe = np.where(finite, zs, 0.0)
+    v = np.asarray(
+        jax.jit(jax.vmap(per_traj))(
+            jnp.asarray(safe[..., :d]), jnp.asarray(safe[..., d:]), jnp.asarray(a)
+        )
+    )
+    out = np.concatenate([zs[..., :d], v], axis=-1)
+    return np.where(finite, out, np.nan)
+
+
+def _predictor(model, system, roll):
+    """f(z0s, ts, args) -> (predictions, stats): the model's rollout, or a trivial
+    predictor's closed form (compiled once, so the second call times the prediction alone)."""
+    import jax
+
+    import models
+
+    if isinstance(model, models.AbstractTrivialModel):
+        velocity, momentum = _true_maps(system)
+        fn = jax.jit(
+            lambda z0s, ts, args: model.predict_batch(
+                z0s, ts, args, velocity=velocity, momentum=momentum
+            )
+        )
+        return lambda z0s, ts, args: (fn(z0s, ts, args), {})
+    return lambda z0s, ts, args: roll(model, z0s, ts, args)
+
+
 def _evaluate(config, system, data, model, cache_root):
     import equinox as eqx
     import jax
@@ -213,10 +288,11 @@ def _evaluate(config, system, data, model, cache_root):
     def roll(m, z0s, ts, args):
         return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
 
+    predict = _predictor(model, system, roll)
     t0 = time.perf_counter()
-    jax.block_until_ready(roll(model, z0s, ts, args))  # compile + first run
+    jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
     t1 = time.perf_counter()
-    pred, stats = jax.block_until_ready(roll(model, z0s, ts, args))
+    pred, stats = jax.block_until_ready(predict(z0s, ts, args))
     t2 = time.perf_counter()
     rollout_seconds = t2 - t1
     zhat = np.asarray(pred, dtype=np.float64)
@@ -230,6 +306,13 @@ def _evaluate(config, system, data, model, cache_root):
     ev_t = M.energy_violation_curve(h_pred, h_true)
     vpt = M.valid_prediction_time(err_t, data.ts_test)
     finite = bool(np.all(np.isfinite(zhat)))
+    # Momentum-coordinate runs are also scored on (q, qdot), decoded with the TRUE velocity map
+    # (so models fed (q, p) and (q, qdot) can be compared on one footing).
+    err_velocity, mse_velocity = float("nan"), float("nan")
+    if config.coordinates == "momentum":
+        zv_hat, zv = to_velocity(system, zhat, h_args), to_velocity(system, z, h_args)
+        err_velocity = float(M.geometric_mean(M.relative_error(zv_hat, zv, angular)[..., 1:]))
+        mse_velocity = M.mse(zv_hat, zv, angular)
 
     states = z.reshape(-1, z.shape[-1])
     pick = np.linspace(0, len(states) - 1, min(_SYMPLECTIC_STATES, len(states))).astype(int)
@@ -250,6 +333,8 @@ def _evaluate(config, system, data, model, cache_root):
         "energy_pct_max_pe": M.energy_pct_max_pe(
             h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
         ),
+        "rollout_error_velocity": err_velocity,
+        "mse_velocity": mse_velocity,
         "symplectic_error": M.symplectic_error(
             model, jnp.asarray(states[pick], dtype=dtype), s_args
         ),
@@ -274,8 +359,10 @@ def _evaluate(config, system, data, model, cache_root):
 
 NAN_METRICS = (
     "rollout_error",
+    "rollout_error_velocity",
     "energy_violation",
     "mse",
+    "mse_velocity",
     "valid_time",
     "rollout_error_ref",
     "energy_violation_ref",
@@ -309,6 +396,7 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
             compile_seconds=meta["compile_seconds"],
             steps_done=meta.get("steps_done"),
             final_loss=meta.get("final_loss"),
+            flops_per_step=_nan_if_none(meta.get("flops_per_step")),
             train_cached=meta["train_cached"],
         )
         metrics, curves, full = _evaluate(config, system, data, model, cache_root)

@@ -1,16 +1,19 @@
 """Registry of learned-dynamics models assembled from inductive biases.
 
 Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract model classes,
-:func:`symplectic_error`, :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange
-solve), :func:`n_parameters`, and the integrators (``Integrator``, ``rollout``, ...).
+:func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
+parameter-free reference predictors), :func:`coordinates` (what a model accepts),
+:func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve), :func:`n_parameters`,
+and the integrators (``Integrator``, ``rollout``, ...).
 """
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
 from ._integrators import Integrator, count_evaluations, rollout, rollout_batch
-from ._models import available, make, n_parameters
+from ._models import available, coordinates, make, n_parameters, trivial_models
 from ._scalar import acceleration_from_lagrangian
 from ._scene import Scene
 from ._symplectic import symplectic_error
+from ._trivial import AbstractTrivialModel
 
 __all__ = [
     "AbstractContinuousModel",
@@ -20,10 +23,13 @@ __all__ = [
     "rollout_batch",
     "AbstractDiscreteModel",
     "AbstractModel",
+    "AbstractTrivialModel",
     "Scene",
     "acceleration_from_lagrangian",
     "available",
+    "coordinates",
     "make",
     "n_parameters",
     "symplectic_error",
+    "trivial_models",
 ]

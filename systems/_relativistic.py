@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._base import AbstractSystem
-from ._params import check_real
+from ._params import check_positive, check_real
 
 G_DEFAULT = 1.0
 G_RANGE = (0.5, 2.0)
@@ -22,10 +22,14 @@ class RelativisticParticle(AbstractSystem):
     (not qdot), and the Euler-Lagrange equation dp/dt = g gives
     qddot = g (1 - qdot^2)^(5/2) / (1 + 2 qdot^2), so |qdot| < 1 for all time.
     ``args = (g,)`` per trajectory; ``self.g`` (default 1.0) is used when ``args`` is None.
-    Training data draw g uniform on [0.5, 2.0] (:meth:`sample_args`; the seed gives no range).
+    Training data draw g uniform on [g_min, g_max] (default [0.5, 2.0]; :meth:`sample_args`,
+    the seed gives no range) and start speeds uniform on [-v0_max, v0_max] (default 0.9).
     """
 
     g: float = eqx.field(static=True, default=G_DEFAULT)
+    v0_max: float = eqx.field(static=True, default=MAX_SPEED)
+    g_min: float = eqx.field(static=True, default=G_RANGE[0])
+    g_max: float = eqx.field(static=True, default=G_RANGE[1])
     friction: float = eqx.field(static=True, default=0.0)
     angular: tuple[bool, ...] = eqx.field(static=True, default=(False,))
     name: str = eqx.field(static=True, default="relativistic_particle")
@@ -69,19 +73,35 @@ class RelativisticParticle(AbstractSystem):
 
     @eqx.filter_jit
     def sample_initial(self, key, n: int):
-        """q ~ N(0, 1), qdot ~ U(-0.9, 0.9): well inside the light cone |qdot| < 1."""
+        """q ~ N(0, 1), qdot ~ U(-v0_max, v0_max): inside the light cone |qdot| < 1."""
         k_q, k_v = jax.random.split(key)
         q = jax.random.normal(k_q, (n, 1), dtype=jnp.float64)
-        v = jax.random.uniform(k_v, (n, 1), dtype=jnp.float64, minval=-MAX_SPEED, maxval=MAX_SPEED)
+        v = jax.random.uniform(
+            k_v, (n, 1), dtype=jnp.float64, minval=-self.v0_max, maxval=self.v0_max
+        )
         return jnp.concatenate([q, v], axis=-1)
 
     @eqx.filter_jit
     def sample_args(self, key, n: int):
-        """g ~ U(0.5, 2.0) per trajectory, shape (n, 1)."""
-        lo, hi = G_RANGE
-        return jax.random.uniform(key, (n, 1), dtype=jnp.float64, minval=lo, maxval=hi)
+        """g ~ U(g_min, g_max) per trajectory, shape (n, 1)."""
+        return jax.random.uniform(
+            key, (n, 1), dtype=jnp.float64, minval=self.g_min, maxval=self.g_max
+        )
 
 
-def relativistic_particle(g=G_DEFAULT) -> RelativisticParticle:
-    """The relativistic particle with default potential gradient g."""
-    return RelativisticParticle(g=check_real("g", g))
+def relativistic_particle(
+    g=G_DEFAULT, v0_max=MAX_SPEED, g_min=G_RANGE[0], g_max=G_RANGE[1]
+) -> RelativisticParticle:
+    """The relativistic particle with default potential gradient g.
+
+    ``v0_max`` in (0, 1) bounds the initial speeds; random g (``random_args``) are drawn from
+    [g_min, g_max] (g_min <= g_max, both finite).
+    """
+    g = check_real("g", g)
+    v0_max = check_positive("v0_max", v0_max)
+    if not v0_max < 1.0:
+        raise ValueError(f"v0_max must be in (0, 1) (speeds below c = 1); got {v0_max!r}")
+    g_min, g_max = check_real("g_min", g_min), check_real("g_max", g_max)
+    if g_min > g_max:
+        raise ValueError(f"g_min must be <= g_max; got g_min={g_min!r}, g_max={g_max!r}")
+    return RelativisticParticle(g=g, v0_max=v0_max, g_min=g_min, g_max=g_max)

@@ -11,7 +11,17 @@ import jax.numpy as jnp
 import jax.random as jr
 import numpy as np
 import pytest
-from _model_helpers import CHAIN2, STRUCTURED, VELOCITY_ONLY, G, W, _apply, _states  # noqa: F401
+from _model_helpers import (  # noqa: F401
+    CHAIN2,
+    STRUCTURED,
+    TRAINABLE,
+    VELOCITY_ONLY,
+    G,
+    W,
+    _apply,
+    _scene_for,
+    _states,
+)
 
 import models
 from models import AbstractContinuousModel, Scene
@@ -21,7 +31,7 @@ from models import AbstractContinuousModel, Scene
 def _trained_once(name):
     """float32: loss, vmapped outputs and parameter gradients in one jitted program, called
     twice with different values (it must trace once)."""
-    model = models.make(name, CHAIN2, key=jr.PRNGKey(0), width=W)
+    model = models.make(name, _scene_for(name), key=jr.PRNGKey(0), width=W)
     traces = []
 
     @eqx.filter_jit
@@ -44,7 +54,7 @@ def _trained_once(name):
 
 @functools.cache
 def _forward64(name):
-    model = models.make(name, CHAIN2, key=jr.PRNGKey(0), width=W, dtype="float64")
+    model = models.make(name, _scene_for(name), key=jr.PRNGKey(0), width=W, dtype="float64")
     zs = 0.5 * _states(jr.PRNGKey(1), 6, 2)
     f = eqx.filter_jit(
         lambda m, zs: (_apply(m, zs[0], None), jax.vmap(lambda z: _apply(m, z, None))(zs))
@@ -52,7 +62,7 @@ def _forward64(name):
     return model, zs, *f(model, zs.astype(jnp.float32))
 
 
-@pytest.mark.parametrize("name", models.available())
+@pytest.mark.parametrize("name", TRAINABLE)
 def test_conformance_float32_jit_vmap_grad(name):
     model, zs, out, out2, grads, n_traces = _trained_once(name)
     assert out.shape == (6, 4) and out.dtype == jnp.float32
@@ -67,7 +77,7 @@ def test_conformance_float32_jit_vmap_grad(name):
         np.testing.assert_array_equal(out[:, :2], zs[:, 2:].astype(jnp.float32))
 
 
-@pytest.mark.parametrize("name", models.available())
+@pytest.mark.parametrize("name", TRAINABLE)
 def test_conformance_float64_and_vmap_matches_unbatched(name):
     model, zs, single, outs = _forward64(name)
     assert outs.shape == (6, 4) and outs.dtype == jnp.float64 and single.dtype == jnp.float64
@@ -98,7 +108,7 @@ def _variant(name):
     return model, f(model, zs, jnp.array([1.0])), f(model, zs, jnp.array([2.0]))
 
 
-@pytest.mark.parametrize("name", models.available())
+@pytest.mark.parametrize("name", TRAINABLE)
 def test_variant_scene_uses_args_and_dissipation(name):
     model, out1, out2 = _variant(name)
     assert out1.shape == (5, 4) and bool(jnp.all(jnp.isfinite(out1)))
@@ -117,12 +127,19 @@ def test_registry_and_errors():
         "node_so",
         "hnn",
         "hnn_so",
+        "mixture_hnn",
         "node_symreg",
+        "node_so_symreg",
         "lnn",
         "vin",
         "vin_implicit",
         "resnet",
+        "constant_velocity",
+        "at_rest",
     ]
+    assert models.trivial_models() == ["constant_velocity", "at_rest"]
+    assert models.coordinates("node_so_symreg") == ("momentum",)
+    assert models.coordinates("lnn") == ("velocity",)
     key = jr.PRNGKey(0)
     with pytest.raises(ValueError, match="hnn_so"):
         models.make("hnn_s0", CHAIN2, key=key)
@@ -143,6 +160,10 @@ def test_registry_and_errors():
             models.make("node", CHAIN2, key=key, **bad)
     with pytest.raises(ValueError, match="velocity"):
         models.make("lnn", Scene(dof=1, angular=(False,), canonical=True), key=key)
+    with pytest.raises(ValueError, match="momentum"):
+        models.make("node_so_symreg", CHAIN2, key=key)
+    with pytest.raises(ValueError, match="momentum_map"):
+        models.make("hnn", CHAIN2, key=key, momentum_map="no")
     with pytest.raises(ValueError):
         Scene(dof=2, angular=(True,))
 

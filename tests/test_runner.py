@@ -38,11 +38,14 @@ ALL = register(
             "k": [2, None],
             "friction": [0.0, 0.4],
             "model": models.available(),
+            "coordinates": ["velocity", "momentum"],
         },
-        # chain and spring, damped and not, and the relativistic particle: five scenes
+        # chain and spring, damped and not, and the relativistic particle: five scenes; each
+        # model once, in velocity coordinates unless it takes momentum coordinates only
         include=lambda c: (
             (c.system == "relativistic_particle") == (c.k is None)
             and not (c.system == "relativistic_particle" and c.friction > 0)
+            and (c.coordinates == "velocity") == ("velocity" in models.coordinates(c.model))
         ),
     ),
     replace=True,

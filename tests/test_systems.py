@@ -101,6 +101,14 @@ def test_unknown_name_suggests_closest():
         ("damped_spring_pendulum", {"k": 2, "friction": -1.0}, "friction"),
         ("relativistic_particle", {"k": 1}, "unknown parameter.*allowed: g"),
         ("relativistic_particle", {"g": "a"}, "g must be"),
+        ("relativistic_particle", {"v0_max": 1.0}, "v0_max must be in"),
+        ("relativistic_particle", {"v0_max": -0.1}, "v0_max must be"),
+        ("relativistic_particle", {"g_min": 1.0, "g_max": 0.5}, "g_min must be <= g_max"),
+        (
+            "spring_pendulum",
+            {"k": 2, "initial": "rest"},
+            "initial must be one of equilibrium, paper",
+        ),
     ],
 )
 def test_bad_params(name, params, match):
@@ -287,6 +295,35 @@ def test_relativistic_sampling_inside_light_cone():
     assert np.max(np.abs(z[:, 1])) < 0.9 and np.std(z[:, 1]) > 0.3
     g = np.asarray(s.sample_args(jax.random.PRNGKey(3), 500))
     assert g.shape == (500, 1) and np.all((g >= 0.5) & (g <= 2.0)) and np.std(g) > 0.2
+
+
+def test_relativistic_sampling_ranges_are_parameters():
+    s = systems.make("relativistic_particle", v0_max=0.3, g_min=0.05, g_max=0.3)
+    z = _random_states(s, n=500)
+    assert np.max(np.abs(z[:, 1])) <= 0.3 and np.std(z[:, 1]) > 0.1
+    g = np.asarray(s.sample_args(jax.random.PRNGKey(3), 500))
+    assert np.all((g >= 0.05) & (g <= 0.3)) and np.ptp(g) > 0.2
+
+
+@pytest.mark.parametrize("k, offsets", [(2, (0.0, 0.87)), (3, (0.0, 0.96, 1.92))])
+def test_spring_paper_initial_states_start_above_equilibrium(k, offsets):
+    """REFERENCE.md: the reference's heights ignore the rest lengths of springs 2..k (and take
+    the masses in draw order), so bob i starts about i - 1 m above the true equilibrium."""
+    paper = systems.make("spring_pendulum", k=k, initial="paper")
+    z = _random_states(paper, n=4000)
+    eq = np.asarray(paper.equilibrium()).reshape(k, 3)
+    offset = z[:, : 3 * k].reshape(-1, k, 3) - eq
+    np.testing.assert_allclose(np.mean(offset[:, :, 2], 0), offsets, atol=0.05)
+    np.testing.assert_allclose(np.mean(offset[:, :, :2], 0), 0.0, atol=0.05)
+    exact = np.asarray(paper.reference_heights()).reshape(k, 3)[:, 2] - eq[:, 2]
+    np.testing.assert_allclose(exact, offsets, atol=0.005)
+    # same noise as the default distribution, only the centre moves; velocities unchanged
+    default = _random_states(systems.make("spring_pendulum", k=k), n=4000)
+    np.testing.assert_allclose(z[:, 3 * k :], default[:, 3 * k :])
+    shift = np.asarray(paper.reference_heights()) - eq.reshape(-1)
+    np.testing.assert_allclose(
+        z[:, : 3 * k] - default[:, : 3 * k], np.broadcast_to(shift, (4000, 3 * k)), atol=1e-12
+    )
 
 
 def test_initial_state_spread():

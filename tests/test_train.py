@@ -201,8 +201,12 @@ def test_models_fit_oscillators_fast(oscillators, name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", models.available())
+@pytest.mark.parametrize(
+    "name",
+    [n for n in models.available() if n not in models.trivial_models() and n != "node_so_symreg"],
+)
 def test_every_model_fits_pendulum(pendulum, name):
+    # node_so_symreg needs momentum data (its fit is checked with the runner's smoke sweeps)
     _fits(name, pendulum)
 
 
