@@ -104,11 +104,15 @@ SPRING_PAPER = (("initial", "paper"),)
 # with results older than the "initial" option.
 SPRING_EQUILIBRIUM = ()
 # Claim 7's test set must discriminate (issue 10): on the default data (start speeds up to
-# ~0.9 c over 10 s windows) the acceleration is tiny and constant velocity scores like the
-# models. Bounding the start speeds away from 1 keeps the particle where the force changes the
-# velocity. Placeholder: the lead sets the measured choice at merge (the one where constant
-# velocity is >= 10x worse than the HNN on (q, p)).
-RELATIVISTIC_TEST_PARAMS = (("v0_max", 0.5),)
+# 0.9 c, g in [0.5, 2], 3 s windows anywhere in 10 s trajectories) the particle runs near light
+# speed, where the acceleration is tiny, and constant velocity scores like the models (quick,
+# seed 0: constant velocity 0.0072 vs HNN on (q, p) 0.0016 in (q, qdot), 4.4x). Slow particles
+# in a weak field stay in the regime where the relativistic dynamics bend the trajectory:
+# measured on 2026-11-22 at quick (float32, scored in (q, qdot)), constant velocity 0.022 /
+# 0.026 vs HNN on (q, p) 0.00064 / 0.00058 for seeds 0 / 1 (35x, 44x): the >= 10x that the
+# issue asks for. Speeds stay far below c = 1, which is the honest price: the test no longer
+# probes the ultra-relativistic regime, where no model can be told from a trivial one.
+RELATIVISTIC_TEST_PARAMS = (("g_max", 0.3), ("g_min", 0.05), ("v0_max", 0.3))
 
 # Overrides of the profile defaults that every shared cell carries. Empty for now: the profile
 # defaults (quick: 200 chunks, width 128, 1000 steps, batch 100) are used as they are. Any entry
@@ -310,6 +314,12 @@ def _relativistic_include(c: RunConfig) -> bool:
 # to velocities (row column rollout_error_velocity). The LNN seed's baseline HNN takes (q, qdot)
 # with qdot standing in for p (momentum_map=False), and its LNN has no kinetic prior; both of
 # today's variants stay as extra rows. The test data are RELATIVISTIC_TEST_PARAMS (see there).
+# Precision: the experiment runs in float64 (all models alike). The seed's pure LNN
+# (kinetic_prior=0, L = MLP) has a near-singular d2L/dqdot2 at initialisation for a few states:
+# at quick, seed 0, in float32 one training chunk of 200 gives a non-finite step-0 loss and the
+# run diverges at step 0, with the solve and with the seed's pseudo-inverse alike (seed 1: ok,
+# 0.0060); in float64 the same run trains (0.0038). The paper-scale models in the other
+# experiments stay float32, as in the reference.
 RELATIVISTIC = Experiment(
     name="relativistic",
     title="LNN seed: relativistic particle, naive HNN on (q, qdot) vs HNN on (q, p) vs LNN",
@@ -324,6 +334,7 @@ RELATIVISTIC = Experiment(
         "system": "relativistic_particle",
         "random_args": True,
         "system_params": RELATIVISTIC_TEST_PARAMS,
+        "dtype": "float64",
     },
     include=_relativistic_include,
     claim=7,
@@ -412,7 +423,10 @@ WALL_S: dict[tuple[str, str | None], tuple[float, float]] = {
     ("node", None): (3.0, 6.5),
     ("node_so", None): (3.4, 6.2),
     ("hnn", None): (7.2, 11.2),
-    ("hnn", "relativistic_particle"): (6.5, 11.1),
+    # float64 since the claim-7 test set changed: measured 20 s / 70 s of training for hnn (q, p)
+    # / pure lnn at load ~4 on 2 cores (about half speed), so halved here
+    ("hnn", "relativistic_particle"): (10.0, 12.0),
+    ("lnn", "relativistic_particle"): (35.0, 14.0),
     ("hnn_so", "chain_pendulum"): (16.0, 15.7),
     ("hnn_so", "spring_pendulum"): (18.1, 17.0),
     ("hnn_so", None): (17.0, 16.0),
