@@ -517,6 +517,8 @@ def _integrator_problem(model_key: tuple, scene_key: tuple, method: str) -> str 
     import models
 
     model, scene = _tiny_model(model_key, scene_key)
+    if isinstance(model, models.AbstractTrivialModel):
+        return None  # a closed-form prediction: no integrator is used, any name is accepted
     try:
         integrator = models.Integrator(method)
     except ValueError as e:
