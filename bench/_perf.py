@@ -323,7 +323,7 @@ def ensemble_table(names=ENSEMBLE_MODELS, sizes=ENSEMBLE_SIZES, steps=None, say=
     """Training runs per minute: M runs as one ensemble vs the same M runs one at a time.
 
     Each run is ``steps`` training steps (one compiled block; default 100 on an accelerator,
-    40 on CPU) of the chain-2 setting, at the paper sizes (width 256, batch 200, 800 chunks)
+    20 on CPU) of the chain-2 setting, at the paper sizes (width 256, batch 200, 800 chunks)
     on an accelerator and the quick-profile sizes (width 128, batch 100, 200 chunks) on CPU.
     Both ways are compiled first (``compile_s_*``) and then timed on wall clock over the M
     runs with distinct seeds, including the host-side batching of ``bench.train``. Evaluation
@@ -336,7 +336,7 @@ def ensemble_table(names=ENSEMBLE_MODELS, sizes=ENSEMBLE_SIZES, steps=None, say=
 
     accel = jax.default_backend() != "cpu"
     width, batch, n = (WIDTH, BATCH, N_TRAIN) if accel else (128, 100, 200)
-    steps = steps or (100 if accel else 40)
+    steps = steps or (100 if accel else 20)
     dataset = _Synthetic(n=n)
     machine = _machine()
     rows = []
