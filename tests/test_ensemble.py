@@ -189,3 +189,23 @@ def test_ray_sweep_one_ensemble_per_task(tmp_path):
     assert sorted(r["ensemble_size"] for r in rows) == [1, 3, 3, 3]
     df = _store.load_runs(tmp_path / "res")
     assert set(df["config_hash"]) == {c.config_hash for c in configs}
+
+
+@pytest.mark.slow
+def test_pool_sweep_runs_ensembles_in_workers(tmp_path):
+    configs = [_run(seed=s) for s in range(2)] + [_run(seed=0, width=16)]
+    rows = runner.sweep(
+        configs,
+        tmp_path / "res",
+        experiment="test_ensemble",
+        profile="smoke",
+        workers=2,
+        progress=False,
+        cache_root=tmp_path / "cache",
+        ensemble="on",
+    )
+    assert all(r["status"] == "ok" for r in rows), [r["error"] for r in rows]
+    assert sorted(r["ensemble_size"] for r in rows) == [1, 2, 2]
+    assert set(_store.load_runs(tmp_path / "res")["config_hash"]) == {
+        c.config_hash for c in configs
+    }
