@@ -209,3 +209,15 @@ def test_pool_sweep_runs_ensembles_in_workers(tmp_path):
     assert set(_store.load_runs(tmp_path / "res")["config_hash"]) == {
         c.config_hash for c in configs
     }
+
+
+def test_cli_ensemble_flags(capsys, tmp_path):
+    from bench._cli import _parser, main
+
+    code = main(["--results", str(tmp_path), "sweep", "--all", "--ensemble", "of"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "did you mean 'off'" in err[0], err
+    assert not (tmp_path / ".rows").exists()
+    assert _parser().parse_args(["perf", "--ensemble"]).ensemble is True
+    assert _parser().parse_args(["bench", "--ensemble", "off"]).ensemble == "off"
+    assert _parser().parse_args(["sweep", "--all"]).ensemble == "auto"
