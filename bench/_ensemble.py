@@ -269,19 +269,67 @@ def plan_groups(
     return out + alone
 
 
+# --------------------------------------------------------------------------- evaluation
+def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Sequence) -> list:
+    """The test rollouts of every member as one program (vmap over members).
+
+    Member m rolls out ``models[m]`` from its own test states ``datasets[m].z_test[:, 0]``
+    with the evaluation integrator of ``configs[m]`` (all members must share it). Returns,
+    per member, ``(pred, stats, rollout_seconds, eval_compile_seconds)`` as
+    :func:`bench._runner._evaluate` takes them (seconds: 1/M of the ensemble's).
+    """
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    import models as M
+
+    from ._runner import eval_integrator
+
+    c = configs[0]
+    integ = eval_integrator(c)
+    if any(eval_integrator(x) != integ or x.random_args != c.random_args for x in configs):
+        raise ValueError("ensemble members must share their evaluation settings")
+    dtype = jnp.dtype(c.dtype)
+    z0s = jnp.stack([jnp.asarray(d.z_test[:, 0], dtype) for d in datasets])
+    ts = jnp.stack([jnp.asarray(d.ts_test, dtype) for d in datasets])
+    args = None
+    if c.random_args:
+        args = jnp.stack([jnp.asarray(d.args_test, dtype) for d in datasets])
+    parts = [eqx.partition(m, eqx.is_inexact_array) for m in models]
+    static = parts[0][1]
+    params = _stack([p for p, _ in parts])
+
+    def one(p, z0s, ts, args):
+        model = eqx.combine(p, static)
+        return M.rollout_batch(model, z0s, ts, args, integ, return_stats=True)
+
+    roll = eqx.filter_jit(jax.vmap(one, in_axes=(0, 0, 0, None if args is None else 0)))
+    t0 = time.perf_counter()
+    jax.block_until_ready(roll(params, z0s, ts, args))  # compile + first run
+    t1 = time.perf_counter()
+    pred, stats = jax.block_until_ready(roll(params, z0s, ts, args))
+    seconds = time.perf_counter() - t1
+    compile_seconds = max(0.0, (t1 - t0) - seconds)
+    n = len(models)
+    return [(pred[i], _member(stats, i), seconds / n, compile_seconds / n) for i in range(n)]
+
+
 # ---------------------------------------------------------------------------- execution
 def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     """Train ``configs`` as one ensemble, then evaluate each member; one row per run.
 
     Never raises for a run's failure: when the ensemble cannot be built or trained (a bad
-    config, a failed dataset), every member runs alone and records its own outcome. A
-    storage error (full disk) propagates, as in :func:`bench._runner.execute_run`.
+    config, a failed dataset), every member runs alone and records its own outcome; when the
+    vmapped test rollouts fail, each member rolls out alone. A storage error (full disk)
+    propagates, as in :func:`bench._runner.execute_run`.
     """
     from . import _runner as R
 
     cache_root = Path(cache_root or R.default_cache_root())
     configs = list(configs)
     trained: list = [None] * len(configs)
+    rolled: list = [None] * len(configs)
     if len(configs) > 1:
         try:
             models, datasets = [], []
@@ -303,9 +351,19 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
                 file=sys.stderr,
             )
             trained = [None] * len(configs)
+        if trained[0] is not None:
+            try:
+                rolled = rollout_members(configs, datasets, [t[0] for t in trained])
+            except Exception as e:
+                if storage_error(e):
+                    raise
+                print(
+                    f"ensemble rollouts fell back to single ones: {one_line(e, 300)}",
+                    file=sys.stderr,
+                )
     rows = []
-    for c, t in zip(configs, trained, strict=True):
-        row = R.execute_run(c, cache_root=cache_root, trained=t)
+    for c, t, r in zip(configs, trained, rolled, strict=True):
+        row = R.execute_run(c, cache_root=cache_root, trained=t, rolled=r)
         row["ensemble_size"] = 1 if t is None else len(configs)
         rows.append(row)
     return rows

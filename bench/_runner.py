@@ -201,7 +201,24 @@ def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
     return value
 
 
-def _evaluate(config, system, data, model, cache_root):
+def eval_integrator(config: RunConfig):
+    """The test-rollout integrator of a run (adaptive: at most EVAL_MAX_STEPS steps)."""
+    import models
+
+    return models.Integrator(
+        config.eval_integrator,
+        substeps=config.eval_substeps,
+        rtol=config.eval_rtol,
+        max_steps=EVAL_MAX_STEPS,
+    )
+
+
+def _evaluate(config, system, data, model, cache_root, rolled=None):
+    """Metrics, curves and full curves of a trained model on the test set.
+
+    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
+    elsewhere (an ensemble's, vmapped over members: ``bench._ensemble``).
+    """
     import equinox as eqx
     import jax
     import jax.numpy as jnp
@@ -211,12 +228,7 @@ def _evaluate(config, system, data, model, cache_root):
     # An adaptive evaluation of a stiff learned field can take millions of steps; a test
     # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
     # (non-finite states) instead of holding the sweep.
-    integ = models.Integrator(
-        config.eval_integrator,
-        substeps=config.eval_substeps,
-        rtol=config.eval_rtol,
-        max_steps=EVAL_MAX_STEPS,
-    )
+    integ = eval_integrator(config)
     dtype = jnp.dtype(config.dtype)
     z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
     ts = jnp.asarray(data.ts_test, dtype=dtype)
@@ -226,12 +238,16 @@ def _evaluate(config, system, data, model, cache_root):
     def roll(m, z0s, ts, args):
         return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
 
-    t0 = time.perf_counter()
-    jax.block_until_ready(roll(model, z0s, ts, args))  # compile + first run
-    t1 = time.perf_counter()
-    pred, stats = jax.block_until_ready(roll(model, z0s, ts, args))
-    t2 = time.perf_counter()
-    rollout_seconds = t2 - t1
+    if rolled is None:
+        t0 = time.perf_counter()
+        jax.block_until_ready(roll(model, z0s, ts, args))  # compile + first run
+        t1 = time.perf_counter()
+        pred, stats = jax.block_until_ready(roll(model, z0s, ts, args))
+        t2 = time.perf_counter()
+        rollout_seconds = t2 - t1
+        eval_compile_seconds = max(0.0, (t1 - t0) - rollout_seconds)
+    else:
+        pred, stats, rollout_seconds, eval_compile_seconds = rolled
     zhat = np.asarray(pred, dtype=np.float64)
     z = data.z_test
     angular = tuple(system.angular)
@@ -268,7 +284,7 @@ def _evaluate(config, system, data, model, cache_root):
         ),
         "floor": _floor(system, data, config, cache_root),
         "rollout_finite": finite,
-        "eval_compile_seconds": max(0.0, (t1 - t0) - rollout_seconds),
+        "eval_compile_seconds": eval_compile_seconds,
         "rollout_seconds": rollout_seconds,
         "rollout_seconds_per_traj": rollout_seconds / max(1, len(zhat)),
         "nfe": nfe,
@@ -297,7 +313,9 @@ NAN_METRICS = (
 )
 
 
-def execute_run(config: RunConfig, cache_root=None, progress=False, trained=None) -> dict:
+def execute_run(
+    config: RunConfig, cache_root=None, progress=False, trained=None, rolled=None
+) -> dict:
     """Run one configuration end to end and return its row (never raises).
 
     The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
@@ -305,7 +323,8 @@ def execute_run(config: RunConfig, cache_root=None, progress=False, trained=None
     curves, stored in the row file and expanded into curves.parquet).
 
     ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
-    ``bench._ensemble``; meta as :func:`store_trained` returns it) instead of training here.
+    ``bench._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
+    ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
     """
     cache_root = Path(cache_root or default_cache_root())
     row = base_row(config)
@@ -330,7 +349,7 @@ def execute_run(config: RunConfig, cache_root=None, progress=False, trained=None
             final_loss=meta.get("final_loss"),
             train_cached=meta["train_cached"],
         )
-        metrics, curves, full = _evaluate(config, system, data, model, cache_root)
+        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled)
         if row["status"] == "diverged" and not metrics["rollout_finite"]:
             # A model that went non-finite in training has no meaningful prediction.
             metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))

@@ -144,11 +144,12 @@ def _sweep(configs, root, mode, executor="local", cache=None):
     )
 
 
-def test_ensemble_sweep_rows_match_single_runs(tmp_path):
+def test_ensemble_sweep_rows_match_single_runs(tmp_path, capsys):
     # one seed, two learning rates (one dataset to generate); the second diverges
     configs = [_run(seed=0), _run(seed=0, lr=1e30)]
     cache = tmp_path / "cache"
     ens = _sweep(configs, tmp_path / "ens", "on", cache=cache)
+    assert "fell back" not in capsys.readouterr().err  # trained and rolled out as one
     ens_params = {
         c.train_hash: (cache / "params" / c.train_hash).rename(tmp_path / c.train_hash)
         for c in configs
@@ -169,7 +170,7 @@ def test_ensemble_sweep_rows_match_single_runs(tmp_path):
         )
     ok = configs[0].config_hash
     assert a.loc[ok, "status"] == "ok" and a.loc[configs[1].config_hash, "status"] == "diverged"
-    for m in ("final_loss", "rollout_error", "mse"):
+    for m in ("final_loss", "rollout_error", "mse", "energy_violation", "nfe", "n_params"):
         assert a.loc[ok, m] == pytest.approx(b.loc[ok, m], rel=1e-3)
     assert not any(r["train_cached"] for r in ens + one)
     # the member's parameters are cached like a single run's: a rerun trains nothing
