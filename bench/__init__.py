@@ -46,6 +46,9 @@ try:  # the trainer lands separately; re-export it when it is there
     from ._train import TrainConfig, TrainResult, train  # noqa: E402, F401
 
     __all__ += ["TrainConfig", "TrainResult", "train"]
+    from ._ensemble import train_ensemble  # noqa: E402, F401
+
+    __all__ += ["train_ensemble"]
 except ModuleNotFoundError as _e:  # pragma: no cover
     if _e.name != "bench._train":
         raise

@@ -96,7 +96,12 @@ def _parser() -> argparse.ArgumentParser:
 
     sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
     sub.add_parser("report", help="write results/REPORT.md")
-    sub.add_parser("perf", help="performance measurements (bench._perf)")
+    pf = sub.add_parser("perf", help="performance measurements (bench._perf)")
+    pf.add_argument(
+        "--ensemble",
+        action="store_true",
+        help="runs per minute, ensembles vs one at a time (results/perf_ensemble.csv)",
+    )
 
     st = sub.add_parser("stability", help="numerical stability cases (results/stability.csv)")
     st.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
@@ -121,11 +126,18 @@ def _sweep_opts(p, default_profile):
         help="local processes (default 1: in-process; 0: one per core)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--ensemble",
+        default="auto",
+        help="auto (default: on when jax's backend is an accelerator), on or off: train runs "
+        "that differ only in seed, lr or noise as one vmapped program",
+    )
 
 
 def _check_sweep_args(args):
     check_choice("profile", args.profile, list(PROFILES))
     check_choice("executor", args.executor, ["local", "ray"])
+    check_choice("ensemble", args.ensemble, ["auto", "on", "off"])
     if args.workers < 0:
         raise ValueError(f"workers must be an integer >= 0; got {args.workers}")
 
@@ -258,6 +270,7 @@ def _do_sweep(args, names) -> int:
         workers=None if args.workers == 0 else args.workers,
         address=args.address,
         progress=not args.no_progress,
+        ensemble=args.ensemble,
     )
     for name, rows in res.items():
         counts = {}
@@ -319,7 +332,8 @@ def _cmd_report(args) -> int:
 def _cmd_perf(args) -> int:
     fn = _optional_entry("bench._perf", "main", "perf")
     if fn is not None:
-        out = fn([])  # its own defaults; `python -m bench.perf --help` lists its options
+        # its own defaults; `python -m bench.perf --help` lists its options
+        out = fn(["--ensemble"] if getattr(args, "ensemble", False) else [])
         return int(out or 0)
     return 0
 
@@ -367,6 +381,7 @@ def _cmd_bench(args) -> int:
         "profile": args.profile,
         "executor": args.executor,
         "workers": args.workers,
+        "ensemble": args.ensemble,
         "experiments": names,
         "provenance": provenance(),  # this process's versions, device and commit
     }

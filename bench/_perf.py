@@ -11,6 +11,10 @@ blocks, each waited for); the compile time; the median ms of a 40 x 100-step tes
 step; and the FLOP floor = FLOPs / measured float32 matmul peak. The load average is recorded
 beside each measurement because the machine may be shared.
 
+``python -m bench perf --ensemble`` (:func:`ensemble_table`) writes ``results/perf_ensemble.csv``:
+training runs per minute, M runs as one ensemble (``bench._ensemble``) vs the same M runs one
+at a time, for M in 1, 5, 10, 20 and the paper models.
+
 ``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
 writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
 ``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the
@@ -304,6 +308,114 @@ def flag_sweep(models_arg, repeats):
     return rows
 
 
+ENSEMBLE_MODELS = ("node", "node_so", "hnn", "hnn_so")
+ENSEMBLE_SIZES = (1, 5, 10, 20)
+
+
+def _machine() -> str:
+    dev = jax.devices()[0]
+    if dev.platform == "cpu":
+        return f"{platform.node()} cpu {platform.machine()} {cpu_count()} cores"
+    return f"{platform.node()} {dev.platform} {getattr(dev, 'device_kind', '')}".strip()
+
+
+def ensemble_table(names=ENSEMBLE_MODELS, sizes=ENSEMBLE_SIZES, steps=None, say=print):
+    """Training runs per minute: M runs as one ensemble vs the same M runs one at a time.
+
+    Each run is ``steps`` training steps (one compiled block; default 100 on an accelerator,
+    20 on CPU) of the chain-2 setting, at the paper sizes (width 256, batch 200, 800 chunks)
+    on an accelerator and the quick-profile sizes (width 128, batch 100, 200 chunks) on CPU.
+    Both ways are compiled first (``compile_s_*``) and then timed on wall clock over the M
+    runs with distinct seeds, including the host-side batching of ``bench.train``. Evaluation
+    is not included. ``load_avg`` is the 1-minute load when the row was measured.
+    """
+    import models
+
+    from ._ensemble import train_ensemble
+    from ._train import train
+
+    accel = jax.default_backend() != "cpu"
+    width, batch, n = (WIDTH, BATCH, N_TRAIN) if accel else (128, 100, 200)
+    steps = steps or (100 if accel else 20)
+    dataset = _Synthetic(n=n)
+    machine = _machine()
+    rows = []
+    for name in names:
+
+        def make(seed, name=name):
+            return models.make(name, _scene(), key=jax.random.key(seed), width=width, depth=DEPTH)
+
+        for m in sizes:
+            cfgs = [
+                TrainConfig(steps=steps, batch=batch, steps_per_call=steps, seed=s)
+                for s in range(m)
+            ]
+            nets = [make(s) for s in range(m)]
+            compile_single = train(nets[0], dataset, cfgs[0]).compile_seconds
+            t0 = time.perf_counter()
+            for net, c in zip(nets, cfgs, strict=True):
+                train(net, dataset, c)
+            single_s = time.perf_counter() - t0
+            first = train_ensemble(nets, [dataset] * m, cfgs)
+            compile_ens = first[0].compile_seconds * m
+            t0 = time.perf_counter()
+            train_ensemble(nets, [dataset] * m, cfgs)
+            ens_s = time.perf_counter() - t0
+            row = {
+                "machine": machine,
+                "backend": jax.default_backend(),
+                "model": name,
+                "ensemble_size": m,
+                "steps_per_run": steps,
+                "width": width,
+                "batch": batch,
+                "single_runs_per_min": 60 * m / single_s,
+                "ensemble_runs_per_min": 60 * m / ens_s,
+                "speedup": single_s / ens_s,
+                "compile_s_single": compile_single,
+                "compile_s_ensemble": compile_ens,
+                "load_avg": _load(),
+                "threads": THREADS,
+                "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+            }
+            rows.append(row)
+            say(
+                f"{name:8s} M={m:2d}  single {row['single_runs_per_min']:8.1f} runs/min  "
+                f"ensemble {row['ensemble_runs_per_min']:8.1f} runs/min  "
+                f"x{row['speedup']:.2f}  compile {compile_single:.1f}/{compile_ens:.1f} s  "
+                f"load {row['load_avg']:.2f}"
+            )
+    return rows
+
+
+def _ensemble_main(a, say) -> int:
+    import models
+
+    names = [n for n in (a.models or ",".join(ENSEMBLE_MODELS)).split(",") if n]
+    unknown = sorted(set(names) - set(models.available()))
+    if unknown:
+        raise SystemExit(f"unknown model(s) {unknown}; allowed: {models.available()}")
+    try:
+        sizes = [int(x) for x in a.sizes.split(",") if x]
+    except ValueError:
+        raise SystemExit(
+            f"--sizes must be comma-separated integers >= 1; got {a.sizes!r}"
+        ) from None
+    if not sizes or min(sizes) < 1 or (a.steps is not None and a.steps < 1):
+        raise SystemExit("--sizes and --steps must be integers >= 1")
+    rows = ensemble_table(names, sizes, a.steps, say=say)
+    if a.json:
+        print(json.dumps({"rows": rows}))
+    if not a.no_write and rows:
+        import pandas as pd
+
+        out = Path(a.out or "results/perf_ensemble.csv")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        pd.DataFrame(rows).to_csv(out, index=False)
+        say(f"wrote {out}")
+    return 0
+
+
 def main(argv=None) -> int:
     import models
 
@@ -312,22 +424,40 @@ def main(argv=None) -> int:
     )
     parser.add_argument(
         "--models",
-        default=",".join(
-            n
-            for n in models.available()  # trainable, on the (q, qdot) scene timed here
-            if n not in models.trivial_models() and "velocity" in models.coordinates(n)
-        ),
-        help="comma-separated model names (default: all trainable velocity-scene models)",
+        default=None,
+        help="comma-separated model names (default: every trainable velocity-scene model; "
+        "with --ensemble " + ",".join(ENSEMBLE_MODELS) + ")",
     )
     parser.add_argument("--repeats", type=int, default=5, help="timed blocks per model")
     parser.add_argument("--block", type=int, default=20, help="training steps per timed block")
     parser.add_argument("--quick", action="store_true", help="3 repeats of 10-step blocks")
     parser.add_argument("--seeds", action="store_true", help="also time 3 seeds vmapped")
     parser.add_argument("--flags", action="store_true", help="also compare XLA thread flags")
-    parser.add_argument("--out", default="results/perf.csv")
+    parser.add_argument(
+        "--ensemble", action="store_true", help="runs/min, ensembles vs one at a time, only"
+    )
+    parser.add_argument(
+        "--sizes",
+        default=",".join(map(str, ENSEMBLE_SIZES)),
+        help="ensemble sizes (--ensemble)",
+    )
+    parser.add_argument(
+        "--steps", type=int, default=None, help="training steps per run (--ensemble)"
+    )
+    parser.add_argument(
+        "--out", default=None, help="default results/perf.csv (--ensemble: perf_ensemble.csv)"
+    )
     parser.add_argument("--no-write", action="store_true")
     parser.add_argument("--json", action="store_true", help="print the rows as one JSON line")
     a = parser.parse_args(argv)
+    if a.ensemble:
+        return _ensemble_main(a, (lambda *x: print(*x, file=sys.stderr)) if a.json else print)
+    a.out = a.out or "results/perf.csv"
+    a.models = a.models or ",".join(
+        n
+        for n in models.available()  # trainable, on the (q, qdot) scene timed here
+        if n not in models.trivial_models() and "velocity" in models.coordinates(n)
+    )
     if a.quick:
         a.repeats, a.block = 3, 10
     if a.repeats < 1 or a.block < 1:

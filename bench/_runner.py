@@ -125,7 +125,7 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
 
     import models
 
-    from ._train import TrainConfig, train
+    from ._train import train
 
     if isinstance(model, models.AbstractTrivialModel):  # no parameters: nothing to train
         meta = {
@@ -150,7 +150,17 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
                 return loaded, meta
         except Exception:  # a corrupt cache entry: retrain below
             pass
-    tcfg = TrainConfig(
+    res = train(model, data, train_config(config), progress=progress)
+    return res.model, store_trained(config, res, cache_root)
+
+
+def train_config(config: RunConfig):
+    """The :class:`bench.TrainConfig` of a run."""
+    import models
+
+    from ._train import TrainConfig
+
+    return TrainConfig(
         steps=config.steps,
         batch=config.batch,
         lr=config.lr,
@@ -159,7 +169,13 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
         dtype=config.dtype,
         seed=config.seed,
     )
-    res = train(model, data, tcfg, progress=progress)
+
+
+def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
+    """Write a :class:`bench.TrainResult` to ``params/<train_hash>/``; return its meta."""
+    import equinox as eqx
+
+    pdir = Path(cache_root) / "params" / config.train_hash
     losses = np.asarray(res.losses, dtype=np.float64)
     meta = {
         "status": res.status,
@@ -173,12 +189,12 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
     pdir.mkdir(parents=True, exist_ok=True)
     tmp = pdir / f".tmp-{os.getpid()}.eqx"
     eqx.tree_serialise_leaves(tmp, res.model)
-    os.replace(tmp, pfile)
-    meta["sha256"] = _sha256(pfile)
-    _write_json(meta_file, meta)
+    os.replace(tmp, pdir / "model.eqx")
+    meta["sha256"] = _sha256(pdir / "model.eqx")
+    _write_json(pdir / "train.json", meta)
     np.save(pdir / "losses.npy", losses)
     meta["train_cached"] = False
-    return res.model, meta
+    return meta
 
 
 def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
@@ -263,7 +279,24 @@ def _predictor(model, system, roll):
     return lambda z0s, ts, args: roll(model, z0s, ts, args)
 
 
-def _evaluate(config, system, data, model, cache_root):
+def eval_integrator(config: RunConfig):
+    """The test-rollout integrator of a run (adaptive: at most EVAL_MAX_STEPS steps)."""
+    import models
+
+    return models.Integrator(
+        config.eval_integrator,
+        substeps=config.eval_substeps,
+        rtol=config.eval_rtol,
+        max_steps=EVAL_MAX_STEPS,
+    )
+
+
+def _evaluate(config, system, data, model, cache_root, rolled=None):
+    """Metrics, curves and full curves of a trained model on the test set.
+
+    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
+    elsewhere (an ensemble's, vmapped over members: ``bench._ensemble``).
+    """
     import equinox as eqx
     import jax
     import jax.numpy as jnp
@@ -273,12 +306,7 @@ def _evaluate(config, system, data, model, cache_root):
     # An adaptive evaluation of a stiff learned field can take millions of steps; a test
     # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
     # (non-finite states) instead of holding the sweep.
-    integ = models.Integrator(
-        config.eval_integrator,
-        substeps=config.eval_substeps,
-        rtol=config.eval_rtol,
-        max_steps=EVAL_MAX_STEPS,
-    )
+    integ = eval_integrator(config)
     dtype = jnp.dtype(config.dtype)
     z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
     ts = jnp.asarray(data.ts_test, dtype=dtype)
@@ -288,13 +316,17 @@ def _evaluate(config, system, data, model, cache_root):
     def roll(m, z0s, ts, args):
         return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
 
-    predict = _predictor(model, system, roll)
-    t0 = time.perf_counter()
-    jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
-    t1 = time.perf_counter()
-    pred, stats = jax.block_until_ready(predict(z0s, ts, args))
-    t2 = time.perf_counter()
-    rollout_seconds = t2 - t1
+    if rolled is None:
+        predict = _predictor(model, system, roll)
+        t0 = time.perf_counter()
+        jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
+        t1 = time.perf_counter()
+        pred, stats = jax.block_until_ready(predict(z0s, ts, args))
+        t2 = time.perf_counter()
+        rollout_seconds = t2 - t1
+        eval_compile_seconds = max(0.0, (t1 - t0) - rollout_seconds)
+    else:
+        pred, stats, rollout_seconds, eval_compile_seconds = rolled
     zhat = np.asarray(pred, dtype=np.float64)
     z = data.z_test
     angular = tuple(system.angular)
@@ -340,7 +372,7 @@ def _evaluate(config, system, data, model, cache_root):
         ),
         "floor": _floor(system, data, config, cache_root),
         "rollout_finite": finite,
-        "eval_compile_seconds": max(0.0, (t1 - t0) - rollout_seconds),
+        "eval_compile_seconds": eval_compile_seconds,
         "rollout_seconds": rollout_seconds,
         "rollout_seconds_per_traj": rollout_seconds / max(1, len(zhat)),
         "nfe": nfe,
@@ -371,12 +403,18 @@ NAN_METRICS = (
 )
 
 
-def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
+def execute_run(
+    config: RunConfig, cache_root=None, progress=False, trained=None, rolled=None
+) -> dict:
     """Run one configuration end to end and return its row (never raises).
 
     The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
     ``diverged_step``, ``error``, the metrics, the costs, and ``curves`` (small per-time
     curves, stored in the row file and expanded into curves.parquet).
+
+    ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
+    ``bench._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
+    ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
     """
     cache_root = Path(cache_root or default_cache_root())
     row = base_row(config)
@@ -388,7 +426,10 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
         (art / "traceback.txt").unlink(missing_ok=True)
         config.validate()
         system, data, _, model = _build(config, cache_root)
-        model, meta = _train_cached(config, model, data, cache_root, progress)
+        if trained is None:
+            model, meta = _train_cached(config, model, data, cache_root, progress)
+        else:
+            model, meta = trained
         row.update(
             status=meta["status"],
             diverged_step=meta.get("diverged_step"),
@@ -399,7 +440,7 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
             flops_per_step=_nan_if_none(meta.get("flops_per_step")),
             train_cached=meta["train_cached"],
         )
-        metrics, curves, full = _evaluate(config, system, data, model, cache_root)
+        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled)
         if row["status"] == "diverged" and not metrics["rollout_finite"]:
             # A model that went non-finite in training has no meaningful prediction.
             metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))
@@ -440,6 +481,8 @@ def sweep(
     address: str | None = None,
     progress: bool = True,
     cache_root=None,
+    ensemble: str = "auto",
+    ensemble_max: int = 20,
 ) -> list[dict]:
     """Execute the runs of ``configs`` not yet in ``results_dir``; return the new rows.
 
@@ -452,6 +495,10 @@ def sweep(
     a run or when storing its row) stops the sweep with :class:`bench._errors.StorageError`;
     the rows stored so far are whole and the next sweep resumes. A damaged row file counts
     as not done (see :func:`bench._store.scan_rows`): its run is executed again.
+
+    ``ensemble`` (``auto``, ``on``, ``off``; ``auto``: on when jax's default backend is an
+    accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
+    ``ensemble_max`` members, one per task (see ``bench._ensemble``).
     """
     from ._experiments import check_choice, check_runnable
 
@@ -483,6 +530,7 @@ def sweep(
     bar = tqdm(total=len(todo), desc=f"{experiment} [{profile}]", unit="run", disable=not progress)
 
     def finish(row: dict) -> None:
+        row.setdefault("ensemble_size", 1)
         row["experiment"] = experiment
         row["profile"] = profile
         _store.write_row(results_dir, row)
@@ -491,19 +539,30 @@ def sweep(
         bar.update(1)
         bar.set_postfix_str(f"last: {row['model']} {row['status']}")
 
+    # ---- ensembles (bench._ensemble): groups of runs trained as one program
+    from . import _ensemble
+
+    groups = [[c] for c in todo]
+    if _ensemble.enabled(ensemble):
+        groups = _ensemble.plan_groups(todo, cache_root, ensemble_max)
+    # ----
     cores = cpu_count()
     try:
         if executor == "ray":
-            _sweep_ray(todo, finish, cache_root, address, cores)
+            _sweep_ray(groups, finish, cache_root, address, cores)
         else:
             workers = cores if workers is None else max(1, int(workers))
-            workers = min(workers, len(todo))
+            workers = min(workers, len(groups))
             if workers == 1:
-                for c in todo:
-                    bar.set_postfix_str(_label(c))
-                    finish(execute_run(c, cache_root=cache_root, progress=False))
+                for g in groups:
+                    bar.set_postfix_str(_label(g[0]) + (f" +{len(g) - 1}" if len(g) > 1 else ""))
+                    if len(g) == 1:
+                        finish(execute_run(g[0], cache_root=cache_root, progress=False))
+                    else:
+                        for row in _ensemble.execute_group(g, cache_root=cache_root):
+                            finish(row)
             else:
-                _sweep_pool(todo, finish, cache_root, workers, cores)
+                _sweep_pool(groups, finish, cache_root, workers, cores)
     except Exception as e:
         err = storage_error(e)
         if err is None:
@@ -519,7 +578,7 @@ def sweep(
     return new_rows
 
 
-def _sweep_pool(todo, finish, cache_root, workers, cores):
+def _sweep_pool(groups, finish, cache_root, workers, cores):
     import multiprocessing as mp
 
     ctx = mp.get_context("spawn")
@@ -532,9 +591,10 @@ def _sweep_pool(todo, finish, cache_root, workers, cores):
         slots.put(available[i * share : (i + 1) * share] or None)
     pool = ctx.Pool(workers, initializer=_pin_worker, initargs=(slots,))
     with pool:
-        jobs = [(c.to_dict(), str(cache_root)) for c in todo]
-        for row in pool.imap_unordered(_star_execute, jobs):
-            finish(row)
+        jobs = [([c.to_dict() for c in g], str(cache_root)) for g in groups]
+        for rows in pool.imap_unordered(_star_execute, jobs):
+            for row in rows:
+                finish(row)
 
 
 def _pin_worker(slots) -> None:
@@ -547,10 +607,15 @@ def _pin_worker(slots) -> None:
 
 
 def _star_execute(job):
-    return _execute_dict(*job)
+    dicts, cache_root = job
+    if len(dicts) == 1:
+        return [_execute_dict(dicts[0], cache_root)]
+    from ._ensemble import _execute_group_dicts
+
+    return _execute_group_dicts(dicts, cache_root)
 
 
-def _sweep_ray(todo, finish, cache_root, address, cores):
+def _sweep_ray(groups, finish, cache_root, address, cores):
     try:
         import ray
     except ImportError as e:  # pragma: no cover
@@ -576,19 +641,25 @@ def _sweep_ray(todo, finish, cache_root, address, cores):
             )
         started = True
     try:
-        remote = ray.remote(num_cpus=1)(_execute_dict)
-        pending = {remote.remote(c.to_dict(), str(cache_root)): c for c in todo}
+        # one task per ensemble (a single run is an ensemble of 1); a GPU per task on GPUs
+        gpus = 1 if ray.cluster_resources().get("GPU", 0) >= 1 else 0
+        remote = ray.remote(num_cpus=1, num_gpus=gpus)(_star_execute)
+        pending = {remote.remote(([c.to_dict() for c in g], str(cache_root))): g for g in groups}
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
-            c = pending.pop(ready[0])
+            g = pending.pop(ready[0])
             try:
-                row = ray.get(ready[0])
+                rows = ray.get(ready[0])
             except Exception as e:  # a worker that died: record, keep going
                 if storage_error(e):  # a full disk: stop (sweep raises StorageError)
                     raise
-                row = base_row(c)
-                row["error"] = one_line(e, 500)
-            finish(row)
+                rows = []
+                for c in g:
+                    row = base_row(c)
+                    row["error"] = one_line(e, 500)
+                    rows.append(row)
+            for row in rows:
+                finish(row)
     finally:
         if started:
             ray.shutdown()

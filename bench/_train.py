@@ -103,9 +103,13 @@ class TrainResult:
     flops_per_step: float = float("nan")
 
 
-def optimizer(config: TrainConfig) -> optax.GradientTransformation:
-    """clip_by_global_norm(clip) -> AdamW(cosine lr -> lr * lr_floor over steps, weight_decay)."""
-    schedule = optax.cosine_decay_schedule(config.lr, config.steps, alpha=config.lr_floor)
+def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
+    """clip_by_global_norm(clip) -> AdamW(cosine lr -> lr * lr_floor over steps, weight_decay).
+
+    ``lr`` overrides ``config.lr`` (a traced scalar in an ensemble).
+    """
+    lr = config.lr if lr is None else lr
+    schedule = optax.cosine_decay_schedule(lr, config.steps, alpha=config.lr_floor)
     return optax.chain(
         optax.clip_by_global_norm(config.clip),
         optax.adamw(schedule, weight_decay=config.weight_decay),
@@ -124,15 +128,17 @@ def loss_fn(model, z, args, ts, config: TrainConfig):
 _TRACES = [0]  # how many times a training block was traced (tests assert one per config)
 
 
-def _block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig):
-    """Run ``len(idx)`` steps; ``active[k]`` False makes step k a no-op (padding of the tail).
+def make_step(static, config: TrainConfig, data, lr=None):
+    """One training step ``step(carry, (batch indices, active)) -> (carry, (loss, failed))``.
 
-    After a step with a non-finite loss or gradient, ``dead`` is set and no later step of the
-    run changes the parameters; ``good`` holds the last parameters whose loss was finite.
+    ``carry = (params, opt_state, dead, good)``. ``active`` False makes the step a no-op
+    (padding of the tail). After a non-finite loss or gradient, ``dead`` is set and no later
+    step changes the parameters; ``good`` holds the last parameters whose loss was finite.
+    ``lr`` (default ``config.lr``) may be a traced scalar: ensembles (``bench._ensemble``) vmap
+    this one step over members with their own data, parameters and learning rate.
     """
-    _TRACES[0] += 1
-    (z_all, args_all, ts), idx, active = inputs
-    opt = optimizer(config)
+    z_all, args_all, ts = data
+    opt = optimizer(config, lr=lr)
 
     def step(carry, xs):
         params, opt_state, dead, good = carry
@@ -155,6 +161,14 @@ def _block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig
         dead = dead | failed
         return (params, opt_state, dead, good), (loss, failed)
 
+    return step
+
+
+def _block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig):
+    """Run ``len(idx)`` steps of :func:`make_step` as one ``lax.scan``."""
+    _TRACES[0] += 1
+    data, idx, active = inputs
+    step = make_step(static, config, data)
     (params, opt_state, dead, good), (losses, failed) = jax.lax.scan(
         step, (params, opt_state, dead, good), (idx, active)
     )

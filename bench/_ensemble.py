@@ -1,0 +1,380 @@
+"""Ensembles: runs that differ only in seed, learning rate or noise train as one program.
+
+M members with parameters p_m, optimiser states s_m, training sets D_m and learning rates
+lr_m take the step of :func:`bench._train.make_step`, vmapped over m::
+
+    (p_m, s_m) <- step(p_m, s_m; D_m[batch_m], lr_m)        for m = 1..M, in one lax.scan
+
+Every member keeps its own ``dead``/``good`` flags, so a member whose loss or gradient goes
+non-finite at step t is frozen there, recorded ``diverged`` at t, and the others go on
+unchanged (vmap never mixes members). Each member draws its batches from its own seed exactly
+as a single run does, so member m of an ensemble is the single run of its config up to
+float32 round-off (batched matmuls may sum in another order).
+
+Rows: a member's row is the row :func:`bench._runner.execute_run` writes for its config (the
+same columns, ``config_hash`` and ``train_hash``; its parameters go to the same params cache),
+plus ``ensemble_size`` (1 for a run trained alone). ``train_seconds`` and
+``compile_seconds`` of a member are its share (1/M) of the ensemble's.
+
+Grouping (:func:`plan_groups`): pending runs whose every field except ``ENSEMBLE_FIELDS``
+and ``eval_*`` agree form one group (cut into groups of at most ``max_size``). Runs whose
+parameters are already cached, and second runs of one ``train_hash``, run alone. Not grouped:
+``loss`` (a static choice of the loss function) and options held by the model (e.g. a
+regulariser weight inside ``model_options``, a static field of the model).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ._errors import one_line, storage_error
+from ._experiments import RunConfig, check_choice
+
+MODES = ("auto", "on", "off")
+# RunConfig fields that may differ between the members of one ensemble (no shape changes).
+ENSEMBLE_FIELDS = ("seed", "lr", "noise")
+MAX_SIZE = 20
+
+
+def enabled(mode: str) -> bool:
+    """``on``/``off`` as said; ``auto``: on when jax's default backend is an accelerator."""
+    check_choice("ensemble", mode, MODES)
+    if mode != "auto":
+        return mode == "on"
+    import jax
+
+    return jax.default_backend() != "cpu"
+
+
+# ------------------------------------------------------------------------------ training
+def _stack(trees):
+    import jax
+    import jax.numpy as jnp
+
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
+
+
+def _member(tree, i):
+    import equinox as eqx
+    import jax
+
+    return jax.tree.map(lambda x: x[i] if eqx.is_array(x) else x, tree)
+
+
+def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config):
+    """``len(idx)`` steps of every member: lax.scan over vmap(make_step) over members."""
+    import jax
+
+    from ._train import _TRACES, make_step
+
+    _TRACES[0] += 1
+    data, lr, idx, active = inputs
+
+    def member_step(carry, xs, data, lr):
+        return make_step(static, config, data, lr)(carry, xs)
+
+    vstep = jax.vmap(member_step, in_axes=(0, (0, None), 0, 0))
+
+    def body(carry, xs):
+        return vstep(carry, xs, data, lr)
+
+    (params, opt_state, dead, good), (losses, failed) = jax.lax.scan(
+        body, (params, opt_state, dead, good), (idx, active)
+    )
+    return params, opt_state, dead, good, losses, failed
+
+
+_COMPILED: dict = {}
+
+
+def _compiled(inputs, params, static, opt_state, dead, good, config):
+    import equinox as eqx
+    import jax
+
+    key = (
+        jax.tree.structure((params, static, opt_state)),
+        tuple(jax.tree.leaves(static)),
+        tuple((x.shape, x.dtype) for x in jax.tree.leaves((inputs, params, opt_state))),
+        config,
+    )
+    hit = _COMPILED.get(key)
+    if hit is not None:
+        return hit, 0.0
+    fn = eqx.filter_jit(_ensemble_block, donate="all-except-first")
+    t0 = time.perf_counter()
+    compiled = fn.lower(inputs, params, opt_state, dead, good, static=static, config=config)
+    compiled = compiled.compile()
+    seconds = time.perf_counter() - t0
+
+    def run(inputs, params, opt_state, dead, good):
+        return compiled(inputs, params, opt_state, dead, good, static=static, config=config)
+
+    _COMPILED[key] = run
+    return run, seconds
+
+
+def _common_config(configs):
+    """The members' shared TrainConfig (seed 0, lr 1); ValueError when they differ otherwise."""
+    from ._train import TrainConfig
+
+    if not configs:
+        raise ValueError("an ensemble needs at least one member")
+    keys = []
+    for c in configs:
+        if not isinstance(c, TrainConfig):
+            raise ValueError(f"config must be a bench.TrainConfig, got {type(c).__name__}")
+        keys.append(dataclasses.replace(c, seed=0, lr=1.0, log_every=1))
+    for k in keys[1:]:
+        if k != keys[0]:
+            raise ValueError("ensemble members may differ only in seed and lr (TrainConfig)")
+    return keys[0]
+
+
+def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
+    """Train ``models[m]`` on ``datasets[m]`` with ``configs[m]`` as one program.
+
+    Returns one :class:`bench.TrainResult` per member, each as :func:`bench.train` would
+    return it for that member alone (``train_seconds``, ``compile_seconds``: 1/M of the
+    ensemble's). ValueError when the members' configs differ in more than seed and lr, or
+    their models or data differ in structure or shape.
+    """
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    from ._train import TrainResult, _Batches, optimizer, prepare
+
+    m_count = len(models)
+    if not (m_count == len(datasets) == len(configs)):
+        raise ValueError("train_ensemble needs as many datasets and configs as models")
+    cfg = _common_config(configs)
+    data = [prepare(m, d, c) for m, d, c in zip(models, datasets, configs, strict=True)]
+    parts = [eqx.partition(m, eqx.is_inexact_array) for m in models]
+    static = parts[0][1]
+    for i in range(1, m_count):
+        same = jax.tree.structure(parts[i][0]) == jax.tree.structure(parts[0][0])
+        same = same and bool(eqx.tree_equal(parts[i][1], static))
+        same = same and all(
+            a.shape == b.shape
+            for a, b in zip(jax.tree.leaves(parts[i][0]), jax.tree.leaves(parts[0][0]), strict=True)
+        )
+        if not same:
+            raise ValueError(f"ensemble member {i}'s model differs in structure from member 0")
+        if any(a.shape != b.shape for a, b in zip(data[i], data[0], strict=True)):
+            raise ValueError(f"ensemble member {i}'s training data differ in shape from member 0")
+    params = _stack([p for p, _ in parts])  # new buffers: the callers' models stay valid
+    good = jax.tree.map(jnp.copy, params)
+    opt_state = jax.vmap(optimizer(cfg).init)(params)
+    dead = jnp.zeros(m_count, bool)
+    stacked = tuple(jnp.stack(x) for x in zip(*data, strict=True))
+    lr = jnp.asarray([c.lr for c in configs], jnp.dtype(cfg.dtype))
+    n = stacked[0].shape[1]
+    k = min(cfg.steps_per_call, cfg.steps)
+    batches = [_Batches(n, cfg.batch, c.seed) for c in configs]
+
+    def inputs(start):
+        idx = np.stack([b.take(k) for b in batches], axis=1)  # (k, M, B)
+        active = np.arange(start, start + k) < cfg.steps
+        return (stacked, lr, jnp.asarray(idx), jnp.asarray(active))
+
+    block_in = inputs(0)
+    run, compile_seconds = _compiled(block_in, params, static, opt_state, dead, good, cfg)
+
+    losses: list[list[np.ndarray]] = [[] for _ in range(m_count)]
+    diverged: list[int | None] = [None] * m_count
+    train_seconds = 0.0
+    done = 0
+    while done < cfg.steps and any(d is None for d in diverged):
+        if done > 0:
+            block_in = inputs(done)
+        t0 = time.perf_counter()
+        params, opt_state, dead, good, block_losses, failed = run(
+            block_in, params, opt_state, dead, good
+        )
+        block_losses = np.asarray(block_losses)[: cfg.steps - done]  # (k, M); waits
+        train_seconds += time.perf_counter() - t0
+        failed = np.asarray(failed)[: cfg.steps - done]
+        for i in range(m_count):
+            if diverged[i] is not None:
+                continue
+            bad = np.flatnonzero(failed[:, i])
+            if bad.size:
+                losses[i].append(block_losses[: bad[0], i])
+                diverged[i] = done + int(bad[0])
+            else:
+                losses[i].append(block_losses[:, i])
+        done += len(block_losses)
+    out = []
+    for i in range(m_count):
+        ok = diverged[i] is None
+        out.append(
+            TrainResult(
+                model=eqx.combine(_member(params if ok else good, i), static),
+                losses=np.concatenate(losses[i]) if losses[i] else np.zeros(0),
+                status="ok" if ok else "diverged",
+                diverged_step=diverged[i],
+                train_seconds=train_seconds / m_count,
+                compile_seconds=compile_seconds / m_count,
+                steps_done=done if ok else diverged[i],
+            )
+        )
+    return out
+
+
+# ------------------------------------------------------------------------------ grouping
+def group_key(config: RunConfig) -> str:
+    """The fields an ensemble's members share: all but ``ENSEMBLE_FIELDS`` and ``eval_*``."""
+    d = {
+        a: b
+        for a, b in config.to_dict().items()
+        if a not in ENSEMBLE_FIELDS and not a.startswith("eval_")
+    }
+    return json.dumps(d, sort_keys=True, default=str)
+
+
+def _trivial_names() -> frozenset:
+    import models
+
+    return frozenset(models.trivial_models())
+
+
+def plan_groups(
+    configs: Sequence[RunConfig], cache_root=None, max_size: int = MAX_SIZE
+) -> list[list[RunConfig]]:
+    """Cut pending runs into ensembles (lists of >= 1 run), order kept within each group.
+
+    Runs whose parameters are cached under ``cache_root``, second runs of one
+    ``train_hash`` (they differ only in evaluation) and trivial predictors (nothing to train)
+    come last, alone: they load the parameters, or need none, instead of training.
+    """
+    if isinstance(max_size, bool) or not isinstance(max_size, int) or max_size < 1:
+        raise ValueError(f"ensemble size must be an integer >= 1; got {max_size!r}")
+    groups: dict[str, list[RunConfig]] = {}
+    alone: list[list[RunConfig]] = []
+    trains: set[str] = set()
+    for c in configs:
+        cached = (
+            cache_root is not None
+            and (Path(cache_root) / "params" / c.train_hash / "model.eqx").exists()
+        )
+        if cached or c.train_hash in trains or c.model in _trivial_names():
+            alone.append([c])
+            continue
+        trains.add(c.train_hash)
+        groups.setdefault(group_key(c), []).append(c)
+    out = []
+    for members in groups.values():
+        out.extend(members[i : i + max_size] for i in range(0, len(members), max_size))
+    return out + alone
+
+
+# --------------------------------------------------------------------------- evaluation
+def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Sequence) -> list:
+    """The test rollouts of every member as one program (vmap over members).
+
+    Member m rolls out ``models[m]`` from its own test states ``datasets[m].z_test[:, 0]``
+    with the evaluation integrator of ``configs[m]`` (all members must share it). Returns,
+    per member, ``(pred, stats, rollout_seconds, eval_compile_seconds)`` as
+    :func:`bench._runner._evaluate` takes them (seconds: 1/M of the ensemble's).
+    """
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    import models as M
+
+    from ._runner import eval_integrator
+
+    c = configs[0]
+    integ = eval_integrator(c)
+    if any(eval_integrator(x) != integ or x.random_args != c.random_args for x in configs):
+        raise ValueError("ensemble members must share their evaluation settings")
+    dtype = jnp.dtype(c.dtype)
+    z0s = jnp.stack([jnp.asarray(d.z_test[:, 0], dtype) for d in datasets])
+    ts = jnp.stack([jnp.asarray(d.ts_test, dtype) for d in datasets])
+    args = None
+    if c.random_args:
+        args = jnp.stack([jnp.asarray(d.args_test, dtype) for d in datasets])
+    parts = [eqx.partition(m, eqx.is_inexact_array) for m in models]
+    static = parts[0][1]
+    params = _stack([p for p, _ in parts])
+
+    def one(p, z0s, ts, args):
+        model = eqx.combine(p, static)
+        return M.rollout_batch(model, z0s, ts, args, integ, return_stats=True)
+
+    roll = eqx.filter_jit(jax.vmap(one, in_axes=(0, 0, 0, None if args is None else 0)))
+    t0 = time.perf_counter()
+    jax.block_until_ready(roll(params, z0s, ts, args))  # compile + first run
+    t1 = time.perf_counter()
+    pred, stats = jax.block_until_ready(roll(params, z0s, ts, args))
+    seconds = time.perf_counter() - t1
+    compile_seconds = max(0.0, (t1 - t0) - seconds)
+    n = len(models)
+    return [(pred[i], _member(stats, i), seconds / n, compile_seconds / n) for i in range(n)]
+
+
+# ---------------------------------------------------------------------------- execution
+def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
+    """Train ``configs`` as one ensemble, then evaluate each member; one row per run.
+
+    Never raises for a run's failure: when the ensemble cannot be built or trained (a bad
+    config, a failed dataset), every member runs alone and records its own outcome; when the
+    vmapped test rollouts fail, each member rolls out alone. A storage error (full disk)
+    propagates, as in :func:`bench._runner.execute_run`.
+    """
+    from . import _runner as R
+
+    cache_root = Path(cache_root or R.default_cache_root())
+    configs = list(configs)
+    trained: list = [None] * len(configs)
+    rolled: list = [None] * len(configs)
+    if len(configs) > 1:
+        try:
+            models, datasets = [], []
+            for c in configs:
+                c.validate()
+                _, data, _, model = R._build(c, cache_root)
+                models.append(model)
+                datasets.append(data)
+            results = train_ensemble(models, datasets, [R.train_config(c) for c in configs])
+            trained = [
+                (res.model, R.store_trained(c, res, cache_root))
+                for c, res in zip(configs, results, strict=True)
+            ]
+        except Exception as e:
+            if storage_error(e):
+                raise
+            print(
+                f"ensemble of {len(configs)} runs fell back to single runs: {one_line(e, 300)}",
+                file=sys.stderr,
+            )
+            trained = [None] * len(configs)
+        if trained[0] is not None:
+            try:
+                rolled = rollout_members(configs, datasets, [t[0] for t in trained])
+            except Exception as e:
+                if storage_error(e):
+                    raise
+                print(
+                    f"ensemble rollouts fell back to single ones: {one_line(e, 300)}",
+                    file=sys.stderr,
+                )
+    rows = []
+    for c, t, r in zip(configs, trained, rolled, strict=True):
+        row = R.execute_run(c, cache_root=cache_root, trained=t, rolled=r)
+        row["ensemble_size"] = 1 if t is None else len(configs)
+        rows.append(row)
+    return rows
+
+
+def _execute_group_dicts(dicts: list[dict], cache_root: str | None = None) -> list[dict]:
+    """Ray/pool task: one ensemble from plain dicts."""
+    return execute_group([RunConfig.from_dict(d) for d in dicts], cache_root=cache_root)
