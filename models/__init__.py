@@ -16,7 +16,15 @@ from ._scene import Scene  # noqa: E402
 from ._symplectic import symplectic_error  # noqa: E402
 
 try:  # the integrators live in their own module, written alongside this package
-    from ._integrators import Integrator, count_evaluations, rollout, rollout_batch  # noqa: F401
+    from ._integrators import (  # noqa: F401
+        METHODS,
+        ORDERS,
+        Integrator,
+        count_evaluations,
+        implicit_tolerance,
+        rollout,
+        rollout_batch,
+    )
 except ImportError:  # pragma: no cover - only while _integrators.py does not exist yet
     pass
 
