@@ -17,6 +17,7 @@ from ._symplectic import symplectic_error  # noqa: E402
 
 try:  # the integrators live in their own module, written alongside this package
     from ._integrators import (  # noqa: F401
+        DESCRIPTIONS,
         METHODS,
         ORDERS,
         Integrator,

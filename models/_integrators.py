@@ -54,6 +54,17 @@ ORDERS = {
     "leapfrog_explicit": 2,  # 1 once the acceleration depends on the velocity
     "implicit_midpoint": 2,
 }
+# What each method is, in a phrase (report tables name methods by these).
+DESCRIPTIONS = {
+    "euler": "explicit Euler (order 1)",
+    "rk4": "classical RK4 (order 4)",
+    "rk4_38": "Kutta's 3/8 rule (order 4)",
+    "leapfrog": "generalised Stormer-Verlet: implicit velocity kick, in (q, p) for Hamiltonian "
+    "models (order 2; symplectic for H)",
+    "leapfrog_explicit": "explicit velocity Verlet (order 1 once the acceleration depends on v)",
+    "implicit_midpoint": "implicit midpoint (order 2, symplectic for any H)",
+    "adaptive": "diffrax adaptive Runge-Kutta with PID step control",
+}
 # The implicit stages converge when successive iterates agree to eps ** IMPLICIT_POWER of the
 # dtype (relative and absolute): 1.8e-12 in float64, 6.4e-6 in float32, where the rounding
 # noise of a learned field (an LNN's Hessian solve) keeps iterates from agreeing any closer.

@@ -22,6 +22,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from models import _integrators
+
 from .. import _metrics as M
 from .._errors import one_line
 
@@ -30,15 +32,9 @@ DT = 0.03
 # A trajectory is called diverged where |z| exceeds this multiple of the largest |z| of the
 # true trajectories (non-angular coordinates only: a whirling angle grows without bound).
 BOUND_FACTOR = 100.0
-# What each method label in the tables is.
+# What each method label in the tables is (``models.DESCRIPTIONS`` and this study's choices).
 METHOD_NOTES = {
-    "euler": "explicit Euler (order 1)",
-    "rk4": "classical RK4 (order 4)",
-    "rk4_38": "Kutta's 3/8 rule (order 4)",
-    "leapfrog": "generalised Stormer-Verlet: implicit velocity kick, in (q, p) for Hamiltonian "
-    "models (order 2; symplectic for H)",
-    "leapfrog_explicit": "explicit velocity Verlet (order 1 once a depends on v)",
-    "implicit_midpoint": "implicit midpoint (order 2, symplectic for any H)",
+    **_integrators.DESCRIPTIONS,
     "adaptive": "Tsit5, PID rtol 1e-6",
     "native": "the discrete model's own step",
 }
