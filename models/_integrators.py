@@ -98,7 +98,7 @@ class Integrator:
     max_steps: int = 100_000
     implicit_iterations: int = 0
     implicit_solver: str = "fixed_point"
-    implicit_max_steps: int = 16
+    implicit_max_steps: int = 32
 
     def __post_init__(self):
         if self.method not in METHODS:
