@@ -85,6 +85,7 @@ def test_one_step_is_symplectic_on_a_learned_nonseparable_h(learned_h, method):
     assert float(jnp.max(jnp.abs(phi_rk4.T @ _j(2) @ phi_rk4 - _j(2)))) > 1e-8
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["leapfrog", "implicit_midpoint"])
 def test_one_step_is_symplectic_for_the_separable_hnn_mass(method):
     # hnn_so in velocity coordinates integrates in (q, p); its H has a q-dependent mass, so
@@ -131,8 +132,15 @@ def test_learned_h_bounded_over_ten_thousand_steps():
         assert band.max() < 1e-3 * euler.max(), (method, band.max(), euler.max())
 
 
-@pytest.mark.parametrize("method", ["leapfrog", "implicit_midpoint"])
-@pytest.mark.parametrize("name", ["node_so", "hnn_so"])
+@pytest.mark.parametrize(
+    ("method", "name"),
+    [
+        ("implicit_midpoint", "node_so"),
+        pytest.param("leapfrog", "node_so", marks=pytest.mark.slow),
+        pytest.param("leapfrog", "hnn_so", marks=pytest.mark.slow),
+        pytest.param("implicit_midpoint", "hnn_so", marks=pytest.mark.slow),
+    ],
+)
 def test_gradient_through_implicit_stages_matches_finite_differences(method, name):
     scene = models.Scene(dof=2, angular=(True, True))
     model = models.make(name, scene, key=jax.random.PRNGKey(2), width=8, dtype="float64")
@@ -157,6 +165,7 @@ def test_gradient_through_implicit_stages_matches_finite_differences(method, nam
     assert abs(ad - fd) < 1e-6 * max(1.0, abs(fd)), (ad, fd)
 
 
+@pytest.mark.slow
 def test_newton_and_fixed_point_stages_agree(chain):
     model, z0, horizon, _ = chain
     ts = jnp.linspace(0.0, horizon, 17)
