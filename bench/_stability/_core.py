@@ -153,7 +153,7 @@ class StabilitySize:
     rtols: tuple[float, ...] = (1e-3, 1e-5, 1e-7, 1e-9)
     spring_constants: tuple[float, ...] = (1e3, 1e4, 1e5)
     speeds: tuple[float, ...] = (0.99, 0.999, 0.9999)
-    dts: tuple[float, ...] = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
+    dts: tuple[float, ...] = (3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
     high_energy_steps: int = 200
     dt_methods: tuple[str, ...] = (
         "euler",
@@ -164,6 +164,7 @@ class StabilitySize:
         "implicit_midpoint",
     )
     stiff_solvers: tuple[str, ...] = ("tsit5", "kvaerno5")
+    stiff_horizon: float = 1.0  # seconds of the stiffness case (each call counted on the host)
     stiff_fixed: tuple[str, ...] = ("rk4", "implicit_midpoint")
     lnn_probe: bool = True  # also probe freshly initialised LNN models with each solve
 
