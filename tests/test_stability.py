@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import jax
 import numpy as np
 import pytest
 
@@ -170,3 +171,20 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     assert set(df["case"]) == set(S.CASES)
     text = S.stability_section(tmp_path)
     assert "## Numerical stability" in text and "stiffness" in text
+
+
+def test_simulate_takes_tolerance_and_solver():
+    # the stability study's ground truth and solver variants go through systems' simulate
+    import systems
+
+    sysm = systems.make("chain_pendulum", k=2)
+    z0 = np.asarray(sysm.sample_initial(jax.random.PRNGKey(0), 2))
+    ts = np.linspace(0.0, 0.5, 4)
+    truth = np.asarray(sysm.simulate_batch(z0, ts))
+    ys, info = sysm.simulate_batch(z0, ts, rtol=1e-8, atol=1e-10, solver="tsit5", stats=True)
+    assert np.max(np.abs(np.asarray(ys) - truth)) < 1e-5
+    assert np.all(np.asarray(info["ok"])) and np.all(np.asarray(info["nfe"]) > 6)
+    loose = sysm.simulate(z0[0], ts, rtol=1e-3, atol=1e-5, solver="tsit5")
+    assert 0 < np.max(np.abs(np.asarray(loose) - truth[0])) < 1e-1
+    with pytest.raises(ValueError, match="allowed"):
+        sysm.simulate(z0[0], ts, solver="euler")
