@@ -212,11 +212,11 @@ def _summary(case: str, g) -> list[str]:
         order = ok[ok.metric == "order"].set_index("method").value
         cost = ok[ok.metric == "nfe_per_step"].set_index("method").value
         rk4 = cost.get("rk4", float("nan"))
-        parts = [
-            f"{m} {order.get(m, float('nan')):.2f} ({cost.get(m, float('nan')) / rk4:.2g}x rk4's "
-            "evaluations per step)"
-            for m in cost.index
-        ]
+        parts = []
+        for m in cost.index:
+            o = order.get(m, float("nan"))
+            fitted = f"{o:.2f}" if np.isfinite(o) else "no fit (errors outside the window)"
+            parts.append(f"{m} {fitted} ({cost[m] / rk4:.2g}x rk4's evaluations per step)")
         if parts:
             out += ["", "Fitted orders: " + "; ".join(parts) + "."]
     if case == "stiffness":
