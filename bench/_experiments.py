@@ -29,7 +29,15 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-INTEGRATORS = ("euler", "rk4", "rk4_38", "leapfrog", "adaptive")
+INTEGRATORS = (
+    "euler",
+    "rk4",
+    "rk4_38",
+    "leapfrog",
+    "leapfrog_explicit",
+    "implicit_midpoint",
+    "adaptive",
+)
 COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
@@ -367,7 +375,7 @@ def expand(exp: Experiment | str, profile: str = "quick") -> list[RunConfig]:
 
 def valid(cfg: RunConfig) -> bool:
     """Whether a combination makes sense: leapfrog needs a second-order continuous model."""
-    if "leapfrog" in (cfg.train_integrator, cfg.eval_integrator):
+    if {"leapfrog", "leapfrog_explicit"} & {cfg.train_integrator, cfg.eval_integrator}:
         return _second_order(cfg.model)
     return True
 

@@ -7,7 +7,9 @@ are one-factor-at-a-time around a base point, not a full product:
 - base training: the paper's cell (``train_integrator`` rk4_38, the profile's ``width`` and
   ``steps``), so that node, node_so and hnn_so share their base runs with Figs. 2, 4, 5;
 - on the base training, an evaluation grid (:data:`EVAL_GRID`): fixed-step euler, rk4, rk4_38,
-  leapfrog at several substeps, and ``adaptive`` (tsit5) at several ``eval_rtol``. The runner
+  leapfrog (the generalised, implicit Stormer-Verlet; ``leapfrog_explicit`` in ``paper``),
+  implicit_midpoint (symplectic for any learned H) at several substeps, and ``adaptive``
+  (tsit5) at several ``eval_rtol``. The runner
   caches trained parameters by ``train_hash``, so these runs cost an evaluation each;
 - training variants that change one of ``width``, ``steps`` or ``train_integrator``, each
   evaluated at the base evaluation (rk4_38 x 1) and with its own training integrator.
@@ -44,13 +46,21 @@ ERROR = "rollout_error"
 
 # Fixed-step methods and the substeps evaluated per profile (adaptive: the rtol axis).
 EVAL_GRID: dict[str, dict[str, tuple[int, ...]]] = {
-    "smoke": {"rk4": (2,), "rk4_38": (1,), "leapfrog": (1,)},
-    "quick": {"euler": (1,), "rk4": (1, 4), "rk4_38": (1,), "leapfrog": (1,)},
+    "smoke": {"rk4": (2,), "rk4_38": (1,), "leapfrog": (1,), "implicit_midpoint": (1,)},
+    "quick": {
+        "euler": (1,),
+        "rk4": (1, 4),
+        "rk4_38": (1,),
+        "leapfrog": (1,),
+        "implicit_midpoint": (1,),
+    },
     "paper": {
         "euler": (1, 2, 4, 8),
         "rk4": (1, 2, 4, 8),
         "rk4_38": (1, 2, 4, 8),
         "leapfrog": (1, 2, 4, 8),
+        "leapfrog_explicit": (1, 2, 4, 8),
+        "implicit_midpoint": (1, 2, 4, 8),
     },
 }
 RTOLS = {
@@ -331,16 +341,36 @@ def label(df: pd.DataFrame) -> pd.Series:
 
 
 def tradeoff_table(runs: pd.DataFrame, cost: str = "rollout_seconds_per_traj") -> pd.DataFrame:
-    """The Pareto front per (system, model) of the seed-aggregated runs in (cost, error)."""
+    """The Pareto front per (system, model) of the seed-aggregated runs in (cost, error), plus,
+    for every evaluation method with no configuration on the front, its lowest-error one
+    (``on_front`` = no), so that every method evaluated appears in the table."""
     agg = aggregate_seeds(runs)
     if not len(agg):
         return agg
     fronts = []
     for _, g in agg.groupby(["system", "model"], sort=True):
-        f = pareto_front(g, cost)
+        f = pareto_front(g, cost).assign(on_front="yes")
+        if "eval_integrator" in g and not (g["model"].isin(DISCRETE)).all():
+            e = pd.to_numeric(g[ERROR], errors="coerce")
+            c = pd.to_numeric(g[cost], errors="coerce")
+            rest = g[np.isfinite(e) & np.isfinite(c) & ~g.index.isin(f.index)]
+            missing = set(rest["eval_integrator"]) - set(f.get("eval_integrator", []))
+            for method in sorted(missing):
+                r = rest[rest["eval_integrator"] == method]
+                best = r.loc[[pd.to_numeric(r[ERROR], errors="coerce").idxmin()]]
+                f = pd.concat([f, best.assign(on_front="no")])
         fronts.append(f.assign(config=label(f)))
-    cols = ["system", "model", "config", ERROR, cost, "n_seeds", "diverged"]
-    return pd.concat(fronts)[[c for c in cols if c in agg.columns or c == "config"]]
+    cols = ["system", "model", "config", ERROR, cost, "on_front", "n_seeds", "diverged"]
+    return pd.concat(fronts)[[c for c in cols if c in agg.columns or c in ("config", "on_front")]]
+
+
+def methods_legend(runs: pd.DataFrame) -> str:
+    """One line naming what each evaluation method in ``runs`` is."""
+    from models._integrators import DESCRIPTIONS
+
+    names = sorted(set(runs.get("eval_integrator", pd.Series([], dtype=str)).dropna().astype(str)))
+    parts = [f"`{m}` = {DESCRIPTIONS[m]}" for m in names if m in DESCRIPTIONS]
+    return ("Methods: " + "; ".join(parts) + ".") if parts else ""
 
 
 def _runs(results_dir, profile=None) -> tuple[pd.DataFrame, str | None]:
@@ -384,6 +414,9 @@ def tradeoff_section(results_dir="results", profile: str | None = None) -> str:
         "### Pareto front per model (error vs rollout seconds per trajectory)",
         "",
     ]
+    legend = methods_legend(runs)
+    if legend:
+        lines += [legend, ""]
     if "rollout_seconds_per_traj" in agg:
         lines += _md(tradeoff_table(runs))
     else:

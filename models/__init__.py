@@ -8,7 +8,16 @@ and the integrators (``Integrator``, ``rollout``, ...).
 """
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
-from ._integrators import Integrator, count_evaluations, rollout, rollout_batch
+from ._integrators import (
+    DESCRIPTIONS,
+    METHODS,
+    ORDERS,
+    Integrator,
+    count_evaluations,
+    implicit_tolerance,
+    rollout,
+    rollout_batch,
+)
 from ._models import available, coordinates, make, n_parameters, trivial_models
 from ._scalar import acceleration_from_lagrangian
 from ._scene import Scene
@@ -17,7 +26,11 @@ from ._trivial import AbstractTrivialModel
 
 __all__ = [
     "AbstractContinuousModel",
+    "DESCRIPTIONS",
+    "METHODS",
+    "ORDERS",
     "Integrator",
+    "implicit_tolerance",
     "count_evaluations",
     "rollout",
     "rollout_batch",

@@ -13,8 +13,15 @@
   cheapest program for XLA: no solver state, no step-size control);
 - ``adaptive`` hands the field to ``diffrax.diffeqsolve`` with a PID step-size controller and
   ``SaveAt(ts=ts)``;
-- ``leapfrog`` is kick-drift-kick velocity Verlet on ``z = (q, v)`` using the model's
-  ``acceleration(q, v, args)`` (second-order models only);
+- ``leapfrog`` is the generalised (implicit) Stormer-Verlet method, second order and
+  time-symmetric for every second-order model, symplectic for a Hamiltonian field in
+  canonical coordinates; ``leapfrog_explicit`` is the explicit kick-drift-kick velocity Verlet
+  (first order once the acceleration depends on the velocity);
+- ``implicit_midpoint`` (``y_{n+1} = y_n + h F((y_n + y_{n+1}) / 2)``) is symplectic for
+  every Hamiltonian field, separable or not, in the model's own (canonical) coordinates;
+- the implicit stages are solved by ``optimistix`` (fixed-point iteration or Newton) to a
+  tolerance tied to the state's dtype, and differentiated by the implicit function theorem
+  (``optimistix.ImplicitAdjoint``), so training through them costs no unrolled iterations;
 - discrete models (``step(z, dt, args)``) ignore the method: ``z_{n+1} = step(z_n, h, args)``.
 """
 
@@ -26,8 +33,42 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-METHODS = ("euler", "rk4", "rk4_38", "leapfrog", "adaptive")
+METHODS = (
+    "euler",
+    "rk4",
+    "rk4_38",
+    "leapfrog",
+    "leapfrog_explicit",
+    "implicit_midpoint",
+    "adaptive",
+)
 SOLVERS = ("tsit5", "dopri5", "dopri8")
+IMPLICIT_SOLVERS = ("fixed_point", "newton")
+# Methods that need a second-order model (or a canonical scene) and their convergence orders.
+LEAPFROGS = ("leapfrog", "leapfrog_explicit")
+ORDERS = {
+    "euler": 1,
+    "rk4": 4,
+    "rk4_38": 4,
+    "leapfrog": 2,
+    "leapfrog_explicit": 2,  # 1 once the acceleration depends on the velocity
+    "implicit_midpoint": 2,
+}
+# What each method is, in a phrase (report tables name methods by these).
+DESCRIPTIONS = {
+    "euler": "explicit Euler (order 1)",
+    "rk4": "classical RK4 (order 4)",
+    "rk4_38": "Kutta's 3/8 rule (order 4)",
+    "leapfrog": "generalised Stormer-Verlet: implicit velocity kick, in (q, p) for Hamiltonian "
+    "models (order 2; symplectic for H)",
+    "leapfrog_explicit": "explicit velocity Verlet (order 1 once the acceleration depends on v)",
+    "implicit_midpoint": "implicit midpoint (order 2, symplectic for any H)",
+    "adaptive": "diffrax adaptive Runge-Kutta with PID step control",
+}
+# The implicit stages converge when successive iterates agree to eps ** IMPLICIT_POWER of the
+# dtype (relative and absolute): 1.8e-12 in float64, 6.4e-6 in float32, where the rounding
+# noise of a learned field (an LNN's Hessian solve) keeps iterates from agreeing any closer.
+IMPLICIT_POWER = 0.75
 # Intervals up to this many are unrolled: training chunks are short (4 intervals) and the
 # unrolled program lets XLA fuse across steps; long test rollouts stay a compact loop.
 _UNROLL_MAX = 8
@@ -37,13 +78,16 @@ _UNROLL_MAX = 8
 class Integrator:
     """How ``rollout`` advances a continuous model.
 
-    ``method``: ``euler`` | ``rk4`` | ``rk4_38`` | ``leapfrog`` | ``adaptive``.
+    ``method``: ``euler`` | ``rk4`` | ``rk4_38`` | ``leapfrog`` | ``leapfrog_explicit`` |
+    ``implicit_midpoint`` | ``adaptive``.
     ``substeps``: fixed steps per interval of ``ts`` (fixed-step methods and discrete models).
     ``rtol``, ``atol``, ``solver`` (``tsit5`` | ``dopri5`` | ``dopri8``), ``max_steps``: the
     adaptive solve.
-    ``implicit_iterations``: leapfrog only; fixed-point iterations of the implicit second
-    velocity kick for velocity-dependent accelerations (0: the explicit variant, see
-    :func:`rollout`).
+    ``implicit_solver`` (``fixed_point`` | ``newton``), ``implicit_max_steps``: the nonlinear
+    solve of the implicit stages of ``leapfrog`` and ``implicit_midpoint`` (optimistix, to
+    ``implicit_tolerance`` of the state's dtype; a stage that does not converge keeps its last
+    iterate). ``implicit_iterations = k > 0`` replaces the solve by exactly k fixed-point
+    iterations (a fixed cost, no convergence test, differentiated through the iterations).
     """
 
     method: str = "rk4_38"
@@ -53,12 +97,18 @@ class Integrator:
     solver: str = "tsit5"
     max_steps: int = 100_000
     implicit_iterations: int = 0
+    implicit_solver: str = "fixed_point"
+    implicit_max_steps: int = 32
 
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"integrator method {self.method!r}: allowed {', '.join(METHODS)}")
         if self.solver not in SOLVERS:
             raise ValueError(f"adaptive solver {self.solver!r}: allowed {', '.join(SOLVERS)}")
+        if self.implicit_solver not in IMPLICIT_SOLVERS:
+            raise ValueError(
+                f"implicit solver {self.implicit_solver!r}: allowed {', '.join(IMPLICIT_SOLVERS)}"
+            )
         if isinstance(self.substeps, bool) or not isinstance(self.substeps, int):
             raise ValueError(f"substeps must be an integer >= 1, got {self.substeps!r}")
         if self.substeps < 1:
@@ -74,6 +124,9 @@ class Integrator:
             raise ValueError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
         if self.max_steps < 1:
             raise ValueError(f"max_steps must be an integer >= 1, got {self.max_steps}")
+        k = self.implicit_max_steps
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            raise ValueError(f"implicit_max_steps must be an integer >= 1, got {k!r}")
 
 
 def _kinds():
@@ -99,12 +152,33 @@ def _check(model, integrator) -> str:
     if not isinstance(integrator, Integrator):
         raise ValueError(f"integrator must be a models.Integrator, got {type(integrator).__name__}")
     kind = _kind(model)
-    if kind == "continuous" and integrator.method == "leapfrog" and not model.second_order:
+    if kind == "continuous" and integrator.method in LEAPFROGS and not _leapfrog_ok(model):
         raise ValueError(
-            f"leapfrog needs a second-order model (acceleration(q, v, args)); "
-            f"{type(model).__name__} is first order: use euler, rk4, rk4_38 or adaptive"
+            f"{integrator.method} needs a second-order model (acceleration(q, v, args)) or a "
+            f"canonical scene; {type(model).__name__} is first order: use euler, rk4, rk4_38, "
+            "implicit_midpoint or adaptive"
+        )
+    if kind == "continuous" and integrator.method == "leapfrog_explicit" and not model.second_order:
+        raise ValueError(
+            "leapfrog_explicit needs a second-order model (acceleration(q, v, args)); "
+            f"{type(model).__name__} is first order: use leapfrog or implicit_midpoint"
         )
     return kind
+
+
+def _canonical(model) -> bool:
+    """Whether leapfrog works on the partitioned field (dq/dt, dp/dt) of ``internal_field``:
+    the model integrates in other coordinates than (q, qdot) (a Hamiltonian model's (q, p)),
+    or it is a first-order model of a canonical scene."""
+    from ._base import AbstractContinuousModel
+
+    if not model.second_order:
+        return bool(getattr(model.scene, "canonical", False))
+    return type(model).encode is not AbstractContinuousModel.encode
+
+
+def _leapfrog_ok(model) -> bool:
+    return bool(model.second_order) or bool(getattr(model.scene, "canonical", False))
 
 
 # --- one step of each fixed-step method ------------------------------------------------------
@@ -137,9 +211,10 @@ _STEPS = {"euler": _euler, "rk4": _rk4, "rk4_38": _rk4_38}
 
 
 def _scan_intervals(advance, carry, ts, substeps):
-    """Apply ``advance(carry, t, h)`` ``substeps`` times per interval of ``ts``; stack states.
+    """Apply ``advance(carry, t, h)`` ``substeps`` times per interval of ``ts``.
 
-    ``carry`` is a tuple whose first entry is the state ``z``.
+    ``carry`` is a tuple whose first entry is the state ``z``. Returns the stacked states and
+    the final carry.
     """
 
     def interval(carry, t_pair):
@@ -155,9 +230,99 @@ def _scan_intervals(advance, carry, ts, substeps):
 
     n = ts.shape[0] - 1
     if n == 0:
-        return carry[0][None]
-    _, zs = jax.lax.scan(interval, carry, (ts[:-1], ts[1:]), unroll=n if n <= _UNROLL_MAX else 1)
-    return jnp.concatenate([carry[0][None], zs], axis=0)
+        return carry[0][None], carry
+    last, zs = jax.lax.scan(interval, carry, (ts[:-1], ts[1:]), unroll=n if n <= _UNROLL_MAX else 1)
+    return jnp.concatenate([carry[0][None], zs], axis=0), last
+
+
+# --- implicit stages ---------------------------------------------------------------------
+
+
+def implicit_tolerance(dtype) -> float:
+    """rtol = atol of the implicit stages: eps(dtype) ** ``IMPLICIT_POWER``."""
+    return float(jnp.finfo(dtype).eps) ** IMPLICIT_POWER
+
+
+def _stage(fn, guess, params, integrator):
+    """The fixed point ``K = fn(K, params)`` from ``guess``; returns ``(K, evaluations)``.
+
+    optimistix's fixed-point iteration (or Newton on ``fn(K) - K``) to
+    :func:`implicit_tolerance`, differentiated by the implicit function theorem; or exactly
+    ``implicit_iterations`` plain iterations when that is > 0. Newton's count adds the
+    Jacobian's ``len(K)`` forward-mode products as one evaluation each.
+    """
+    k = integrator.implicit_iterations
+    if k > 0:
+        for _ in range(k):
+            guess = fn(guess, params)
+        return guess, k
+    import optimistix as optx
+
+    tol = implicit_tolerance(guess.dtype)
+    if integrator.implicit_solver == "newton":
+        sol = optx.root_find(
+            lambda y, a: fn(y, a) - y,
+            optx.Newton(rtol=tol, atol=tol, norm=_norm),
+            guess,
+            params,
+            max_steps=integrator.implicit_max_steps,
+            throw=False,
+        )
+        per_step = 1 + guess.shape[-1]
+    else:
+        sol = optx.fixed_point(
+            fn,
+            optx.FixedPointIteration(rtol=tol, atol=tol, norm=_norm),
+            guess,
+            params,
+            max_steps=integrator.implicit_max_steps,
+            throw=False,
+        )
+        per_step = 1
+    return sol.value, per_step * sol.stats["num_steps"]
+
+
+def _norm(x):
+    """optimistix's max norm in the default float dtype, whatever the state's dtype (its
+    solver state is created in the default dtype; a float32 state under x64 must match)."""
+    import optimistix as optx
+
+    return optx.max_norm(x).astype(jnp.result_type(float))
+
+
+def _extrapolate(k, k_prev):
+    """Initial guess of the next stage value: linear extrapolation of the last two, O(h^2)."""
+    return 2 * k - k_prev
+
+
+def _velocity_kick(a, p):
+    """The implicit last kick of leapfrog as a fixed point in a = a(q1, v_half + h/2 a)."""
+    model, q1, v_half, half_h, args = p
+    return model.acceleration(q1, v_half + half_h * a, args).astype(a.dtype)
+
+
+def _field_at(model, t, y, args):
+    return model.internal_field(t, y, args).astype(y.dtype)
+
+
+def _sv_momentum(k, p):
+    """Stage 1 of generalised Stormer-Verlet: K = F(t, (q, p + h/2 K_p))."""
+    model, t, q, mom, half_h, args = p
+    d = q.shape[-1]
+    return _field_at(model, t, jnp.concatenate([q, mom + half_h * k[d:]]), args)
+
+
+def _sv_position(k, p):
+    """Stage 2 of generalised Stormer-Verlet: K = F(t + h, (q + h/2 (f_a + K_q), p_half))."""
+    model, t, q, f_a, p_half, half_h, args = p
+    d = q.shape[-1]
+    return _field_at(model, t, jnp.concatenate([q + half_h * (f_a + k[:d]), p_half]), args)
+
+
+def _midpoint(k, p):
+    """Implicit midpoint stage: K = F(t + h/2, y + h/2 K)."""
+    model, t, y, half_h, args = p
+    return _field_at(model, t, y + half_h * k, args)
 
 
 def _adaptive(model, z0, ts, args, integrator):
@@ -211,19 +376,37 @@ def rollout(
     dtype first). Fixed-step methods take ``integrator.substeps`` steps of
     ``h = (ts[i+1] - ts[i]) / substeps`` per interval.
 
-    ``leapfrog`` (velocity Verlet, kick-drift-kick, ``a = model.acceleration``)::
+    ``leapfrog`` is the generalised Stormer-Verlet method (Hairer, Lubich & Wanner,
+    *Geometric Numerical Integration*, VI.3). For a second-order model integrated in
+    z = (q, v) (``a = model.acceleration``), kick-drift-kick with an implicit last kick::
 
-        v' = v + h/2 a(q, v);  q_new = q + h v';  a_new = a(q_new, v');  v_new = v' + h/2 a_new
+        v' = v + h/2 a(q, v);  q_new = q + h v';  v_new = v' + h/2 a(q_new, v_new)
 
-    and ``a_new`` is reused as the first kick of the next step (one acceleration per step).
-    When ``a`` does not depend on ``v`` this is the exact symplectic, time-reversible,
-    second-order Stormer-Verlet map. When it does (damping; Coriolis terms of a learned
-    mass matrix) this explicit variant evaluates the velocity-dependent part at the half-step
-    velocity: it is then neither symplectic nor time-reversible, and first order in that part.
-    ``implicit_iterations = k > 0`` instead solves the second kick
-    ``v_new = v' + h/2 a(q_new, v_new)`` by k fixed-point iterations started from the explicit
-    value (1 + k accelerations per step): the generalised leapfrog, time-reversible when
-    ``a(q, -v) = a(q, v)`` (no drift of a conserved energy) and second order.
+    solved for ``a_new = a(q_new, v_new)``, which is reused as the first kick of the next
+    step. It is second order and time-symmetric whatever ``a`` depends on (damping, the
+    Coriolis terms of a chain or of a learned mass matrix); when ``a`` does not depend on v the
+    solve converges at once and the map is the classical symplectic Stormer-Verlet. For a model
+    that integrates in canonical y = (q, p) (``encode`` overridden: the Hamiltonian models;
+    or a first-order model of a canonical scene), with ``internal_field = (f, g)``::
+
+        p' = p + h/2 g(q, p');  q_new = q + h/2 (f(q, p') + f(q_new, p'));
+        p_new = p' + h/2 g(q_new, p')
+
+    (two implicit stages): symplectic and second order for every H(q, p), separable or not,
+    e.g. the q-dependent mass of ``hnn_so``.
+
+    ``leapfrog_explicit`` is the explicit velocity Verlet (one acceleration per step)::
+
+        v' = v + h/2 a(q, v);  q_new = q + h v';  v_new = v' + h/2 a(q_new, v')
+
+    symplectic and second order only when ``a`` does not depend on v; with a
+    velocity-dependent ``a`` it is neither symplectic nor time-reversible and FIRST order.
+
+    ``implicit_midpoint``: ``y_new = y + h K`` with ``K = F(t + h/2, y + h/2 K)`` in the model's
+    coordinates: symplectic for every Hamiltonian field, second order, A-stable.
+
+    The implicit stages are solved with optimistix (``integrator.implicit_solver``) to
+    :func:`implicit_tolerance` from an extrapolated guess and differentiated implicitly.
 
     With ``return_stats=True`` returns ``(zs, stats)``; ``stats["nfe"]`` counts vector-field
     evaluations. For ``adaptive`` it is ``1 + (stages - fsal) * num_steps`` from diffrax's step
@@ -240,37 +423,28 @@ def rollout(
     m = integrator.substeps
     dtype = z0.dtype
     stats = None
+    method = integrator.method
+    count = jnp.zeros((), jnp.int32)
 
     if kind == "discrete":
 
         def advance(c, t, h):
             return (model.step(c[0], h, args).astype(dtype),)
 
-        zs = _scan_intervals(advance, (z0,), ts, m)
-    elif integrator.method == "adaptive":
+        zs, _ = _scan_intervals(advance, (z0,), ts, m)
+    elif method == "adaptive":
         if ts.shape[0] < 2:
             zs, stats = z0[None], {"nfe": jnp.asarray(0)}
         else:
             zs, stats = _adaptive(model, z0, ts, args, integrator)
-    elif integrator.method == "leapfrog":
-        d = z0.shape[-1] // 2
-
-        def accel(q, v):
-            return model.acceleration(q, v, args).astype(dtype)
-
-        def advance(c, t, h):
-            z, a = c
-            q, v = z[:d], z[d:]
-            v_half = v + (0.5 * h) * a
-            q_new = q + h * v_half
-            a_new = accel(q_new, v_half)
-            for _ in range(integrator.implicit_iterations):
-                a_new = accel(q_new, v_half + (0.5 * h) * a_new)
-            return (jnp.concatenate([q_new, v_half + (0.5 * h) * a_new]), a_new)
-
-        zs = _scan_intervals(advance, (z0, accel(z0[:d], z0[d:])), ts, m)
+    elif method == "leapfrog_explicit" or (method == "leapfrog" and not _canonical(model)):
+        zs, count = _leapfrog_velocity(model, z0, ts, args, integrator)
+    elif method == "leapfrog":
+        zs, count = _leapfrog_canonical(model, z0, ts, args, integrator)
+    elif method == "implicit_midpoint":
+        zs, count = _implicit_midpoint(model, z0, ts, args, integrator)
     else:
-        step = _STEPS[integrator.method]
+        step = _STEPS[method]
 
         def f(t, y):
             return model.internal_field(t, y, args).astype(dtype)
@@ -278,14 +452,91 @@ def rollout(
         def advance(c, t, h):
             return (step(f, t, c[0], h),)
 
-        ys = _scan_intervals(advance, (model.encode(z0, args).astype(dtype),), ts, m)
+        ys, _ = _scan_intervals(advance, (model.encode(z0, args).astype(dtype),), ts, m)
         zs = _decoded(model, z0, ys, args)
 
     if not return_stats:
         return zs
     if stats is None:
-        stats = {"nfe": count_evaluations(model, ts, integrator)}
+        if kind == "continuous" and method in ("leapfrog", "implicit_midpoint"):
+            stats = {"nfe": count}
+        else:
+            stats = {"nfe": count_evaluations(model, ts, integrator)}
     return zs, stats
+
+
+def _leapfrog_velocity(model, z0, ts, args, integrator):
+    """Leapfrog on z = (q, v) with the model's acceleration; see :func:`rollout`."""
+    d = z0.shape[-1] // 2
+    dtype = z0.dtype
+    explicit = integrator.method == "leapfrog_explicit"
+
+    def accel(q, v):
+        return model.acceleration(q, v, args).astype(dtype)
+
+    def advance(c, t, h):
+        z, a, a_prev, n = c
+        q, v = z[:d], z[d:]
+        v_half = v + (0.5 * h) * a
+        q_new = q + h * v_half
+        if explicit:
+            a_new, cost = accel(q_new, v_half), 1
+        else:
+            params = (model, q_new, v_half, 0.5 * h, args)
+            a_new, cost = _stage(_velocity_kick, _extrapolate(a, a_prev), params, integrator)
+        z_new = jnp.concatenate([q_new, v_half + (0.5 * h) * a_new])
+        return (z_new, a_new, a, n + cost)
+
+    a0 = accel(z0[:d], z0[d:])
+    zs, last = _scan_intervals(
+        advance, (z0, a0, a0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+    )
+    return zs, last[-1]
+
+
+def _leapfrog_canonical(model, z0, ts, args, integrator):
+    """Generalised Stormer-Verlet on the partitioned field F = (f, g) of ``internal_field`` in
+    the model's coordinates y = (q, p); see :func:`rollout`."""
+    d = z0.shape[-1] // 2
+    dtype = z0.dtype
+
+    def advance(c, t, h):
+        y, k, k_prev, n = c
+        q, p = y[:d], y[d:]
+        half = 0.5 * h
+        k1, n1 = _stage(
+            _sv_momentum, _extrapolate(k, k_prev), (model, t, q, p, half, args), integrator
+        )
+        p_half = p + half * k1[d:]
+        params = (model, t + h, q, k1[:d], p_half, half, args)
+        k2, n2 = _stage(_sv_position, k1, params, integrator)
+        y_new = jnp.concatenate([q + half * (k1[:d] + k2[:d]), p_half + half * k2[d:]])
+        return (y_new, k2, k, n + n1 + n2)
+
+    y0 = model.encode(z0, args).astype(dtype)
+    k0 = _field_at(model, ts[0], y0, args)
+    ys, last = _scan_intervals(
+        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+    )
+    return _decoded(model, z0, ys, args), last[-1]
+
+
+def _implicit_midpoint(model, z0, ts, args, integrator):
+    """Implicit midpoint in the model's coordinates y; see :func:`rollout`."""
+    dtype = z0.dtype
+
+    def advance(c, t, h):
+        y, k, k_prev, n = c
+        params = (model, t + 0.5 * h, y, 0.5 * h, args)
+        k_new, cost = _stage(_midpoint, _extrapolate(k, k_prev), params, integrator)
+        return (y + h * k_new, k_new, k, n + cost)
+
+    y0 = model.encode(z0, args).astype(dtype)
+    k0 = _field_at(model, ts[0], y0, args)
+    ys, last = _scan_intervals(
+        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+    )
+    return _decoded(model, z0, ys, args), last[-1]
 
 
 def rollout_batch(
@@ -310,19 +561,31 @@ def rollout_batch(
 def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
     """Vector-field evaluations per trajectory of a fixed-step rollout over ``ts``.
 
-    Per step: euler 1, rk4 and rk4_38 4, leapfrog 1 + implicit_iterations (plus one initial
-    acceleration, reused afterwards), a discrete model 1 ``step``. For ``adaptive`` the count
-    is known only after the solve: use ``rollout(..., return_stats=True)``.
+    Per step: euler 1, rk4 and rk4_38 4, leapfrog_explicit 1 (plus one initial acceleration,
+    reused afterwards), a discrete model 1 ``step``; with ``implicit_iterations = k > 0``
+    leapfrog k (2k in canonical coordinates) and implicit_midpoint k, plus one initial
+    evaluation. For ``adaptive`` and for implicit stages solved to tolerance the count is known
+    only after the solve: use ``rollout(..., return_stats=True)``.
     """
     kind = _check(model, integrator)
     steps = (len(ts) - 1) * integrator.substeps
     if kind == "discrete":
         return steps
-    if integrator.method == "adaptive":
+    method = integrator.method
+    if method == "adaptive" or (
+        method in ("leapfrog", "implicit_midpoint") and integrator.implicit_iterations == 0
+    ):
         raise ValueError(
-            "count_evaluations: adaptive cost is known after the solve; "
-            "use rollout(..., return_stats=True) (allowed here: euler, rk4, rk4_38, leapfrog)"
+            f"count_evaluations: the cost of {method} is known after the solve; use "
+            "rollout(..., return_stats=True) (allowed here: euler, rk4, rk4_38, "
+            "leapfrog_explicit, or implicit_iterations > 0)"
         )
-    if integrator.method == "leapfrog":
-        return steps * (1 + integrator.implicit_iterations) + (1 if steps > 0 else 0)
-    return steps * {"euler": 1, "rk4": 4, "rk4_38": 4}[integrator.method]
+    first = 1 if steps > 0 else 0
+    if method == "leapfrog_explicit":
+        return steps + first
+    if method == "leapfrog":
+        per = 2 if _canonical(model) else 1
+        return steps * per * integrator.implicit_iterations + first
+    if method == "implicit_midpoint":
+        return steps * integrator.implicit_iterations + first
+    return steps * {"euler": 1, "rk4": 4, "rk4_38": 4}[method]

@@ -32,6 +32,7 @@ from jax import Array
 RTOL = 1e-11
 ATOL = 1e-11
 MAX_STEPS = 1_000_000
+SOLVERS = ("dopri8", "dopri5", "tsit5", "kvaerno5")
 
 
 class AbstractSystem(eqx.Module):
@@ -138,8 +139,13 @@ class AbstractSystem(eqx.Module):
     def check_states(self, z: np.ndarray) -> None:
         """Raise ValueError for states outside the system's domain (hook; none by default)."""
 
-    def simulate(self, z0, ts, args=None) -> Array:
-        """Ground-truth trajectory z(ts) from z(ts[0]) = z0, float64, shape (len(ts), 2*dof)."""
+    def simulate(
+        self, z0, ts, args=None, *, rtol=RTOL, atol=ATOL, solver="dopri8", stats=False
+    ) -> Array:
+        """Ground-truth trajectory z(ts) from z(ts[0]) = z0, float64, shape (len(ts), 2*dof).
+
+        ``rtol``, ``atol``, ``solver`` and ``stats``: as in :meth:`simulate_batch`.
+        """
         z0 = _as_float_array(z0, "z0")
         if z0.shape != (2 * self.dof,):
             raise ValueError(
@@ -150,13 +156,33 @@ class AbstractSystem(eqx.Module):
             if args.shape != (self.n_args,):
                 raise ValueError(f"args must have shape ({self.n_args},); got {args.shape}")
             args = args[None]
-        return self.simulate_batch(z0[None], ts, args)[0]
+        out = self.simulate_batch(
+            z0[None], ts, args, rtol=rtol, atol=atol, solver=solver, stats=stats
+        )
+        if stats:
+            return out[0][0], {k: v[0] for k, v in out[1].items()}
+        return out[0]
 
-    def simulate_batch(self, z0s, ts, args=None) -> Array:
+    def simulate_batch(
+        self, z0s, ts, args=None, *, rtol=RTOL, atol=ATOL, solver="dopri8", stats=False
+    ) -> Array:
         """Ground-truth trajectories for a batch of initial states, shape (N, len(ts), 2*dof).
 
         ``args``: None (default parameters), shape (n_args,) (shared) or (N, n_args).
+        ``rtol``, ``atol``: the PID controller's tolerances (default 1e-11, the ground truth);
+        ``solver``: ``dopri8`` (default) | ``dopri5`` | ``tsit5`` | ``kvaerno5`` (implicit, for
+        stiff systems). The solve runs in float64 with ``max_steps`` = 10^6 and does not raise:
+        a solve that fails (out of steps) returns inf from where it stopped. With
+        ``stats=True`` returns ``(zs, stats)``, stats per trajectory: ``num_steps``,
+        ``num_rejected_steps``, ``nfe`` (vector-field evaluations: stages per step less the
+        first-same-as-last one; for ``kvaerno5`` the stages' Newton iterations are not counted,
+        so it is a lower bound) and ``ok`` (the solve succeeded).
         """
+        if solver not in SOLVERS:
+            raise ValueError(f"solver {solver!r}: allowed {', '.join(SOLVERS)}")
+        for name, tol in (("rtol", rtol), ("atol", atol)):
+            if not (isinstance(tol, int | float) and 0 < tol < 1):
+                raise ValueError(f"{name} must be a number in (0, 1), got {tol!r}")
         z0s = _as_float_array(z0s, "z0s")
         if z0s.ndim != 2 or z0s.shape[1] != 2 * self.dof or z0s.shape[0] < 1:
             raise ValueError(
@@ -180,7 +206,19 @@ class AbstractSystem(eqx.Module):
                     f"args must have shape ({self.n_args},) or ({n}, {self.n_args}); "
                     f"got {args.shape}"
                 )
-        return _solve_batch(self, jnp.asarray(z0s), jnp.asarray(ts), jnp.asarray(args))
+        default = (rtol, atol, solver) == (RTOL, ATOL, "dopri8")
+        if default and not stats:
+            return _solve_batch(self, jnp.asarray(z0s), jnp.asarray(ts), jnp.asarray(args))
+        zs, info = _solve_batch_with(
+            self,
+            jnp.asarray(z0s),
+            jnp.asarray(ts),
+            jnp.asarray(args),
+            jnp.asarray(rtol, jnp.float64),
+            jnp.asarray(atol, jnp.float64),
+            solver,
+        )
+        return (zs, info) if stats else zs
 
 
 def _as_float_array(x, what: str) -> np.ndarray:
@@ -213,6 +251,48 @@ def _solve_batch(system: AbstractSystem, z0s, ts, args):
             max_steps=MAX_STEPS,
         )
         return sol.ys
+
+    return jax.vmap(one)(z0s, args)
+
+
+# stages per step less the first-same-as-last one; kvaerno5's Newton iterations not counted
+_STAGES = {"dopri8": 12, "dopri5": 6, "tsit5": 6, "kvaerno5": 6}
+
+
+@eqx.filter_jit
+def _solve_batch_with(system: AbstractSystem, z0s, ts, args, rtol, atol, solver: str):
+    """:func:`_solve_batch` at other tolerances or with another solver, with step counts."""
+    term = diffrax.ODETerm(system.vector_field)
+    method = {
+        "dopri8": diffrax.Dopri8,
+        "dopri5": diffrax.Dopri5,
+        "tsit5": diffrax.Tsit5,
+        "kvaerno5": diffrax.Kvaerno5,
+    }[solver]()
+    controller = diffrax.PIDController(rtol=rtol, atol=atol)
+
+    def one(z0, a):
+        sol = diffrax.diffeqsolve(
+            term,
+            method,
+            t0=ts[0],
+            t1=ts[-1],
+            dt0=None,
+            y0=z0,
+            args=a,
+            saveat=diffrax.SaveAt(ts=ts),
+            stepsize_controller=controller,
+            max_steps=MAX_STEPS,
+            throw=False,
+        )
+        steps = sol.stats["num_steps"]
+        info = {
+            "num_steps": steps,
+            "num_rejected_steps": sol.stats["num_rejected_steps"],
+            "nfe": 1 + _STAGES[solver] * steps,
+            "ok": sol.result == diffrax.RESULTS.successful,
+        }
+        return sol.ys, info
 
     return jax.vmap(one)(z0s, args)
 

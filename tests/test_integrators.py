@@ -92,6 +92,8 @@ def test_standins_are_models(osc):
         ("rk4", 4, [0.2, 0.1, 0.05, 0.025]),
         ("rk4_38", 4, [0.2, 0.1, 0.05, 0.025]),
         ("leapfrog", 2, [0.1, 0.05, 0.025, 0.0125]),
+        ("leapfrog_explicit", 2, [0.1, 0.05, 0.025, 0.0125]),
+        ("implicit_midpoint", 2, [0.1, 0.05, 0.025, 0.0125]),
     ],
 )
 def test_convergence_order(osc, method, order, dts):
@@ -113,7 +115,7 @@ def test_convergence_order(osc, method, order, dts):
 def test_substeps_equal_refined_grid(osc):
     ts = jnp.array([0.0, 0.3, 0.5, 1.1])  # non-uniform
     fine = jnp.sort(jnp.concatenate([ts, 0.5 * (ts[1:] + ts[:-1])]))
-    for method in ("euler", "rk4_38", "leapfrog"):
+    for method in ("euler", "rk4_38", "leapfrog", "implicit_midpoint"):
         coarse = rollout(osc, Z0, ts, None, Integrator(method, substeps=2))
         refined = rollout(osc, Z0, fine, None, Integrator(method))
         np.testing.assert_allclose(coarse, refined[::2], rtol=0, atol=1e-13)
@@ -183,8 +185,9 @@ def _counting(model):
         Integrator("euler", substeps=3),
         Integrator("rk4"),
         Integrator("rk4_38", substeps=2),
-        Integrator("leapfrog", substeps=3),
+        Integrator("leapfrog_explicit", substeps=3),
         Integrator("leapfrog", implicit_iterations=2),
+        Integrator("implicit_midpoint", implicit_iterations=3),
         Integrator("adaptive", rtol=1e-7, atol=1e-9),
     ],
     ids=lambda i: i.method,
@@ -223,8 +226,16 @@ def test_leapfrog_bounded_energy_euler_grows(osc):
     np.testing.assert_allclose(energy(ze[-1]) / e0, (1 + (h * W) ** 2) ** 1000, rtol=1e-9)
 
 
-@pytest.mark.parametrize(("iterations", "order"), [(0, 1), (3, 2)])
-def test_leapfrog_order_velocity_dependent(iterations, order):
+@pytest.mark.parametrize(
+    ("method", "iterations", "order"),
+    [
+        ("leapfrog_explicit", 0, 1),
+        ("leapfrog", 0, 2),
+        ("leapfrog", 3, 2),
+        ("implicit_midpoint", 0, 2),
+    ],
+)
+def test_leapfrog_order_velocity_dependent(method, iterations, order):
     # explicit variant: first order once a depends on v; implicit kick: second order again
     damped = Oscillator(w=W, gamma=0.5)
     t1 = 2.0
@@ -238,11 +249,11 @@ def test_leapfrog_order_velocity_dependent(iterations, order):
             Z0,
             jnp.array([0.0, t1]),
             None,
-            Integrator("leapfrog", substeps=n, implicit_iterations=iterations),
+            Integrator(method, substeps=n, implicit_iterations=iterations),
         )
         errors.append(float(jnp.max(jnp.abs(zs[-1] - ref))))
     slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
-    assert abs(slope - order) < 0.3, (iterations, slope, errors)
+    assert abs(slope - order) < 0.3, (method, iterations, slope, errors)
 
 
 def test_damped_leapfrog_decays(osc):
@@ -250,8 +261,8 @@ def test_damped_leapfrog_decays(osc):
     ts = jnp.linspace(0.0, 10.0, 201)
     zs = np.asarray(rollout(damped, Z0, ts, None, Integrator("leapfrog", substeps=4)))
     ref = np.asarray(rollout(damped, Z0, ts, None, Integrator("adaptive", rtol=1e-10, atol=1e-12)))
-    # first order in the velocity-dependent part (documented): close, but not exact
-    assert np.max(np.abs(zs - ref)) < 2e-2
+    # second order with the implicit kick: close to the adaptive reference at h = 0.0125
+    assert np.max(np.abs(zs - ref)) < 1e-4
     e = 0.5 * (zs[:, 1] ** 2 + W**2 * zs[:, 0] ** 2)
     assert e[-1] < 0.1 * e[0]
 
@@ -298,6 +309,9 @@ def test_float32_state_stays_float32(osc):
         {"atol": 0.0},
         {"max_steps": 0},
         {"implicit_iterations": -1},
+        {"method": "gauss2"},
+        {"implicit_solver": "broyden"},
+        {"implicit_max_steps": 0},
     ],
 )
 def test_bad_integrator(kwargs):
@@ -308,8 +322,11 @@ def test_bad_integrator(kwargs):
 def test_bad_uses(osc):
     with pytest.raises(ValueError, match="second-order"):
         rollout(FirstOrder(), Z0, jnp.linspace(0, 1, 3), None, Integrator("leapfrog"))
-    with pytest.raises(ValueError, match="return_stats"):
-        count_evaluations(osc, jnp.linspace(0, 1, 3), Integrator("adaptive"))
+    with pytest.raises(ValueError, match="second-order"):
+        rollout(FirstOrder(), Z0, jnp.linspace(0, 1, 3), None, Integrator("leapfrog_explicit"))
+    for method in ("adaptive", "leapfrog", "implicit_midpoint"):
+        with pytest.raises(ValueError, match="return_stats"):
+            count_evaluations(osc, jnp.linspace(0, 1, 3), Integrator(method))
     with pytest.raises(ValueError, match="Integrator"):
         rollout(osc, Z0, jnp.linspace(0, 1, 3), None, "rk4")
     with pytest.raises(ValueError, match="AbstractContinuousModel"):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import jax
 import numpy as np
 import pytest
 
@@ -91,6 +92,11 @@ def test_stiff_rk4_diverges_adaptive_stays_accurate():
     assert tsit.outcome == "ok" and tsit.value < 1e-4
     nfe = _by_variant(rows, "nfe")
     assert nfe["kappa=100000/tsit5"].value > nfe["kappa=100000/rk4"].value
+    # one cost unit for every solver: counted calls of the field (rk4: 4 per step + 0)
+    assert {"rk4", "implicit_midpoint", "tsit5"} <= {r.method for r in nfe.values()}
+    assert nfe["kappa=100000/rk4"].value == 4 * round(TINY.horizon / S.DT)
+    # the A-stable implicit midpoint stays bounded at the step where RK4 blows up
+    assert err["kappa=100000/implicit_midpoint"].outcome == "ok"
 
 
 def test_relativistic_roundtrip_float64_exact_to_rounding():
@@ -108,6 +114,25 @@ def test_relativistic_roundtrip_float64_exact_to_rounding():
     assert p64.value < 1e-14
     # float32: 1 - qdot^2 ~ 2e-3 loses ~3 of float32's 7 digits
     assert 1e-8 < p32.value < 1e-2
+
+
+def test_float32_velocity_stagnates_near_light_speed():
+    # at v = 0.999 the float32 RK4 velocity never changes (issue 10) while float64's does:
+    # the case must flag it, so that its float32 "drift" is not read as a measurement
+    import systems
+    from bench._stability._truth import _relativistic_rk4
+
+    sysm = systems.make("relativistic_particle")
+    ts = np.arange(21) * S.DT
+    rows = _relativistic_rk4(sysm, np.array([0.0, 0.999]), ts, np.array([1.0]), 0.999, "g")
+    _check_recorded(rows)
+    change = {r.dtype: r.value for r in rows if r.metric == "velocity_change"}
+    assert change["float64"] > 0 and change["float32"] == 0.0
+    (flag,) = [r for r in rows if r.metric == "stagnant"]
+    assert flag.value == 1.0 and "stagnant" in flag.message
+    rows = _relativistic_rk4(sysm, np.array([0.0, 0.9]), ts, np.array([1.0]), 0.9, "g")
+    (flag,) = [r for r in rows if r.metric == "stagnant"]
+    assert flag.value == 0.0
 
 
 def test_regularised_lnn_solve_finite_where_lu_is_not():
@@ -146,3 +171,20 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     assert set(df["case"]) == set(S.CASES)
     text = S.stability_section(tmp_path)
     assert "## Numerical stability" in text and "stiffness" in text
+
+
+def test_simulate_takes_tolerance_and_solver():
+    # the stability study's ground truth and solver variants go through systems' simulate
+    import systems
+
+    sysm = systems.make("chain_pendulum", k=2)
+    z0 = np.asarray(sysm.sample_initial(jax.random.PRNGKey(0), 2))
+    ts = np.linspace(0.0, 0.5, 4)
+    truth = np.asarray(sysm.simulate_batch(z0, ts))
+    ys, info = sysm.simulate_batch(z0, ts, rtol=1e-8, atol=1e-10, solver="tsit5", stats=True)
+    assert np.max(np.abs(np.asarray(ys) - truth)) < 1e-5
+    assert np.all(np.asarray(info["ok"])) and np.all(np.asarray(info["nfe"]) > 6)
+    loose = sysm.simulate(z0[0], ts, rtol=1e-3, atol=1e-5, solver="tsit5")
+    assert 0 < np.max(np.abs(np.asarray(loose) - truth[0])) < 1e-1
+    with pytest.raises(ValueError, match="allowed"):
+        sysm.simulate(z0[0], ts, solver="euler")

@@ -118,7 +118,7 @@ def test_declaration_registered_and_drops_invalid(quick_runs):
             assert c.eval_rtol == T.DEFAULT_RTOL
         assert len(T._train_changes(c, "quick")) <= 1
     methods = {c.eval_integrator for c in quick_runs}
-    assert {"euler", "rk4", "leapfrog", "adaptive"} <= methods
+    assert {"euler", "rk4", "leapfrog", "implicit_midpoint", "adaptive"} <= methods
     rtols = {c.eval_rtol for c in quick_runs if c.eval_integrator == "adaptive"}
     assert min(rtols) <= 1e-9 and max(rtols) >= 1e-3
     assert {c.width for c in quick_runs} == {64, 128, 256}
@@ -182,6 +182,24 @@ def test_section_and_figure_from_a_store(tmp_path):
     assert f"{len(rows)} runs" in text
     paths = T.tradeoff_figure(tmp_path)
     assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
+def test_table_lists_every_evaluated_method(tmp_path):
+    # implicit_midpoint is dominated (slower and worse than rk4x2): it is still listed,
+    # marked off the front, and the legend says what each method is
+    rows = _synthetic_store(tmp_path)
+    runs = pd.DataFrame(rows)
+    cont = runs[runs.model == "node_so"]
+    runs.loc[cont.index, "rollout_error"] = 0.01
+    mid = cont[cont.eval_integrator == "implicit_midpoint"].index
+    runs.loc[mid, ["rollout_error", "rollout_seconds_per_traj"]] = [0.5, 1.0]
+    table = T.tradeoff_table(runs)
+    got = table[table.model == "node_so"]
+    assert set(got.config.str.split("x").str[0]) >= {"implicit_midpoint", "rk4"}
+    row = got[got.config.str.startswith("implicit_midpoint")].iloc[0]
+    assert row.on_front == "no"
+    assert (got.on_front == "yes").any()
+    assert "implicit midpoint" in T.methods_legend(runs)
 
 
 def test_label_forms():

@@ -1,0 +1,249 @@
+"""Running the stability cases, and their figure and REPORT.md section."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import one_line
+from ._core import (
+    COLUMNS,
+    METHOD_NOTES,
+    OUTCOMES,
+    SIZES,
+    Row,
+    StabilitySize,
+    _size,
+    fmt_outcome,
+    guard,
+)
+from ._learned import case_high_energy_models, case_long_horizon, case_model_precision
+from ._lnn import case_lnn_singular
+from ._truth import (
+    case_dt_sweep,
+    case_high_energy_truth,
+    case_precision,
+    case_relativistic,
+    case_stiffness,
+)
+
+CASES: dict[str, Callable[[StabilitySize], list[Row]]] = {
+    "dt_sweep": case_dt_sweep,
+    "precision": case_precision,
+    "high_energy_truth": case_high_energy_truth,
+    "stiffness": case_stiffness,
+    "relativistic": case_relativistic,
+    "lnn_singular": case_lnn_singular,
+    "long_horizon": case_long_horizon,
+    "high_energy_models": case_high_energy_models,
+    "model_precision": case_model_precision,
+}
+
+
+def run_cases(profile="quick", cases=None, progress: bool = True) -> list[Row]:
+    """Every case (or the named ones) at ``profile``'s size, each inside :func:`guard`."""
+    size = _size(profile)
+    names = list(CASES) if cases is None else list(cases)
+    unknown = [c for c in names if c not in CASES]
+    if unknown:
+        raise ValueError(f"unknown stability case(s) {unknown}; allowed: {', '.join(CASES)}")
+    rows = []
+    for name in names:
+        start = time.perf_counter()
+        got = guard(name, lambda name=name: CASES[name](size))
+        if progress:
+            outcomes = {o: sum(r.outcome == o for r in got) for o in OUTCOMES}
+            print(
+                f"[stability] {name}: {len(got)} rows {outcomes} "
+                f"in {time.perf_counter() - start:.1f}s",
+                flush=True,
+            )
+        rows += got
+    return rows
+
+
+def to_frame(rows):
+    import pandas as pd
+
+    return pd.DataFrame([asdict(r) for r in rows], columns=list(COLUMNS))
+
+
+def run_stability(results_dir="results", profile: str = "quick", cases=None):
+    """Run the cases; write ``stability.csv``/``.parquet`` and the figure; return the frame."""
+    results_dir = Path(results_dir)
+    results_dir.mkdir(parents=True, exist_ok=True)
+    df = to_frame(run_cases(profile, cases))
+    df.insert(0, "profile", profile)
+    df.to_csv(results_dir / "stability.csv", index=False)
+    try:
+        df.to_parquet(results_dir / "stability.parquet", index=False)
+    except Exception as err:  # noqa: BLE001 - parquet is a convenience copy of the CSV
+        print(f"[stability] parquet not written: {one_line(err)}")
+    stability_figure(results_dir)
+    return df
+
+
+# --------------------------------------------------------------------------- figure and report
+def _load(results_dir):
+    import pandas as pd
+
+    path = Path(results_dir) / "stability.csv"
+    return pd.read_csv(path) if path.exists() else None
+
+
+def stability_figure(results_dir="results") -> list[Path]:
+    """Four panels: error vs dt, stiff solvers' evaluations, tolerance vs drift, long horizon."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    df = _load(results_dir)
+    if df is None or df.empty:
+        return []
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+
+    ax = axes[0, 0]
+    d = df[(df.case == "dt_sweep") & (df.metric == "final_error")]
+    for method, g in d.groupby("method"):
+        ok = g[g.outcome == "ok"]
+        ax.loglog(ok.param, ok.value.clip(lower=1e-16), "o-", label=method)
+        div = g[g.outcome == "diverged"]
+        ax.plot(div.param, np.ones(len(div)), "x", color=ax.lines[-1].get_color(), ms=10)
+    ax.set(
+        xlabel="dt",
+        ylabel="relative error at final time",
+        title="chain pendulum: fixed step vs dt (x = diverged)",
+    )
+    ax.legend()
+
+    ax = axes[0, 1]
+    d = df[(df.case == "stiffness") & (df.metric == "nfe")]
+    for method, g in d.groupby("method"):
+        ax.loglog(g.param, g.value, "o-", label=method)
+    e = df[(df.case == "stiffness") & (df.metric == "final_error") & (df.outcome == "diverged")]
+    for _, r in e.iterrows():
+        same = d[(d.method == r.method) & (d.param == r.param)]
+        y = float(same.value.iloc[0]) if len(same) else 1.0
+        ax.annotate(
+            f"{r.method} diverged @ step {int(r.step)}", (r.param, y), fontsize=7, rotation=20
+        )
+    ax.set(
+        xlabel="spring constant",
+        ylabel="vector-field evaluations",
+        title="stiff spring pendulum, dt = 0.03",
+    )
+    ax.legend()
+
+    ax = axes[1, 0]
+    d = df[(df.case == "high_energy_truth") & (df.metric == "energy_drift") & (df.outcome == "ok")]
+    for label, g in d.groupby(d.variant.str.split("/").str[0]):
+        ax.loglog(g.param, g.value.clip(lower=1e-17), "o-", label=label)
+    ax.set(xlabel="rtol", ylabel="max energy drift", title="ground truth at high energy")
+    ax.legend()
+
+    ax = axes[1, 1]
+    d = df[(df.case == "long_horizon") & (df.metric == "divergence_rate")]
+    if not d.empty:
+        ax.barh(d.variant, d.value.fillna(1.0))
+        ax.set(
+            xlabel="fraction of trajectories diverged",
+            title=f"long horizon ({int(d.param.iloc[0])} steps)",
+        )
+    else:
+        ax.set_axis_off()
+    fig.tight_layout()
+    out = Path(results_dir) / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "stability.png", out / "stability.pdf"]
+    for p in paths:
+        fig.savefig(p, dpi=120)
+    plt.close(fig)
+    return paths
+
+
+def stability_section(results_dir="results") -> str:
+    """REPORT.md's stability section: one table per case from ``stability.csv``."""
+    df = _load(results_dir)
+    if df is None or df.empty:
+        return (
+            "## Numerical stability\n\nNo `stability.csv` yet: run `python -m bench._stability`.\n"
+        )
+    lines = [
+        "## Numerical stability",
+        "",
+        f"Profile `{df.profile.iloc[0]}`. Every variant ends in `ok` (a value), `diverged` "
+        "(with the first non-finite or runaway step) or `failed` (with the error). "
+        "Errors: relative state error ||zhat - z|| / (||zhat|| + ||z||); energy drift "
+        "|H - H0| / (|H| + |H0|) with the true H.",
+        "",
+    ]
+    for case, g in df.groupby("case", sort=False):
+        doc = " ".join((CASES[case].__doc__ or "").split()) if case in CASES else ""
+        lines += [
+            f"### {case}",
+            "",
+            doc,
+            "",
+            "| variant | metric | result |",
+            "| --- | --- | --- |",
+        ]
+        for r in g.itertuples():
+            lines.append(f"| {r.variant} | {r.metric} | {fmt_outcome(r)} |")
+        lines += _summary(case, g)
+        lines.append("")
+    methods = sorted(set(df.method.dropna().astype(str)) & set(METHOD_NOTES))
+    lines += ["Methods: " + "; ".join(f"`{m}` = {METHOD_NOTES[m]}" for m in methods) + ".", ""]
+    counts = df.outcome.value_counts().to_dict()
+    lines.append(f"Outcomes: {counts}.")
+    return "\n".join(lines) + "\n"
+
+
+def _summary(case: str, g) -> list[str]:
+    """A sentence or two under a case's table: orders and costs, or what stiffness costs."""
+    ok = g[g.outcome == "ok"]
+    out = []
+    if case == "dt_sweep":
+        order = ok[ok.metric == "order"].set_index("method").value
+        cost = ok[ok.metric == "nfe_per_step"].set_index("method").value
+        rk4 = cost.get("rk4", float("nan"))
+        parts = []
+        for m in cost.index:
+            o = order.get(m, float("nan"))
+            fitted = f"{o:.2f}" if np.isfinite(o) else "no fit (errors outside the window)"
+            parts.append(f"{m} {fitted} ({cost[m] / rk4:.2g}x rk4's evaluations per step)")
+        if parts:
+            out += ["", "Fitted orders: " + "; ".join(parts) + "."]
+    if case == "stiffness":
+        nfe = ok[ok.metric == "nfe"]
+        for kappa, k in nfe.groupby("param"):
+            err = g[(g.metric == "final_error") & (g.param == kappa)].set_index("method")
+            parts = []
+            for r in k.itertuples():
+                e = err.loc[r.method] if r.method in err.index else None
+                parts.append(
+                    f"{r.method} {int(r.value)} evaluations"
+                    + (f" ({fmt_outcome(e)})" if e is not None else "")
+                )
+            out += ["", f"kappa = {kappa:g}: " + "; ".join(parts) + "."]
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench._stability", description=__doc__)
+    parser.add_argument("--profile", default="quick", choices=list(SIZES))
+    parser.add_argument("--results", default="results")
+    parser.add_argument("--case", action="append", choices=list(CASES))
+    ns = parser.parse_args(argv)
+    df = run_stability(ns.results, ns.profile, ns.case)
+    print(df.to_string(max_rows=400))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
