@@ -5,13 +5,12 @@ never run (e.g. leapfrog on a first-order model) or a results folder that cannot
 prints one line ``error: ...`` on stderr and exits with code 2, without a traceback. A write
 that fails during a sweep (full disk) stops it with one line and exit code 1 (run it again to
 resume); ``report`` and ``figures`` on a folder without runs say so and exit with code 1. A
-damaged row file is named in a one-line ``warning: ...`` and set aside (see bench._store).
+damaged row file is named in a one-line ``warning: ...`` and set aside (see bench.core._store).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import math
 import signal
@@ -19,7 +18,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from ._experiments import (
+from .core._experiments import (
     PROFILES,
     RunConfig,
     check_choice,
@@ -96,7 +95,7 @@ def _parser() -> argparse.ArgumentParser:
 
     sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
     sub.add_parser("report", help="write results/REPORT.md")
-    pf = sub.add_parser("perf", help="performance measurements (bench._perf)")
+    pf = sub.add_parser("perf", help="performance measurements (bench.studies.perf)")
     pf.add_argument(
         "--ensemble",
         action="store_true",
@@ -202,22 +201,11 @@ def _print_row(row: dict) -> None:
         print(f"{k:>18}: {v}")
 
 
-def _optional_entry(module: str, entry: str, what: str):
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as e:
-        if e.name != module:
-            raise
-        print(f"{what}: {module} is not there yet; nothing to do")
-        return None
-    return getattr(mod, entry)
-
-
 def _cmd_list(args) -> int:
     import models
     import systems
 
-    from . import _experiments as E
+    from .core import _experiments as E
 
     print("systems:     " + ", ".join(systems.available()))
     print("models:      " + ", ".join(models.available()))
@@ -227,7 +215,7 @@ def _cmd_list(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from . import _runner
+    from .core import _runner
 
     cfg = _config_from_args(args)
     _usable_results(args)
@@ -235,7 +223,7 @@ def _cmd_run(args) -> int:
         [cfg], args.results, experiment="adhoc", profile=args.profile, progress=False
     )
     if not row:  # already stored: show the stored row
-        from . import _store
+        from .core import _store
 
         row = [r for r in _store.read_rows(args.results) if r["config_hash"] == cfg.config_hash]
         print("(already stored; delete its row file to rerun)")
@@ -244,7 +232,7 @@ def _cmd_run(args) -> int:
 
 
 def _sweep_names(args) -> list[str]:
-    from . import _experiments as E
+    from .core import _experiments as E
 
     if getattr(args, "all", False) or args.verb == "bench":
         return E.available()
@@ -255,7 +243,7 @@ def _sweep_names(args) -> list[str]:
 
 
 def _do_sweep(args, names) -> int:
-    from . import _runner
+    from .core import _runner
 
     _check_sweep_args(args)
     if not names:
@@ -282,7 +270,7 @@ def _do_sweep(args, names) -> int:
 
 def _usable_results(args) -> Path:
     """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
-    from . import _store
+    from .core import _store
 
     return _store.check_results_dir(args.results, create=True)
 
@@ -293,7 +281,7 @@ class NoRuns(Exception):
 
 def _stored_runs(args, verb: str, action: str) -> None:
     """Raise NoRuns when the results hold no runs; warn about row files that did not read."""
-    from . import _store
+    from .core import _store
 
     results = _store.check_results_dir(args.results, create=False)
     runs = _store.load_runs(results)  # damaged row files are named and set aside here
@@ -314,32 +302,31 @@ def _stored_runs(args, verb: str, action: str) -> None:
 
 
 def _cmd_figures(args) -> int:
-    fn = _optional_entry("bench._figures", "make_figures", "figures")
-    if fn is not None:
-        _stored_runs(args, "figures", "draw")
-        fn(Path(args.results))
+    from ._report import make_figures
+
+    _stored_runs(args, "figures", "draw")
+    make_figures(Path(args.results))
     return 0
 
 
 def _cmd_report(args) -> int:
-    fn = _optional_entry("bench._report", "write_report", "report")
-    if fn is not None:
-        _stored_runs(args, "report", "report")
-        fn(Path(args.results))
+    from ._report import write_report
+
+    _stored_runs(args, "report", "report")
+    write_report(Path(args.results))
     return 0
 
 
 def _cmd_perf(args) -> int:
-    fn = _optional_entry("bench._perf", "main", "perf")
-    if fn is not None:
-        # its own defaults; `python -m bench.perf --help` lists its options
-        out = fn(["--ensemble"] if getattr(args, "ensemble", False) else [])
-        return int(out or 0)
-    return 0
+    from .studies import perf
+
+    # its own defaults; `python -m bench.perf --help` lists its options
+    out = perf.main(["--ensemble"] if getattr(args, "ensemble", False) else [])
+    return int(out or 0)
 
 
 def _cmd_stability(args) -> int:
-    from . import _stability
+    from .studies import stability as _stability
 
     check_choice("profile", args.profile, list(PROFILES))
     if args.case:
@@ -360,8 +347,8 @@ def _cmd_bench(args) -> int:
         _check_sweep_args(args)
         print("no experiments yet")
         return 0
-    from . import _store
-    from ._provenance import provenance
+    from .core import _store
+    from .core._provenance import provenance
 
     before = len(_store.done_hashes(Path(args.results)))
     start = time.time()
@@ -395,7 +382,7 @@ def _cmd_bench(args) -> int:
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
-    from ._store import DamagedRowWarning
+    from .core._store import DamagedRowWarning
 
     if issubclass(category, DamagedRowWarning):
         print(f"warning: {message}", file=sys.stderr if file is None else file)
@@ -408,7 +395,7 @@ _show_warning = warnings.showwarning
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (2 for bad input, 1 for no runs or a failed write)."""
-    from ._errors import StorageError
+    from .core._errors import StorageError
 
     if hasattr(signal, "SIGXFSZ"):  # a file-size limit: an OSError (EFBIG), not a core dump
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)

@@ -2,10 +2,11 @@
 experiment, and the reference's defects that the suite does not copy.
 
 Entry point: :func:`write_report(results_dir, compare=None) -> Path`. Everything in it is
-computed from the stored runs (``bench._store``); figures are linked, not regenerated
-(``make_figures`` does that). ``compare`` lists other results folders (e.g. the paper-profile
-runs) whose verdicts are tabulated beside this folder's; by default, every subfolder of
-``results_dir`` that holds stored runs (``results/paper``, ``results/paper_gpu``).
+computed from the stored runs (``bench.core``'s query layer); figures are linked, not
+regenerated (:func:`make_figures` draws every registered study's figure). ``compare`` lists
+other results folders (e.g. the paper-profile runs) whose verdicts are tabulated beside this
+folder's; by default, every subfolder of ``results_dir`` that holds stored runs
+(``results/paper``, ``results/paper_gpu``).
 """
 
 from __future__ import annotations
@@ -21,19 +22,28 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._claims import (
-    CLAIM_EXPERIMENTS,
+from .core._env import cpu_count
+from .core._experiments import RunConfig, expand, get
+from .core._provenance import compare_results, provenance_markdown
+from .core._query import (
+    _cell_key,
+    _parse_pairs,
+    experiment_rows,
+    load_tables,
+    option,
+    params_of,
+    select,
+    variant,
+)
+from .core._studies import studies
+from .studies.paper import (
     MODEL_LABELS,
     TRIVIAL_FACTOR,
     TRIVIAL_MODELS,
     discrimination,
     evaluate_claims,
-    option,
-    select,
+    velocity_scores,
 )
-from ._env import cpu_count
-from ._figures import FIGURES, _cell_key, experiment_rows, figure_stem, load_tables, variant
-from ._provenance import compare_results, provenance_markdown
 
 __all__ = ["write_report"]
 
@@ -49,7 +59,7 @@ The reference implementation has defects that this suite does not copy (REFERENC
 - the t = 0 point (zero error) entered the geometric mean; here it is excluded;
 - ground truth was dopri5 at rtol 1e-7 in float32; here float64 with tight tolerances.
 
-`reference_compatible=True` in `bench._metrics` reproduces the reference's metric conventions
+`reference_compatible=True` in `bench.core._metrics` reproduces the reference's metric conventions
 (t = 0 included, no angle wrapping) for comparison with the paper's printed numbers only; the
 verdicts and tables here never use it.
 """
@@ -268,8 +278,6 @@ def _table_variant(rows: pd.DataFrame) -> pd.Series:
     base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh (extra, not judged)"})
 
     def opts(v) -> str:
-        from ._claims import _parse_pairs
-
         o = {a: b for a, b in _parse_pairs(v).items() if a != "weight"}
         return "[" + ", ".join(f"{a}={b}" for a, b in sorted(o.items())) + "]" if o else ""
 
@@ -278,8 +286,6 @@ def _table_variant(rows: pd.DataFrame) -> pd.Series:
 
 
 def _initial(rows: pd.DataFrame) -> pd.Series:
-    from ._claims import params_of
-
     return params_of(rows).map(lambda p: p.get("initial", "-"))
 
 
@@ -345,8 +351,6 @@ def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
         and (df["coordinates"] == "momentum").any()
         and (df["coordinates"] == "velocity").any()
     ):
-        from ._claims import velocity_scores
-
         scores, _ = velocity_scores(df)
     out = []
     cols = _group_columns(df)
@@ -373,8 +377,6 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
     if profile is None:
         return []
     try:
-        from ._experiments import RunConfig, expand
-
         want = {}
         for c in expand(name, profile):
             want.setdefault(_cell_key(c), c)
@@ -441,24 +443,20 @@ def _perf_section(results_dir: Path) -> list[str]:
 
 
 def _extra_sections(results_dir: Path) -> list[str]:
-    """Trade-off, stability and performance sections (issue 6), where their data exist."""
+    """The sections of the studies with their own tables (trade-off, stability), where their
+    data exist, and the performance section."""
     out: list[str] = []
-    try:
-        from ._tradeoff import tradeoff_section
-
-        out += [tradeoff_section(results_dir), ""]
-        if (results_dir / "figures" / "tradeoff.png").exists():
-            out += ["![tradeoff](figures/tradeoff.png) ([PDF](figures/tradeoff.pdf))", ""]
-    except Exception as e:  # noqa: BLE001 - a broken section must not lose the report
-        out += ["## Speed/accuracy trade-off", "", f"(section failed: {_md_escape(str(e))})", ""]
-    try:
-        from ._stability import stability_section
-
-        out += [stability_section(results_dir), ""]
-        if (results_dir / "figures" / "stability.png").exists():
-            out += ["![stability](figures/stability.png) ([PDF](figures/stability.pdf))", ""]
-    except Exception as e:  # noqa: BLE001
-        out += ["## Numerical stability", "", f"(section failed: {_md_escape(str(e))})", ""]
+    for study in studies():
+        if study.section is None:
+            continue
+        try:
+            out += [study.section(results_dir), ""]
+            stem = study.stem or study.name
+            if (results_dir / "figures" / f"{stem}.png").exists():
+                out += [f"![{stem}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
+        except Exception as e:  # noqa: BLE001 - a broken section must not lose the report
+            title = study.section_title or study.name
+            out += [f"## {title}", "", f"(section failed: {_md_escape(str(e))})", ""]
     out += _perf_section(results_dir)
     return out
 
@@ -476,6 +474,51 @@ def _provenance_section(results_dir: Path, runs: pd.DataFrame, others) -> list[s
 def _load_other(d: Path):
     runs, curves, profile = load_tables(d)
     return d, profile, evaluate_claims(runs, curves, profile)
+
+
+def figure_studies() -> list:
+    """The registered studies that draw one figure from their experiment's rows, in order."""
+    return [s for s in studies() if s.figure is not None]
+
+
+def figure_stem(name: str) -> str:
+    """The file stem of study ``name``'s figure (for the report's links)."""
+    return next(s.stem for s in figure_studies() if s.name == name)
+
+
+def make_figures(results_dir: Path) -> list[Path]:
+    """Every study's figure from the stored runs; returns the files written.
+
+    Runs that did not finish (``status != "ok"``) or have a non-finite error are left out of
+    the plots (the report lists them). An experiment without runs draws nothing; one broken
+    figure does not stop the others.
+    """
+    import matplotlib.pyplot as plt
+
+    results_dir = Path(results_dir)
+    runs, curves, profile = load_tables(results_dir)
+    outdir = results_dir / "figures"
+    written: list[Path] = []
+    for study in figure_studies():
+        rows = experiment_rows(runs, study.name, profile)
+        if len(rows):
+            rows = select(rows)
+        if not len(rows):
+            continue
+        try:
+            written += study.figure(rows, curves, outdir)
+        except Exception as e:  # noqa: BLE001 - one broken figure must not stop the others
+            plt.close("all")
+            print(f"figure {study.name} failed: {type(e).__name__}: {e}")
+    for study in studies():
+        if study.results_figure is None:
+            continue
+        try:
+            written += list(study.results_figure(results_dir) or [])
+        except Exception as e:  # noqa: BLE001
+            plt.close("all")
+            print(f"figure {study.results_figure.__name__} failed: {type(e).__name__}: {e}")
+    return written
 
 
 def write_report(results_dir: Path, compare=None) -> Path:
@@ -514,7 +557,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "",
         "## Claims",
         "",
-        "Verdict rules are in the docstrings of `bench/_claims.py`: effects are per-seed log "
+        "Verdict rules are in the docstrings of `bench/studies/paper/`: effects are per-seed log "
         "ratios of geometric-mean rollout errors (paired by seed) with a 95% percentile "
         "bootstrap over seeds. A claim is *reproduced* when every part holds, *partly "
         "reproduced* when some parts hold and others are contradicted, *not reproduced* when "
@@ -533,15 +576,14 @@ def write_report(results_dir: Path, compare=None) -> Path:
         *other_errors,
     ]
     figdir = results_dir / "figures"
-    for name in FIGURES:
+    for study in figure_studies():
+        name = study.name
         rows = experiment_rows(runs, name, profile)
-        claim = next((c for c, e in CLAIM_EXPERIMENTS.items() if name in e), None)
+        claim = study.claim
         lines += [f"## {name}" + (f" (claim {claim})" if claim else ""), ""]
         try:
-            from ._experiments import get
-
             lines += [get(name).title, ""]
-        except (ImportError, ValueError):
+        except ValueError:
             pass
         if not len(rows):
             lines += ["No runs of this experiment are stored: figure and table skipped.", ""]
@@ -572,7 +614,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
             )
         if len(bad):
             lines.append("")
-        stem = figure_stem(name)
+        stem = study.stem
         if (figdir / f"{stem}.png").exists():
             lines += [f"![{name}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
         elif not len(ok):

@@ -1,6 +1,6 @@
-"""``python -m bench.perf``: the performance benchmark (see :mod:`bench._perf`)."""
+"""``python -m bench.perf``: the performance benchmark (see :mod:`bench.studies.perf`)."""
 
-from ._perf import main
+from .studies.perf import main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -1,7 +1,7 @@
 """``python -m bench.provenance show | compare DIR_A DIR_B | backfill DIR K=V ...``: the
-provenance of results (see :mod:`bench._provenance`)."""
+provenance of results (see :mod:`bench.core._provenance`)."""
 
-from ._provenance import main
+from .core._provenance import main
 
 if __name__ == "__main__":
     raise SystemExit(main())

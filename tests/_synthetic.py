@@ -20,10 +20,10 @@ from collections.abc import Iterable
 import numpy as np
 import pandas as pd
 
-from bench import _store
-from bench._claims import _parse_pairs
-from bench._experiments import expand
-from bench._paper import PAPER_EXPERIMENTS
+from bench.core import _store
+from bench.core._experiments import expand
+from bench.core._query import _parse_pairs
+from bench.studies.paper import PAPER_EXPERIMENTS
 
 TRIVIAL_ERROR = 0.6
 

@@ -1,4 +1,4 @@
-from bench._env import configure_compilation_cache, configure_threads
+from bench.core._env import configure_compilation_cache, configure_threads
 
 configure_threads()
 configure_compilation_cache()

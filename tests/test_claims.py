@@ -1,4 +1,4 @@
-"""Verdict rules of bench._claims on synthetic run tables (no training).
+"""Verdict rules of bench.studies.paper on synthetic run tables (no training).
 
 The tables come from ``tests/_synthetic.py``: every paper experiment expanded in the smoke
 profile, the store's own row format, errors built so that each claim passes ("reproduce"), fails
@@ -14,7 +14,9 @@ import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
 
-from bench import _claims as C
+from bench.core._query import option
+from bench.studies import paper as C
+from bench.studies.paper import _rules as R
 
 
 def _by_key(runs, curves):
@@ -59,7 +61,7 @@ def test_every_claim_has_its_verdicts(reproducing):
 @pytest.mark.parametrize("key", KEYS)
 def test_reproducing_table_gives_reproduced(reproducing, key):
     v = reproducing[key]
-    assert v.verdict == C.REPRODUCED, v.detail
+    assert v.verdict == R.REPRODUCED, v.detail
     assert v.n_seeds == 3 and v.n_failed == 0
     assert v.discriminating is True
     assert np.isfinite(v.effect)
@@ -69,20 +71,20 @@ def test_reproducing_table_gives_reproduced(reproducing, key):
 def test_contradicting_table_gives_not_reproduced(contradicting, key):
     v = contradicting[key]
     # Claim 4's contradicting table keeps the chain edge and breaks the spring one: "partly".
-    expected = C.PARTLY if key.startswith("4") else C.NOT_REPRODUCED
+    expected = R.PARTLY if key.startswith("4") else R.NOT_REPRODUCED
     assert v.verdict == expected, v.detail
     assert "contradicts" in v.detail
 
 
 def test_single_seed_gives_inconclusive():
     for v in C.evaluate_claims(*synthetic_tables("smoke", seeds=(0,), noise=0.05)):
-        assert v.verdict == C.INCONCLUSIVE, (v.key, v.detail)
+        assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
         assert v.n_seeds <= 1
 
 
 def test_trivial_predictor_that_wins_makes_every_claim_inconclusive():
     for v in C.evaluate_claims(*synthetic_tables("smoke", scenario="trivial_wins")):
-        assert v.verdict == C.INCONCLUSIVE, (v.key, v.detail)
+        assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
         assert v.discriminating is False
         assert "NOT DISCRIMINATING" in v.detail
 
@@ -92,7 +94,7 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
     runs = runs[~runs["model"].isin(C.TRIVIAL_MODELS)]
     for v in C.evaluate_claims(runs, curves):
         assert v.discriminating is None, v.key
-        assert v.verdict == C.REPRODUCED, (v.key, v.detail)
+        assert v.verdict == R.REPRODUCED, (v.key, v.detail)
         assert "discriminating unknown" in v.detail
 
 
@@ -102,13 +104,13 @@ def test_huge_noise_gives_inconclusive(claim):
     # bootstrap interval spans both 0 and the smallest ratio that matters.
     runs, curves = synthetic_tables("smoke", seeds=range(8), noise=4.0, rng=1)
     v = C.CLAIMS[claim](runs, curves)
-    assert v.verdict == C.INCONCLUSIVE, v.detail
+    assert v.verdict == R.INCONCLUSIVE, v.detail
 
 
 def test_missing_runs_are_inconclusive():
     empty = pd.DataFrame(columns=["system", "model", "seed", "rollout_error", "status"])
     for v in C.evaluate_claims(empty, None):
-        assert v.verdict == C.INCONCLUSIVE
+        assert v.verdict == R.INCONCLUSIVE
 
 
 def _fail(runs, mask):
@@ -123,13 +125,13 @@ def test_failed_runs_count_as_error_one_not_dropped(tables):
     # Every NODE+SO run of claim 3 diverges: it scores error 1, so second-order structure
     # "closes" a negative fraction of the gap; dropping them would leave the claim undecided.
     bad = _fail(runs, runs["model"] == "node_so")
-    v = C.claim_3(bad, curves)
-    assert v.verdict == C.NOT_REPRODUCED, v.detail
+    v = C.CLAIMS[3](bad, curves)
+    assert v.verdict == R.NOT_REPRODUCED, v.detail
     assert v.n_failed == 6 and "failed/diverged" in v.detail
     # The (q, p) HNN of claim 7 fails: the naive HNN is now better than it.
     bad = _fail(runs, (runs["model"] == "hnn") & (runs["coordinates"] == "momentum"))
-    v = C.claim_7(bad, curves)
-    assert v.verdict in (C.NOT_REPRODUCED, C.PARTLY), v.detail
+    v = C.CLAIMS[7](bad, curves)
+    assert v.verdict in (R.NOT_REPRODUCED, R.PARTLY), v.detail
     assert v.n_failed == 3
 
 
@@ -150,8 +152,8 @@ def test_claim_1_growth_is_judged_per_family(tables):
     hnn = runs.loc[runs["model"].isin(["hnn", "hnn_so"]), "config_hash"]
     flat = curves.copy()
     flat.loc[flat["config_hash"].isin(hnn), "energy_violation"] = 0.01  # HNNs level off
-    v = C.claim_1(runs, flat)
-    assert v.verdict == C.PARTLY, v.detail
+    v = C.CLAIMS[1](runs, flat)
+    assert v.verdict == R.PARTLY, v.detail
     assert "(b) HNNs" in v.detail and "(b) NODEs" in v.detail
     assert "x better at equal error" in v.detail
 
@@ -173,8 +175,8 @@ def test_claim_5_is_judged_against_the_mixture_hnn(tables):
     # the paper's damped HNN becomes 10x better than NODE+SO; the Rayleigh extra is unchanged
     mix = damped & (runs["model"] == "mixture_hnn")
     runs.loc[mix, "rollout_error"] = runs.loc[mix, "rollout_error"] / 10
-    v = C.claim_5(runs, curves)
-    assert v.verdict == C.PARTLY, v.detail
+    v = C.CLAIMS[5](runs, curves)
+    assert v.verdict == R.PARTLY, v.detail
     assert "(b) log(NODE+SO / mixture HNN)" in v.detail and "Rayleigh" in v.detail
 
 
@@ -183,8 +185,8 @@ def test_claim_5_cost_can_come_out_against_node_so(tables):
     runs = runs.copy()
     so = (runs["friction"] > 0) & (runs["model"] == "node_so")
     runs.loc[so, "train_seconds"] = 500.0
-    v = C.claim_5(runs, curves)
-    assert v.verdict == C.PARTLY, v.detail
+    v = C.CLAIMS[5](runs, curves)
+    assert v.verdict == R.PARTLY, v.detail
     assert "(c) cost" in v.detail
 
 
@@ -193,8 +195,8 @@ def test_claim_6_needs_half_the_pairs_resolved_under_both(tables):
     runs = runs.copy()
     l1 = runs["loss"] == "l1"
     runs.loc[l1, "rollout_error"] = 0.05  # L1 ties every model: no pair resolved under L1
-    v = C.claim_6(runs, curves)
-    assert v.verdict == C.INCONCLUSIVE, v.detail
+    v = C.CLAIMS[6](runs, curves)
+    assert v.verdict == R.INCONCLUSIVE, v.detail
     assert "0/6 pairs resolved under both" in v.detail
 
 
@@ -204,15 +206,15 @@ def test_claim_7_scores_every_model_on_velocities(reproducing, tables):
     assert reproducing["7"].effect == pytest.approx(math.log(0.3 / 0.03), abs=0.2)
     runs, curves = tables
     old = runs.drop(columns=["rollout_error_velocity"])
-    assert "scored in (q, p)" in C.claim_7(old, curves).detail
+    assert "scored in (q, p)" in C.CLAIMS[7](old, curves).detail
 
 
 def test_claim_2_ignores_velocity_space_regularisation(tables):
     runs, curves = tables
     runs = runs.copy()
     runs["coordinates"] = "velocity"
-    v = C.claim_2(runs, curves)
-    assert v.verdict == C.INCONCLUSIVE and v.detail == "no runs"
+    v = C.CLAIMS[2](runs, curves)
+    assert v.verdict == R.INCONCLUSIVE and v.detail == "no runs"
 
 
 @pytest.mark.parametrize(
@@ -221,19 +223,19 @@ def test_claim_2_ignores_velocity_space_regularisation(tables):
 )
 def test_option_parses_every_serialisation(value):
     df = pd.DataFrame({"model_options": [value]})
-    assert C.option(df, "weight").iloc[0] == pytest.approx(0.1)
+    assert option(df, "weight").iloc[0] == pytest.approx(0.1)
 
 
 def test_positive_null_and_threshold_rules():
-    assert C._positive("x", [0.5, 0.6, 0.7]).status == "holds"
-    assert C._positive("x", [-0.5, -0.6, -0.7]).status == "contradicts"
-    assert C._positive("x", [-3.0, 0.1, 3.0]).status == "undecided"
-    assert C._null("x", [0.01, -0.02, 0.0]).status == "holds"
-    assert C._null("x", [1.0, 1.1, 1.2]).status == "contradicts"
-    assert C._null("x", [-3.0, 0.1, 3.0]).status == "undecided"
-    assert C._threshold("x", [0.9, 1.0, 1.1], 0.5).status == "holds"
-    assert C._threshold("x", [0.0, 0.1, -0.1], 0.5).status == "contradicts"
-    assert C._threshold("x", [0.0, 1.0, 0.5], 0.5).status == "undecided"
+    assert R._positive("x", [0.5, 0.6, 0.7]).status == "holds"
+    assert R._positive("x", [-0.5, -0.6, -0.7]).status == "contradicts"
+    assert R._positive("x", [-3.0, 0.1, 3.0]).status == "undecided"
+    assert R._null("x", [0.01, -0.02, 0.0]).status == "holds"
+    assert R._null("x", [1.0, 1.1, 1.2]).status == "contradicts"
+    assert R._null("x", [-3.0, 0.1, 3.0]).status == "undecided"
+    assert R._threshold("x", [0.9, 1.0, 1.1], 0.5).status == "holds"
+    assert R._threshold("x", [0.0, 0.1, -0.1], 0.5).status == "contradicts"
+    assert R._threshold("x", [0.0, 1.0, 0.5], 0.5).status == "undecided"
 
 
 def test_success_needs_the_factor_on_every_seed():
@@ -247,6 +249,6 @@ def test_success_needs_the_factor_on_every_seed():
 def test_failed_trivial_predictors_leave_discrimination_unknown(tables):
     runs, curves = tables
     bad = _fail(runs, runs["model"].isin(C.TRIVIAL_MODELS))
-    v = C.claim_3(bad, curves)
-    assert v.discriminating is None and v.verdict == C.REPRODUCED, v.detail
+    v = C.CLAIMS[3](bad, curves)
+    assert v.discriminating is None and v.verdict == R.REPRODUCED, v.detail
     assert v.n_failed == 0  # trivial failures are not model failures

@@ -95,7 +95,7 @@ def test_env_pins_cores_and_compilation_cache():
     # XLA sizes its thread pools from the affinity mask: configure_threads(1) must shrink it,
     # and `import bench` must turn on the persistent compilation cache before jax starts.
     code = (
-        "import os, bench, bench._env as e; n = e.configure_threads(1); "
+        "import os, bench, bench.core._env as e; n = e.configure_threads(1); "
         "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'])"
     )
     out = subprocess.run(

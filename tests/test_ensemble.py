@@ -1,4 +1,4 @@
-"""Ensembles (bench._ensemble): members equal single runs, divergence stays with its member,
+"""Ensembles (bench.core._ensemble): members equal single runs, divergence stays with its member,
 grouping, and the rows of an ensemble sweep."""
 
 import dataclasses
@@ -7,12 +7,12 @@ import jax
 import numpy as np
 import pytest
 
-import bench._runner as runner
+import bench.core._runner as runner
 import models
-from bench import _store
-from bench._ensemble import enabled, group_key, plan_groups, train_ensemble
-from bench._experiments import RunConfig
-from bench._train import TrainConfig, train
+from bench.core import _store
+from bench.core._ensemble import enabled, group_key, plan_groups, train_ensemble
+from bench.core._experiments import RunConfig
+from bench.core._train import TrainConfig, train
 
 STEPS = 20
 

@@ -26,11 +26,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import bench._runner as runner
-from bench import _store
+import bench.core._runner as runner
 from bench._cli import main
-from bench._errors import StorageError, storage_error
-from bench._experiments import Experiment, RunConfig, check_runnable, expand, register
+from bench.core import _store
+from bench.core._errors import StorageError, storage_error
+from bench.core._experiments import Experiment, RunConfig, check_runnable, expand, register
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -145,7 +145,6 @@ def test_damaged_row_files_named_set_aside_and_rerun(stored, monkeypatch):
 
 
 def test_report_and_figures_say_how_many_rows_they_could_not_read(stored, monkeypatch, capsys):
-    import bench._figures
     import bench._report
 
     res, configs = stored
@@ -154,7 +153,7 @@ def test_report_and_figures_say_how_many_rows_they_could_not_read(stored, monkey
         bench._report, "write_report", lambda d: seen.append(len(_store.load_runs(d)))
     )
     monkeypatch.setattr(
-        bench._figures, "make_figures", lambda d: seen.append(len(_store.load_runs(d)))
+        bench._report, "make_figures", lambda d: seen.append(len(_store.load_runs(d)))
     )
     (res / _store.ROWS / f"{configs[0].config_hash}.json").write_text("{")
     (res / _store.ROWS / f"{configs[1].config_hash}.json").write_text("")
@@ -277,7 +276,7 @@ def test_integrator_rule_follows_model_capabilities(tmp_path):
 
 @pytest.mark.slow  # ~100 distinct (model, scene, integrator) traces: about a minute
 def test_every_experiment_run_is_runnable():
-    from bench._experiments import available
+    from bench.core._experiments import available
 
     for profile in ("smoke", "quick", "paper"):
         for name in available():

@@ -8,8 +8,8 @@ import re
 import pytest
 from _synthetic import synthetic_tables
 
-from bench._figures import FIGURES, figure_stem, make_figures
-from bench._report import write_report
+from bench._report import figure_stem, make_figures, write_report
+from bench.studies.paper import FIGURES
 
 
 def _store(d, runs, curves):

@@ -54,7 +54,7 @@ def test_no_upward_imports(package):
 def test_checker_sees_an_upward_import(tmp_path):
     # The static check must be able to fail: a module that imports bench is caught.
     p = tmp_path / "m.py"
-    p.write_text("import numpy\ndef f():\n    from bench._env import cpu_count\n")
+    p.write_text("import numpy\ndef f():\n    from bench.core._env import cpu_count\n")
     assert _imports(p, "models") == [("bench", 3)]
 
 

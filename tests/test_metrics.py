@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bench import _metrics as M
-from bench._store import aggregate
+from bench.core import _metrics as M
+from bench.core._store import aggregate
 
 
 def test_relative_error_known_value():

@@ -3,8 +3,8 @@ cells share config hashes, and the budgets stay within what each profile promise
 
 import pytest
 
-from bench import _experiments as E
-from bench import _paper as P
+from bench.core import _experiments as E
+from bench.studies import paper as P
 
 NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 

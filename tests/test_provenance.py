@@ -17,8 +17,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench import _provenance as P
-from bench import _store
+from bench.core import _provenance as P
+from bench.core import _store
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -142,7 +142,7 @@ def test_backfill_records_what_is_known_and_the_rest_as_unknown(tmp_path):
 
 def test_every_row_of_execute_run_carries_provenance(tmp_path):
     from bench import execute_run
-    from bench._experiments import RunConfig
+    from bench.core._experiments import RunConfig
 
     # A configuration that fails at once: the row is written all the same, with provenance.
     config = RunConfig(system="chain_pendulum", k=1, model="no_such_model", steps=1)
@@ -153,7 +153,7 @@ def test_every_row_of_execute_run_carries_provenance(tmp_path):
 
 def test_bench_meta_json_records_provenance(tmp_path, monkeypatch):
     import bench._cli as cli
-    import bench._runner as runner
+    import bench.core._runner as runner
 
     monkeypatch.setattr(runner, "run_experiments", lambda *a, **k: {})
     monkeypatch.setattr(cli, "_cmd_figures", lambda args: 0)

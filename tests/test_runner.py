@@ -12,10 +12,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import bench._runner as runner
+import bench.core._runner as runner
 import models
-from bench import _store
-from bench._experiments import Experiment, RunConfig, expand, register
+from bench.core import _store
+from bench.core._experiments import Experiment, RunConfig, expand, register
 
 ROOT = Path(__file__).resolve().parents[1]
 

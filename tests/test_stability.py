@@ -12,7 +12,7 @@ import jax
 import numpy as np
 import pytest
 
-from bench import _stability as S
+from bench.studies import stability as S
 
 TINY = replace(
     S.SIZES["smoke"],
@@ -120,7 +120,7 @@ def test_float32_velocity_stagnates_near_light_speed():
     # at v = 0.999 the float32 RK4 velocity never changes (issue 10) while float64's does:
     # the case must flag it, so that its float32 "drift" is not read as a measurement
     import systems
-    from bench._stability._truth import _relativistic_rk4
+    from bench.studies.stability._truth import _relativistic_rk4
 
     sysm = systems.make("relativistic_particle")
     ts = np.arange(21) * S.DT

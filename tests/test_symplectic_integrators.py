@@ -22,7 +22,7 @@ jax.config.update("jax_enable_x64", True)
 
 import models  # noqa: E402
 import systems  # noqa: E402
-from bench._stability import true_model  # noqa: E402
+from bench.studies.stability import true_model  # noqa: E402
 from models._integrators import Integrator, rollout  # noqa: E402
 
 

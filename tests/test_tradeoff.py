@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench import _experiments as E
-from bench import _tradeoff as T
+from bench.core import _experiments as E
+from bench.studies import tradeoff as T
 
 
 def _brute_front(df, cost, error):

@@ -11,10 +11,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import bench._train as train_mod
+import bench.core._train as train_mod
 import models
 import systems
-from bench._train import TrainConfig, train
+from bench.core._train import TrainConfig, train
 from models import Integrator, rollout, rollout_batch
 from models._base import AbstractContinuousModel
 
@@ -257,7 +257,7 @@ def test_learned_h_leapfrog_drift(hnn64, method):
 
 @pytest.mark.slow
 def test_perf_smoke(tmp_path):
-    from bench._perf import main
+    from bench.studies.perf import main
 
     out = tmp_path / "perf.csv"
     assert main(["--models", "resnet", "--quick", "--block", "2", "--out", str(out)]) == 0

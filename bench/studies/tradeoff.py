@@ -33,7 +33,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._experiments import PROFILES, Experiment, RunConfig, expand, register
+from ..core._experiments import PROFILES, Experiment, RunConfig, expand, field_names
+from ..core._query import experiment_rows, pick_profile
+from ..core._store import load_runs
+from ..core._studies import Study, register_study
 
 MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
 # The LNN's evaluations were two thirds of the quick trade-off's cost (821 of 1248 s of run time
@@ -177,7 +180,6 @@ TRADEOFF = Experiment(
     include=include,
     claim=None,
 )
-register(TRADEOFF, replace=True)
 
 
 # ----------------------------------------------------------------------------- the budget
@@ -193,14 +195,14 @@ def estimate(
     """Run count and wall-time estimate of the trade-off at ``profile``.
 
     Training cost per unique ``train_hash`` with the per-step costs of
-    :data:`bench._paper.MS_PER_STEP` (scaled by batch / 200 and, for spring, by the dof the
-    same way :func:`bench._paper.estimate_seconds` does), plus ``eval_seconds`` (compile and
+    :data:`bench.studies.paper.MS_PER_STEP` (scaled by batch / 200 and, for spring, by the dof the
+    same way :func:`bench.studies.paper.estimate_seconds` does), plus ``eval_seconds`` (compile and
     rollouts) per run; runs shared with the paper experiments are left out when
     ``exclude_shared`` (``make bench`` runs them anyway).
     """
     import math
 
-    from . import _paper
+    from .paper import _budget as _paper
 
     ms = dict(_paper.MS_PER_STEP)
     ms.update(ms_per_step or {})
@@ -262,8 +264,6 @@ def aggregate_seeds(df: pd.DataFrame, error: str = ERROR, costs: Sequence[str] =
     ``error``: geometric mean over seeds (errors are compared on a log scale); costs: mean;
     ``n_seeds``: how many ok runs entered; ``diverged``: how many runs did not end ``ok``.
     """
-    from ._experiments import field_names
-
     keys = [f for f in field_names() if f != "seed" and f in df.columns]
     if not len(df):
         return df.copy()
@@ -378,10 +378,7 @@ def methods_legend(runs: pd.DataFrame) -> str:
 
 
 def _runs(results_dir, profile=None) -> tuple[pd.DataFrame, str | None]:
-    from . import _store
-    from ._figures import experiment_rows, pick_profile
-
-    runs = _store.load_runs(results_dir)
+    runs = load_runs(results_dir)
     if not len(runs):
         return runs, None
     if profile is None:
@@ -479,3 +476,15 @@ def tradeoff_figure(results_dir="results", profile: str | None = None) -> list[P
         fig.savefig(p, dpi=120)
     plt.close(fig)
     return paths
+
+
+STUDY = register_study(
+    Study(
+        name="tradeoff",
+        experiments=(TRADEOFF,),
+        stem="tradeoff",
+        results_figure=tradeoff_figure,
+        section=tradeoff_section,
+        section_title="Speed/accuracy trade-off",
+    )
+)

@@ -14,9 +14,9 @@ Nothing hangs: every solve has a bounded number of steps.
 
 The cases stand on the shared machinery: ground truth from ``systems``' simulate (with its
 ``rtol``/``atol``/``solver`` options), rollouts from ``models.rollout`` (the true field wrapped
-as a model), errors, energy drift and valid-prediction time from ``bench._metrics``.
+as a model), errors, energy drift and valid-prediction time from ``bench.core._metrics``.
 
-Run all cases with ``python -m bench._stability [--profile smoke|quick|paper] [--results DIR]``
+Run all cases with ``python -m bench stability [--profile smoke|quick|paper] [--results DIR]``
 or :func:`run_stability`; it writes ``stability.csv`` / ``stability.parquet`` and the figure
 ``figures/stability.png`` / ``.pdf``; :func:`stability_section` renders REPORT.md's section.
 
@@ -25,6 +25,7 @@ dynamics), ``_lnn`` (the Euler-Lagrange solve), ``_learned`` (small learned mode
 (running, figure, report section).
 """
 
+from ...core._studies import Study, register_study
 from ._core import (
     BOUND_FACTOR,
     COLUMNS,
@@ -105,3 +106,13 @@ __all__ = [
     "true_model",
     "valid_time",
 ]
+
+STUDY = register_study(
+    Study(
+        name="stability",
+        stem="stability",
+        results_figure=stability_figure,
+        section=stability_section,
+        section_title="Numerical stability",
+    )
+)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._errors import one_line
+from ...core._errors import one_line
 from ._core import (
     COLUMNS,
     METHOD_NOTES,
@@ -172,7 +172,7 @@ def stability_section(results_dir="results") -> str:
     df = _load(results_dir)
     if df is None or df.empty:
         return (
-            "## Numerical stability\n\nNo `stability.csv` yet: run `python -m bench._stability`.\n"
+            "## Numerical stability\n\nNo `stability.csv` yet: run `python -m bench stability`.\n"
         )
     lines = [
         "## Numerical stability",
@@ -235,7 +235,7 @@ def _summary(case: str, g) -> list[str]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench._stability", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m bench.studies.stability", description=__doc__)
     parser.add_argument("--profile", default="quick", choices=list(SIZES))
     parser.add_argument("--results", default="results")
     parser.add_argument("--case", action="append", choices=list(CASES))

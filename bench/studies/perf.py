@@ -12,7 +12,7 @@ step; and the FLOP floor = FLOPs / measured float32 matmul peak. The load averag
 beside each measurement because the machine may be shared.
 
 ``python -m bench perf --ensemble`` (:func:`ensemble_table`) writes ``results/perf_ensemble.csv``:
-training runs per minute, M runs as one ensemble (``bench._ensemble``) vs the same M runs one
+training runs per minute, M runs as one ensemble (``bench.core._ensemble``) vs the same M runs one
 at a time, for M in 1, 5, 10, 20 and the paper models.
 
 ``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
@@ -33,7 +33,7 @@ import sys
 import time
 from pathlib import Path
 
-from ._env import configure_threads, cpu_count
+from ..core._env import configure_threads, cpu_count
 
 THREADS = configure_threads()
 
@@ -44,7 +44,7 @@ import numpy as np  # noqa: E402
 
 from models._integrators import Integrator, rollout_batch  # noqa: E402
 
-from ._train import TrainConfig, _Batches, _block, _compiled_block, loss_fn, optimizer  # noqa: E402
+from ..core._train import TrainConfig, _Batches, _block, _compiled_block, loss_fn, optimizer  # noqa: E402
 
 # ms per step and per 40 x 100-step rollout of the PyTorch reference (mean of its two runs).
 REFERENCE = {
@@ -131,7 +131,7 @@ def step_flops(model, data, config) -> float:
 
 
 def _prepare(model, dataset, config):
-    from ._train import prepare
+    from ..core._train import prepare
 
     data = prepare(model, dataset, config)
     params, static = eqx.partition(model, eqx.is_inexact_array)
@@ -258,12 +258,12 @@ def bench_model(name, dataset, config, repeats, peak_gflops):
 
 def flag_sweep(models_arg, repeats):
     """ms per step of the first model under XLA thread settings, each in a fresh process."""
-    # bench/_env.py adds its flags unless XLA_FLAGS names intra_op_parallelism_threads; XLA
+    # bench/core/_env.py adds its flags unless XLA_FLAGS names intra_op_parallelism_threads; XLA
     # ignores that bare token (not an XLA flag) when a "--" flag is present, so it serves as a
     # "leave alone" marker.
     keep = "intra_op_parallelism_threads=unset"
     variants = {
-        "bench_env": None,  # whatever bench/_env.py sets (XLA's default threading)
+        "bench_env": None,  # whatever bench/core/_env.py sets (XLA's default threading)
         "eigen_single": f"--xla_cpu_multi_thread_eigen=false {keep}",
         "one_core": "AFFINITY1",
     }
@@ -331,8 +331,8 @@ def ensemble_table(names=ENSEMBLE_MODELS, sizes=ENSEMBLE_SIZES, steps=None, say=
     """
     import models
 
-    from ._ensemble import train_ensemble
-    from ._train import train
+    from ..core._ensemble import train_ensemble
+    from ..core._train import train
 
     accel = jax.default_backend() != "cpu"
     width, batch, n = (WIDTH, BATCH, N_TRAIN) if accel else (128, 100, 200)

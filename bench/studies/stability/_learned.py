@@ -11,7 +11,7 @@ import numpy as np
 
 import systems
 
-from .._errors import one_line
+from ...core._errors import one_line
 from ._core import (
     METHOD_NOTES,
     Row,
@@ -43,7 +43,7 @@ def _train_small(name: str, size: StabilitySize):
     model = models.make(name, scene, key=jax.random.PRNGKey(0), width=size.width)
     info = "untrained"
     if size.train_steps > 0:
-        import bench
+        from ...core._train import TrainConfig, train
 
         ds = systems.make_dataset(
             systems.DatasetConfig(
@@ -54,7 +54,7 @@ def _train_small(name: str, size: StabilitySize):
                 n_test=2,
             )
         )
-        res = bench.train(model, ds, bench.TrainConfig(steps=size.train_steps, batch=64))
+        res = train(model, ds, TrainConfig(steps=size.train_steps, batch=64))
         model = res.model
         info = f"trained {res.steps_done} steps ({res.status})"
     _MODEL_CACHE[key] = (model, info)
@@ -75,7 +75,7 @@ def case_long_horizon(size) -> list[Row]:
     Per model and integrator: divergence rate (fraction of trajectories non-finite or beyond
     the bound), median final energy drift (true H) of the surviving ones, for Hamiltonian
     models the median final drift of their own learned H (what a symplectic method keeps
-    bounded), median valid prediction time (``bench._metrics.valid_prediction_time``: seconds
+    bounded), median valid prediction time (``bench.core._metrics.valid_prediction_time``: seconds
     until the wrapped relative error first exceeds its threshold) and the rollout seconds.
     """
     import models

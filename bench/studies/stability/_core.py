@@ -4,7 +4,7 @@ Everything here stands on the suite's shared machinery: ground truth is ``system
 ``simulate_batch`` (Dopri8 at 1e-11 by default; other tolerances and solvers through its
 ``rtol``/``atol``/``solver`` keywords), fixed-step and adaptive rollouts of the true field go
 through ``models.rollout`` (the true system wrapped as a model by :func:`true_model`), and
-errors, energy drift and the valid-prediction time are those of ``bench._metrics`` (angle
+errors, energy drift and the valid-prediction time are those of ``bench.core._metrics`` (angle
 differences wrapped, one threshold for valid prediction).
 """
 
@@ -24,8 +24,8 @@ import numpy as np
 
 from models import _integrators
 
-from .. import _metrics as M
-from .._errors import one_line
+from ...core import _metrics as M
+from ...core._errors import one_line
 
 OUTCOMES = ("ok", "diverged", "failed")
 DT = 0.03
@@ -101,12 +101,12 @@ def first_bad_step(zs, bound: float | None = None, mask=None) -> int | None:
 
 # --------------------------------------------------------------------------- metrics
 def relative_error(system, zhat, z):
-    """``bench._metrics.relative_error`` with the system's angles wrapped, shape (..., T)."""
+    """``bench.core._metrics.relative_error`` with the system's angles wrapped, shape (..., T)."""
     return M.relative_error(zhat, z, tuple(system.angular))
 
 
 def energy_drift(system, zs, args=None):
-    """|H(z_t) - H(z_0)| / (|H(z_t)| + |H(z_0)|) with the true H (``bench._metrics``'
+    """|H(z_t) - H(z_0)| / (|H(z_t)| + |H(z_0)|) with the true H (``bench.core._metrics``'
     energies and violation curve), for zs (..., T, D); 1 from the first non-finite state."""
     zs = np.asarray(zs, dtype=np.float64)
     h = M.energies(system, zs, args)
@@ -114,7 +114,7 @@ def energy_drift(system, zs, args=None):
 
 
 def valid_time(system, zhat, z, ts):
-    """``bench._metrics.valid_prediction_time`` (its threshold) of the wrapped relative error."""
+    """``bench.core._metrics.valid_prediction_time`` of the wrapped relative error."""
     return M.valid_prediction_time(relative_error(system, zhat, z), ts)
 
 

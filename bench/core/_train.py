@@ -134,7 +134,7 @@ def make_step(static, config: TrainConfig, data, lr=None):
     ``carry = (params, opt_state, dead, good)``. ``active`` False makes the step a no-op
     (padding of the tail). After a non-finite loss or gradient, ``dead`` is set and no later
     step changes the parameters; ``good`` holds the last parameters whose loss was finite.
-    ``lr`` (default ``config.lr``) may be a traced scalar: ensembles (``bench._ensemble``) vmap
+    ``lr`` (default ``config.lr``) may be a traced scalar: ensembles (``bench.core._ensemble``) vmap
     this one step over members with their own data, parameters and learning rate.
     """
     z_all, args_all, ts = data

@@ -15,7 +15,7 @@ Caches under ``$DECON_CACHE`` (default ``./.cache/decon-bench``, git-ignored):
 
 ``sweep(configs, results_dir, ...)`` skips the config hashes already stored, executes the rest
 with the local executor (in-process, or a spawn pool whose workers each get cores / workers
-XLA threads) or Ray, and writes each row as it arrives (see ``bench._store``).
+XLA threads) or Ray, and writes each row as it arrives (see ``bench.core._store``).
 """
 
 from __future__ import annotations
@@ -295,7 +295,7 @@ def _evaluate(config, system, data, model, cache_root, rolled=None):
     """Metrics, curves and full curves of a trained model on the test set.
 
     ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
-    elsewhere (an ensemble's, vmapped over members: ``bench._ensemble``).
+    elsewhere (an ensemble's, vmapped over members: ``bench.core._ensemble``).
     """
     import equinox as eqx
     import jax
@@ -413,7 +413,7 @@ def execute_run(
     curves, stored in the row file and expanded into curves.parquet).
 
     ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
-    ``bench._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
+    ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
     ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
     """
     cache_root = Path(cache_root or default_cache_root())
@@ -448,13 +448,13 @@ def execute_run(
         row["curves"] = curves
         np.savez_compressed(art / "curves.npz", **full)
     except Exception as e:  # one run never stops the sweep...
-        if storage_error(e):  # ...but a full disk does (bench._errors), recording nothing
+        if storage_error(e):  # ...but a full disk does (bench.core._errors), recording nothing
             raise
         row["status"] = "failed"
         row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
-    row.update(provenance())  # versions, device and commit: bench._provenance
+    row.update(provenance())  # versions, device and commit: bench.core._provenance
     _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
     return row
 
@@ -490,15 +490,15 @@ def sweep(
     written atomically as it arrives and the tables are rebuilt, so a killed sweep resumes.
 
     Before anything runs, every run to execute is checked by
-    :func:`bench._experiments.check_runnable` (ValueError for a run that can never run, e.g.
+    :func:`bench.core._experiments.check_runnable` (ValueError for a run that can never run, e.g.
     leapfrog on a first-order model). A write that fails for want of space or permission (in
-    a run or when storing its row) stops the sweep with :class:`bench._errors.StorageError`;
+    a run or when storing its row) stops the sweep with :class:`bench.core._errors.StorageError`;
     the rows stored so far are whole and the next sweep resumes. A damaged row file counts
-    as not done (see :func:`bench._store.scan_rows`): its run is executed again.
+    as not done (see :func:`bench.core._store.scan_rows`): its run is executed again.
 
     ``ensemble`` (``auto``, ``on``, ``off``; ``auto``: on when jax's default backend is an
     accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
-    ``ensemble_max`` members, one per task (see ``bench._ensemble``).
+    ``ensemble_max`` members, one per task (see ``bench.core._ensemble``).
     """
     from ._experiments import check_choice, check_runnable
 
@@ -539,7 +539,7 @@ def sweep(
         bar.update(1)
         bar.set_postfix_str(f"last: {row['model']} {row['status']}")
 
-    # ---- ensembles (bench._ensemble): groups of runs trained as one program
+    # ---- ensembles (bench.core._ensemble): groups of runs trained as one program
     from . import _ensemble
 
     groups = [[c] for c in todo]

@@ -289,10 +289,8 @@ class Experiment:
 
 _REGISTRY: dict[str, Experiment] = {}
 _LOADED = False
-# Modules that declare experiments by calling register() at import; missing ones are skipped,
-# so the registry grows as the team's modules land. DECON_EXTRA_EXPERIMENTS adds more
-# (comma-separated module names), e.g. for the tests.
-_BUILTIN_MODULES = ("bench._paper", "bench._tradeoff", "bench._stability")
+# Third-party studies: modules named in this Python entry-point group (see bench.core._studies).
+ENTRY_POINT_GROUP = "decon_bench.studies"
 
 
 def register(exp: Experiment, *, replace: bool = False) -> Experiment:
@@ -305,29 +303,32 @@ def register(exp: Experiment, *, replace: bool = False) -> Experiment:
     return exp
 
 
-def _load() -> None:
+def load_plugins() -> None:
+    """Import, once, the studies outside ``bench.studies``: the modules of the entry-point group
+    ``decon_bench.studies`` and those named in ``DECON_EXTRA_EXPERIMENTS`` (comma-separated, for
+    the tests). The built-in studies register when ``bench`` is imported."""
     global _LOADED
     if _LOADED:
         return
     _LOADED = True
+    from importlib import metadata
+
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        ep.load()
     extra = [m.strip() for m in os.environ.get("DECON_EXTRA_EXPERIMENTS", "").split(",")]
-    for mod in (*_BUILTIN_MODULES, *[m for m in extra if m]):
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as e:
-            if e.name != mod:  # the module exists but something it imports does not
-                raise
+    for mod in [m for m in extra if m]:
+        importlib.import_module(mod)
 
 
 def available() -> list[str]:
     """Names of the registered experiments, sorted."""
-    _load()
+    load_plugins()
     return sorted(_REGISTRY)
 
 
 def get(name: str) -> Experiment:
     """The registered experiment ``name`` (ValueError naming the registered ones)."""
-    _load()
+    load_plugins()
     if name not in _REGISTRY:
         check_choice("experiment", name, sorted(_REGISTRY) or ["(none registered)"])
     return _REGISTRY[name]

@@ -1,0 +1,182 @@
+"""The one query layer over the stored tables (``runs.parquet``, ``curves.parquet``).
+
+Loading the tables of a results folder, finding an experiment's rows, selecting rows by field
+values, and reading the serialised ``model_options``/``system_params`` columns. Studies, the
+report and the CLI read stored runs only through these functions.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import _store
+
+
+def _parse_pairs(value) -> dict:
+    """``model_options``/``system_params`` as a dict, whatever the store serialised them as."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return {}
+    if isinstance(value, Mapping):
+        return dict(value)
+    if isinstance(value, str):
+        text = value.strip()
+        if not text:
+            return {}
+        try:
+            value = json.loads(text)
+        except ValueError:
+            try:
+                value = ast.literal_eval(text)
+            except (ValueError, SyntaxError):
+                return {}
+        return _parse_pairs(value)
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        out = {}
+        for item in value:
+            if isinstance(item, Mapping):
+                out.update(item)
+            elif isinstance(item, (list, tuple, np.ndarray)) and len(item) == 2:
+                key, v = item[0], item[1]
+                out[str(key)] = tuple(v) if isinstance(v, (list, np.ndarray)) else v
+        return out
+    return {}
+
+
+def option(runs: pd.DataFrame, name: str, column: str = "model_options") -> pd.Series:
+    """The value of option ``name`` in each row's ``column`` (NaN where absent)."""
+    if column not in runs:
+        return pd.Series(np.nan, index=runs.index)
+    return runs[column].map(lambda v: _parse_pairs(v).get(name, np.nan))
+
+
+def params_of(runs: pd.DataFrame, column: str = "system_params") -> pd.Series:
+    """Each row's ``column`` as a dict."""
+    if column not in runs:
+        return pd.Series([{}] * len(runs), index=runs.index)
+    return runs[column].map(_parse_pairs)
+
+
+def _matches(series: pd.Series, value) -> pd.Series:
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return series.isin(list(value))
+    if value is None:
+        return series.isna()
+    if isinstance(value, float):
+        return np.isclose(series.astype(float), value)
+    return series == value
+
+
+def select(runs: pd.DataFrame, *, ok: bool = True, **fields) -> pd.DataFrame:
+    """Rows whose fields equal the given values (a list means "any of").
+
+    Defaults that single out the paper's plain cells are NOT applied here; callers name them.
+    ``ok=True`` keeps only finished runs with a finite rollout error.
+    """
+    mask = pd.Series(True, index=runs.index)
+    for name, value in fields.items():
+        if name == "dissipation":
+            col = runs.get("dissipation", pd.Series(None, index=runs.index))
+            if value is None:
+                mask &= col.isna()
+            else:
+                mask &= (
+                    col.fillna(-1).astype(object).map(lambda v, t=value: v is not None and v == t)
+                )
+            continue
+        if name not in runs:
+            if value is None:
+                continue
+            return runs.iloc[0:0]
+        mask &= _matches(runs[name], value)
+    out = runs[mask]
+    if ok:
+        if "status" in out:
+            out = out[out["status"] == "ok"]
+        out = out[np.isfinite(out["rollout_error"].astype(float))]
+    return out
+
+
+def plain(runs: pd.DataFrame) -> pd.DataFrame:
+    """The paper's default cells: no friction, no noise, (q, qdot), fixed args, and no system
+    params other than the spring pendulum's ``initial`` state."""
+    out = select(
+        runs,
+        ok=False,
+        friction=0.0,
+        noise=0.0,
+        coordinates="velocity",
+        random_args=False,
+    )
+    return out[params_of(out).map(lambda p: set(p) <= {"initial"})]
+
+
+def initial_state(runs: pd.DataFrame) -> pd.Series:
+    """The spring pendulum's initial state per row: ``"paper"`` or ``"equilibrium"`` (rows
+    without the parameter predate it and started from the physical equilibrium)."""
+    return params_of(runs).map(lambda p: p.get("initial", "equilibrium"))
+
+
+def pick_profile(runs: pd.DataFrame) -> str | None:
+    """The profile whose runs the figures show: the one with the most rows (None if untagged)."""
+    if "profile" not in runs or not len(runs) or runs["profile"].isna().all():
+        return None
+    return str(runs["profile"].value_counts().idxmax())
+
+
+def load_tables(results_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
+    """(runs, curves, profile) restricted to the chosen profile."""
+    runs = _store.load_runs(results_dir)
+    curves = _store.load_curves(results_dir)
+    profile = pick_profile(runs)
+    if profile is not None:
+        runs = runs[runs["profile"] == profile].reset_index(drop=True)
+    if len(curves) and len(runs):
+        curves = curves[curves["config_hash"].isin(runs["config_hash"])]
+    return runs, curves, profile
+
+
+def _cell_key(cfg) -> str:
+    """Hash of a run's configuration without its seed: the cell it belongs to."""
+    from ._experiments import _hash
+
+    return _hash({a: b for a, b in cfg.to_dict().items() if a != "seed"})
+
+
+def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.DataFrame:
+    """The runs of experiment ``name``: every stored run (any seed) whose configuration is one
+    of the experiment's cells under ``profile``, shared runs included whichever experiment
+    produced them, plus the rows tagged with the experiment (results of older declarations,
+    whose cells no longer expand); without a profile, the rows tagged with that experiment."""
+    if not len(runs):
+        return runs
+    if profile is not None:
+        try:
+            from ._experiments import RunConfig, expand
+
+            cells = {_cell_key(c) for c in expand(name, profile)}
+            keys = [_cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
+            match = pd.Series([k in cells for k in keys], index=runs.index)
+            if "experiment" in runs:  # rows of older declarations of the same experiment
+                match |= runs["experiment"] == name
+            return runs[match].reset_index(drop=True)
+        except ValueError:
+            pass
+    if "experiment" in runs:
+        return runs[runs["experiment"] == name].reset_index(drop=True)
+    return runs.iloc[0:0]
+
+
+def variant(df: pd.DataFrame) -> pd.Series:
+    """Model label key: ``hnn_so_diss`` for an HNN with the dissipation term, else the model."""
+    diss = df["dissipation"] if "dissipation" in df else pd.Series(None, index=df.index)
+    is_diss = diss.map(lambda v: v is True or v == 1 or v == "True" or v == "true")
+    return df["model"].where(~(is_diss & df["model"].str.startswith("hnn")), df["model"] + "_diss")

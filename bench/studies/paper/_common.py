@@ -1,0 +1,64 @@
+"""What the paper experiments share: models, systems, spring initial states, shared overrides."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from ...core._experiments import RunConfig
+
+PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
+TRIVIAL_MODELS = ("constant_velocity", "at_rest")
+SYSTEMS = ("chain_pendulum", "spring_pendulum")
+# Fig. 3's grid: log-spaced from 1e-6 to 1e3 (REFERENCE.md), 0 = the unregularised model.
+SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
+SYMREG_WEIGHTS_QUICK = (0.0, 1e-6, 1e-3, 1.0, 1000.0)
+UNIT_DOUBLE_PENDULUM = (("lengths", (1.0, 1.0)), ("masses", (1.0, 1.0)))
+SPRING_PAPER = (("initial", "paper"),)
+# The physical equilibrium is the spring pendulum's default initial state: its cells carry no
+# system params, so they share config hashes with the trade-off experiment's spring cells and
+# with results older than the "initial" option.
+SPRING_EQUILIBRIUM = ()
+# Claim 7's test set must discriminate (issue 10): on the default data (start speeds up to
+# 0.9 c, g in [0.5, 2], 3 s windows anywhere in 10 s trajectories) the particle runs near light
+# speed, where the acceleration is tiny, and constant velocity scores like the models (quick,
+# seed 0: constant velocity 0.0072 vs HNN on (q, p) 0.0016 in (q, qdot), 4.4x). Slow particles
+# in a weak field stay in the regime where the relativistic dynamics bend the trajectory:
+# measured on 2026-11-22 at quick (float32, scored in (q, qdot)), constant velocity 0.022 /
+# 0.026 vs HNN on (q, p) 0.00064 / 0.00058 for seeds 0 / 1 (35x, 44x): the >= 10x that the
+# issue asks for. Speeds stay far below c = 1, which is the honest price: the test no longer
+# probes the ultra-relativistic regime, where no model can be told from a trivial one.
+RELATIVISTIC_TEST_PARAMS = (("g_max", 0.3), ("g_min", 0.05), ("v0_max", 0.3))
+
+# Overrides of the profile defaults that every shared cell carries. Empty for now: the profile
+# defaults (quick: 200 chunks, width 128, 1000 steps, batch 100) are used as they are. Any entry
+# here is applied to every experiment that shares cells, so the hashes stay equal.
+SHARED_OVERRIDES: dict[str, dict[str, object]] = {"smoke": {}, "quick": {}, "paper": {}}
+
+
+def _shared(extra: Mapping[str, Mapping[str, object]] | None = None) -> dict:
+    out = {p: dict(v) for p, v in SHARED_OVERRIDES.items()}
+    for p, v in (extra or {}).items():
+        out.setdefault(p, {}).update(v)
+    return out
+
+
+def _free(model: str) -> bool:
+    """Models without a dissipation switch (everything but the HNN family)."""
+    return not model.startswith("hnn")
+
+
+def _trivial(model: str) -> bool:
+    return model in TRIVIAL_MODELS
+
+
+def _initial_ok(c: RunConfig, allowed=(SPRING_PAPER,)) -> bool:
+    """Chain cells carry no system params; spring cells one of the ``allowed`` initial states
+    (``SPRING_EQUILIBRIUM`` is ``()``, the default)."""
+    if c.system == "spring_pendulum":
+        return c.system_params in allowed
+    return c.system_params == ()
+
+
+def _paper_cell(c: RunConfig) -> bool:
+    # constant velocity only: at_rest is for damped scenes
+    return _initial_ok(c) and c.model != "at_rest"

@@ -1,0 +1,215 @@
+"""What the paper-style figures share: labels, colours, bars, trivial-predictor lines, saving.
+
+Each study module draws its own figure (``fig_<experiment>(runs, curves, outdir)``) from the
+runs and curves of the chosen profile and returns the files it wrote. Every number drawn comes
+from the tables: error bars are the standard error of the mean over seeds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from ...core._query import variant  # noqa: E402
+from ._common import TRIVIAL_MODELS  # noqa: E402
+from ._rules import MODEL_LABELS  # noqa: E402
+
+SYSTEM_LABELS = {
+    "chain_pendulum": "chain pendulum",
+    "spring_pendulum": "spring pendulum",
+    "relativistic_particle": "relativistic particle",
+}
+COLORS = {
+    "node": "#1f77b4",
+    "node_so": "#2ca02c",
+    "hnn": "#d62728",
+    "hnn_so": "#ff7f0e",
+    "hnn_so_diss": "#9467bd",
+    "node_symreg": "#17becf",
+    "lnn": "#8c564b",
+    "vin": "#e377c2",
+    "resnet": "#7f7f7f",
+    "mixture_hnn": "#bcbd22",
+    "node_so_symreg": "#17becf",
+}
+# Trivial predictors are drawn as reference lines, never as bars or points.
+TRIVIAL_STYLE = {"constant_velocity": ("black", "--"), "at_rest": ("dimgray", ":")}
+
+
+# ----------------------------------------------------------------------------- tables
+
+
+def _agg(df: pd.DataFrame, by: Sequence[str], metric: str) -> pd.DataFrame:
+    """Per group of ``by``: n, mean and sem = std(ddof=1) / sqrt(n) of the finite values
+    (the columns of ``bench.core._store.aggregate``, without its bootstrap)."""
+    df = df.copy()
+    for col in by:  # groupby on NaN keys (k of the relativistic particle) needs a value
+        if df[col].isna().any():
+            df[col] = df[col].astype(object).where(df[col].notna(), "-")
+    x = pd.to_numeric(df[metric], errors="coerce")
+    df = df.assign(_x=x.where(np.isfinite(x)))
+    g = df.groupby(list(by), sort=True)["_x"]
+    out = pd.DataFrame({"n": g.count(), "mean": g.mean(), "std": g.std(ddof=1)}).reset_index()
+    out["sem"] = out["std"] / np.sqrt(out["n"].clip(lower=1))
+    return out
+
+
+def _save(fig, outdir: Path, stem: str) -> list[Path]:
+    outdir.mkdir(parents=True, exist_ok=True)
+    out = []
+    for ext in ("png", "pdf"):
+        p = outdir / f"{stem}.{ext}"
+        fig.savefig(p, dpi=130, bbox_inches="tight")
+        out.append(p)
+    plt.close(fig)
+    return out
+
+
+def _bars(
+    ax,
+    agg: pd.DataFrame,
+    groups: Sequence,
+    members: Sequence,
+    gcol: str,
+    mcol: str,
+    labels: Callable = str,
+    log: bool = True,
+    ylabel: str = "",
+) -> None:
+    """Grouped bars: one group per ``groups`` value, one bar per ``members`` value, sem bars."""
+    width = 0.8 / max(1, len(members))
+    for j, m in enumerate(members):
+        xs, ys, es = [], [], []
+        for i, g in enumerate(groups):
+            row = agg[(agg[gcol] == g) & (agg[mcol] == m)]
+            if not len(row):
+                continue
+            xs.append(i + (j - (len(members) - 1) / 2) * width)
+            ys.append(row["mean"].iloc[0])
+            es.append(0.0 if not np.isfinite(row["sem"].iloc[0]) else row["sem"].iloc[0])
+        if xs:
+            ys, es = np.asarray(ys), np.asarray(es)
+            lower = np.minimum(es, ys * 0.999) if log else es  # keep log bars positive
+            ax.bar(
+                xs,
+                ys,
+                width,
+                yerr=[lower, es],
+                capsize=3,
+                label=labels(m),
+                color=COLORS.get(str(m)),
+            )
+    ax.set_xticks(range(len(groups)))
+    ax.set_xticklabels([SYSTEM_LABELS.get(str(g), str(g)) for g in groups])
+    if log:
+        ax.set_yscale("log")
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=8)
+
+
+def _label(m) -> str:
+    return MODEL_LABELS.get(str(m), str(m))
+
+
+def _order(values, preferred: Sequence) -> list:
+    present = list(dict.fromkeys(values))
+    return [p for p in preferred if p in present] + [p for p in present if p not in preferred]
+
+
+MODEL_ORDER = (
+    "node",
+    "node_so",
+    "hnn",
+    "hnn_so",
+    "hnn_so_diss",
+    "mixture_hnn",
+    "node_symreg",
+    "node_so_symreg",
+    "lnn",
+    "vin",
+    "resnet",
+)
+SYSTEM_ORDER = ("chain_pendulum", "spring_pendulum", "relativistic_particle")
+
+
+def _curve_mean(curves: pd.DataFrame, hashes, column: str) -> tuple[np.ndarray, np.ndarray]:
+    """Geometric mean over runs of a per-time curve (t > 0): (t, value)."""
+    c = curves[curves["config_hash"].isin(list(hashes)) & (curves["t"] > 0)]
+    c = c[np.isfinite(c[column]) & (c[column] > 0)]
+    if not len(c):
+        return np.array([]), np.array([])
+    g = c.groupby("t")[column].apply(lambda v: float(np.exp(np.mean(np.log(v)))))
+    return g.index.to_numpy(float), g.to_numpy(float)
+
+
+def split_trivial(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(model rows, trivial-predictor rows)."""
+    t = runs["model"].isin(TRIVIAL_MODELS) if len(runs) else pd.Series(dtype=bool)
+    return runs[~t], runs[t]
+
+
+def _gmean(x) -> float:
+    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
+    x = x[np.isfinite(x) & (x > 0)]
+    return float(np.exp(np.mean(np.log(x)))) if len(x) else float("nan")
+
+
+def _trivial_lines(ax, trivial, metric="rollout_error", groups=None, gcol="system", vertical=False):
+    """Each trivial predictor's geometric-mean ``metric`` as a reference line: one segment per
+    bar group (``groups`` along x, by ``gcol``), or a full line (vertical with ``vertical``)."""
+    if trivial is None or not len(trivial) or metric not in trivial:
+        return
+    for m, g in trivial.groupby("model"):
+        color, ls = TRIVIAL_STYLE.get(m, ("black", "--"))
+        label = MODEL_LABELS.get(m, m)
+        if groups is None:
+            v = _gmean(g[metric])
+            if np.isfinite(v):
+                (ax.axvline if vertical else ax.axhline)(v, color=color, ls=ls, lw=1, label=label)
+            continue
+        for i, grp in enumerate(groups):
+            v = _gmean(g.loc[g[gcol] == grp, metric])
+            if np.isfinite(v):
+                ax.hlines(v, i - 0.45, i + 0.45, colors=color, linestyles=ls, lw=1.2, label=label)
+                label = None
+
+
+# ----------------------------------------------------------------------------- one per figure
+
+
+def _model_bars(
+    runs,
+    outdir: Path,
+    stem: str,
+    title: str,
+    metric: str = "rollout_error",
+    ylabel: str = "rollout error (geometric mean)",
+) -> list[Path]:
+    runs, trivial = split_trivial(runs)
+    if not len(runs):
+        return []
+    df = runs.assign(variant=variant(runs))
+    ag = _agg(df, ["system", "variant"], metric)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    groups = _order(df["system"], SYSTEM_ORDER)
+    _trivial_lines(ax, trivial, metric, groups)
+    _bars(
+        ax,
+        ag,
+        groups,
+        _order(df["variant"], MODEL_ORDER),
+        "system",
+        "variant",
+        _label,
+        ylabel=ylabel,
+    )
+    ax.set_title(title)
+    return _save(fig, outdir, stem)

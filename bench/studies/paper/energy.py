@@ -1,0 +1,263 @@
+"""Fig. 2 (energy): the experiment, claim 1's verdict rule and the figure."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from ...core._experiments import Experiment
+from ...core._query import (
+    plain,
+    select,
+)
+from ...core._studies import Study, register_study
+from ._common import (
+    PAPER_MODELS,
+    SPRING_PAPER,
+    SYSTEMS,
+    TRIVIAL_MODELS,
+    _paper_cell,
+    _shared,
+)
+from ._plot import (
+    COLORS,
+    MODEL_ORDER,
+    SYSTEM_LABELS,
+    TRIVIAL_STYLE,
+    _curve_mean,
+    _gmean,
+    _label,
+    _order,
+    _save,
+    split_trivial,
+)
+from ._rules import (
+    CLAIM_TITLES,
+    DELTA_2,
+    FAMILIES,
+    GROWTH_SLOPE,
+    HNN_FAMILY,
+    MODEL_LABELS,
+    Verdict,
+    _boot,
+    _curve_slopes,
+    _models,
+    _n_bad,
+    _null,
+    _paper_spring,
+    _Part,
+    _per_system_disc,
+    _threshold,
+    _verdict,
+    scored,
+)
+
+ENERGY = Experiment(
+    name="energy",
+    title="Fig. 2: energy violation vs rollout error, HNNs and NODEs",
+    axes={
+        "system": SYSTEMS,
+        "k": (1, 2, 3, 4),
+        "model": (*PAPER_MODELS, "constant_velocity"),
+        "system_params": ((), SPRING_PAPER),
+    },
+    profile_overrides=_shared({"smoke": {"k": (2,)}, "quick": {"k": (2,)}}),
+    include=_paper_cell,
+    claim=1,
+)
+
+
+def energy_cells(runs: pd.DataFrame) -> pd.DataFrame:
+    """Fig. 2 cells: the four paper models and the trivial predictors on undamped chain/spring
+    (the paper's spring initial state where present), any k, L2 loss; failed rows kept."""
+    p = _paper_spring(plain(runs))
+    return select(
+        p,
+        ok=False,
+        system=["chain_pendulum", "spring_pendulum"],
+        model=[*PAPER_MODELS, *TRIVIAL_MODELS],
+        loss="l2",
+    )
+
+
+def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
+    """Claim 1 (Fig. 2). Two parts.
+
+    (a) Energy at equal error: over the Fig. 2 cells, fit by least squares
+    ``log EV = a + b log(rollout_error) + c [model is an HNN] (+ one intercept per system)``;
+    the HNN advantage is ``-c`` (how much lower an HNN's log energy violation is than a NODE's at
+    the same rollout error), printed as a factor ``exp(-c)``. Bootstrap resamples whole seeds.
+    A *null* part at ``delta = log 2``: the claim says "no better", and a factor below 2 is
+    within the run-to-run spread of the energy violation at equal error in Fig. 2 (a decade of
+    scatter per model); it holds when a 2x advantage is ruled out and contradicts when the
+    advantage is significant and above 2x.
+    (b) Growth in time, per family (NODEs = node, node_so; HNNs = hnn, hnn_so): for every run
+    with a stored curve, the slope of ``log EV`` against ``log t`` over the late half of the
+    horizon; the per-seed mean slope of each family must exceed :data:`GROWTH_SLOPE` = 0.5
+    ("about linear" is slope 1; levelling off is 0): holds when its CI lies above 0.5,
+    contradicts (the violation levels off or shrinks) when below, else undecided.
+    Failed runs score error 1 and the worst violation.
+    """
+    cells = energy_cells(runs)
+    models = _models(cells)
+    discs = _per_system_disc(cells)
+    n_failed = _n_bad(models)
+    models = models.assign(
+        _err=scored(models, "rollout_error"), _ev=scored(models, "energy_violation")
+    )
+    seeds = np.sort(models["seed"].unique()) if len(models) else np.array([])
+    parts: list[_Part] = []
+    extra = ""
+    head = None
+    if len(models) and models["model"].isin(HNN_FAMILY).any():
+        if (~models["model"].isin(HNN_FAMILY)).any():
+            systems = sorted(models["system"].unique())
+
+            def design(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+                cols = [np.log(df["_err"].to_numpy(float))]
+                cols.append(df["model"].isin(HNN_FAMILY).to_numpy(float))
+                for s in systems:
+                    cols.append((df["system"] == s).to_numpy(float))
+                return np.stack(cols, axis=1), np.log(df["_ev"].to_numpy(float))
+
+            by_seed = [design(models[models["seed"] == s]) for s in seeds]
+
+            def stat(idx) -> float:
+                x = np.concatenate([by_seed[i][0] for i in idx])
+                y = np.concatenate([by_seed[i][1] for i in idx])
+                coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+                return -float(coef[1])
+
+            point, lo, hi = _boot(np.arange(len(seeds)), stat)
+            factor = (
+                f"HNNs conserve energy {math.exp(point):.2g}x better at equal error "
+                f"(95% CI {math.exp(lo):.2g}x to {math.exp(hi):.2g}x)"
+                if np.isfinite(lo)
+                else f"HNNs conserve energy {math.exp(point):.2g}x better at equal error"
+            )
+            a = _null("(a) HNN energy advantage at equal error, -c (log)", (point, lo, hi), DELTA_2)
+            a.n = len(seeds)
+            a.note = factor
+            parts.append(a)
+            head = a
+            x = np.log(models["_err"].to_numpy(float))
+            y = np.log(models["_ev"].to_numpy(float))
+            r = np.corrcoef(x, y)[0, 1] if len(x) > 2 else math.nan
+            extra = f"corr(log err, log EV) = {r:.2f} over {len(models)} runs"
+    sl = _curve_slopes(models, curves, t_min_frac=0.5)
+    for fam, members in FAMILIES.items():
+        s = sl[sl["model"].isin(members)] if len(sl) else sl
+        if len(s):
+            per_seed = s.groupby("seed")["slope"].mean()
+            parts.append(
+                _threshold(
+                    f"(b) {fam}: late-half slope of log EV vs log t",
+                    per_seed.to_numpy(),
+                    GROWTH_SLOPE,
+                )
+            )
+        elif len(models) and models["model"].isin(members).any():
+            parts.append(
+                _Part(f"(b) {fam}: late-half slope", "undecided", *[math.nan] * 3, 0, "no curves")
+            )
+    return _verdict(
+        1,
+        CLAIM_TITLES[1],
+        parts,
+        head,
+        len(seeds),
+        "-c: log EV advantage of HNNs at equal error",
+        extra,
+        discs=discs,
+        n_failed=n_failed,
+    )
+
+
+def fig_energy(runs, curves, outdir: Path) -> list[Path]:
+    """Fig. 2. Left: energy violation vs rollout error (log-log), one point per run, with the
+    least-squares line of log EV on log error and its R^2. Right: energy violation vs time
+    (geometric mean over runs) per model, from the curves."""
+    runs, trivial = split_trivial(runs)
+    if not len(runs):
+        return []
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    markers = {"chain_pendulum": "o", "spring_pendulum": "s"}
+    for s, g in trivial.groupby("system"):  # the trivial predictors' error: vertical lines
+        for m, gm in g.groupby("model"):
+            color, _ = TRIVIAL_STYLE.get(m, ("black", "--"))
+            ls = "--" if s == "chain_pendulum" else ":"
+            a.axvline(
+                _gmean(gm["rollout_error"]),
+                color=color,
+                ls=ls,
+                lw=1,
+                label=f"{MODEL_LABELS.get(m, m)}, {SYSTEM_LABELS.get(s, s)}",
+            )
+    for m in _order(runs["model"], MODEL_ORDER):
+        for s, g in runs[runs["model"] == m].groupby("system"):
+            a.scatter(
+                g["rollout_error"],
+                g["energy_violation"],
+                c=COLORS.get(m),
+                marker=markers.get(s, "^"),
+                s=22,
+                alpha=0.8,
+                label=f"{_label(m)}, {SYSTEM_LABELS.get(s, s)}",
+            )
+    ok = runs[(runs["rollout_error"] > 0) & (runs["energy_violation"] > 0)]
+    if len(ok) >= 3:
+        x, y = np.log10(ok["rollout_error"]), np.log10(ok["energy_violation"])
+        slope, icpt = np.polyfit(x, y, 1)
+        r2 = 1 - np.sum((y - (slope * x + icpt)) ** 2) / max(np.sum((y - y.mean()) ** 2), 1e-300)
+        xs = np.linspace(x.min(), x.max(), 20)
+        a.plot(
+            10**xs,
+            10 ** (slope * xs + icpt),
+            "k--",
+            lw=1,
+            label=f"fit: slope {slope:.2f}, $R^2$ = {r2:.2f}",
+        )
+    a.set(
+        xscale="log",
+        yscale="log",
+        xlabel="rollout error (geometric mean)",
+        ylabel="energy violation",
+        title="Energy violation vs rollout error",
+    )
+    a.legend(fontsize=6, ncol=2)
+    drawn = False
+    for m in _order(runs["model"], MODEL_ORDER):
+        for s, g in runs[runs["model"] == m].groupby("system"):
+            t, v = _curve_mean(curves, g["config_hash"], "energy_violation")
+            if len(t):
+                drawn = True
+                b.plot(
+                    t,
+                    v,
+                    color=COLORS.get(m),
+                    ls="-" if s == "chain_pendulum" else ":",
+                    label=f"{_label(m)}, {SYSTEM_LABELS.get(s, s)}",
+                )
+    if drawn:
+        b.set(xscale="log", yscale="log")
+        b.legend(fontsize=6, ncol=2)
+    b.set(xlabel="time (s)", ylabel="energy violation", title="Energy violation over time")
+    return _save(fig, outdir, "fig2_energy")
+
+
+STUDY = register_study(
+    Study(
+        name="energy",
+        experiments=(ENERGY,),
+        claim=1,
+        title=CLAIM_TITLES[1],
+        rule=claim_1,
+        reads=("energy", "second_order", "coordinates", "loss"),
+        figure=fig_energy,
+        stem="fig2_energy",
+    )
+)

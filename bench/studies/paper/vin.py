@@ -1,0 +1,214 @@
+"""VIN (VIN paper): the experiment, claim 8's verdict rule and the figure."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import pandas as pd
+
+from ...core._experiments import Experiment, RunConfig
+from ...core._query import (
+    select,
+)
+from ...core._studies import Study, register_study
+from ._common import (
+    TRIVIAL_MODELS,
+    _trivial,
+)
+from ._plot import (
+    COLORS,
+    _agg,
+    _curve_mean,
+    _label,
+    _save,
+    _trivial_lines,
+    split_trivial,
+)
+from ._rules import (
+    BOUNDED_SLOPE,
+    CLAIM_TITLES,
+    Verdict,
+    _boot,
+    _curve_slopes,
+    _models,
+    _n_bad,
+    _paired,
+    _Part,
+    _positive,
+    _verdict,
+    discrimination,
+)
+
+# Noisy data are at the smallest data size (n_train 8 at every profile), the VIN seed's
+# "fewer and noisier" comparison.
+VIN_NOISY_N_TRAIN = 8
+
+
+def _vin_include(c: RunConfig) -> bool:
+    if _trivial(c.model):
+        return c.model == "constant_velocity" and c.noise == 0.0 and c.n_train == VIN_NOISY_N_TRAIN
+    if c.noise > 0:
+        return c.model in ("vin", "resnet") and c.n_train == VIN_NOISY_N_TRAIN
+    return True
+
+
+VIN = Experiment(
+    name="vin",
+    title="VIN seed: pendulum from few and noisy trajectories, long horizon",
+    axes={
+        "model": ("vin", "resnet", "node_so", "constant_velocity"),
+        "n_train": (8, 32, 128),
+        "noise": (0.0, 0.01, 0.05),
+    },
+    # 60 chunks = 300 points (9 s at dt = 0.03): 3x the paper's horizon, the longest window of
+    # the protocol's 10 s trajectories
+    fixed={"system": "chain_pendulum", "k": 1, "test_chunks": 60},
+    profile_overrides={
+        "smoke": {
+            "n_train": (8, 16),
+            "test_chunks": 8,
+            "model": ("vin", "resnet", "constant_velocity"),
+        },
+        "quick": {"model": ("vin", "resnet", "constant_velocity"), "n_train": (8, 32)},
+    },
+    include=_vin_include,
+    claim=8,
+)
+
+
+def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
+    """Claim 8 (VIN seed): VIN vs ResNet on the pendulum (chain, k = 1) over a long horizon.
+
+    Parts: (a) *positive*: ``log(err ResNet / err VIN)`` at the smallest ``n_train``, one part
+    per noise level (the noisy cells are the "noisier data" half); (b) *positive*:
+    ``log(EV ResNet / EV VIN)`` at the same cells; (c) bounded energy: the per-seed slope of
+    ``log EV`` vs ``log t`` over the second half of VIN's noise-free curves at the smallest
+    ``n_train`` is below :data:`BOUNDED_SLOPE` = 0.5 (holds when ``ci_high < 0.5``,
+    contradicts when ``ci_low > 0.5``). Threshold: a bounded oscillation has slope ~0, a linear
+    drift slope 1, and 0.5 is an energy error that grows like a random walk (sqrt t), the
+    slowest growth that is still unbounded; anything slower than that over the late half of a
+    9 s window is indistinguishable from bounded. Headline: (a) at zero noise.
+    """
+    v = select(runs, ok=False, system="chain_pendulum", k=1, friction=0.0)
+    v = v[v["model"].isin(["vin", "resnet", *TRIVIAL_MODELS])] if len(v) else v
+    if not len(_models(v)):
+        return _verdict(8, CLAIM_TITLES[8], [], None, 0, "log(err ResNet / err VIN), fewest data")
+    n_min = _models(v)["n_train"].min()
+    at_min = v[v["n_train"] == n_min]
+    trivial = v[v["model"].isin(TRIVIAL_MODELS)]
+    parts, ns = [], []
+    head = None
+    for noise, g in _models(at_min).groupby("noise"):
+        a = _paired(g, {"model": "resnet"}, {"model": "vin"})
+        e = _paired(g, {"model": "resnet"}, {"model": "vin"}, metric="energy_violation")
+        pa = _positive(f"(a) n_train={n_min} noise={noise:g}: log(err ResNet / VIN)", a.to_numpy())
+        parts.append(pa)
+        parts.append(
+            _positive(f"(b) n_train={n_min} noise={noise:g}: log(EV ResNet / VIN)", e.to_numpy())
+        )
+        ns.append(len(a))
+        if head is None:
+            head = pa
+    vin_runs = select(at_min, model="vin", noise=0.0)
+    sl = _curve_slopes(vin_runs, curves, t_min_frac=0.5)
+    if len(sl):
+        ps = sl.groupby("seed")["slope"].mean().to_numpy()
+        sp, slo, shi = _boot(ps)
+        st = (
+            "undecided"
+            if len(ps) < 2
+            else (
+                "holds"
+                if shi < BOUNDED_SLOPE
+                else ("contradicts" if slo > BOUNDED_SLOPE else "undecided")
+            )
+        )
+        parts.append(_Part("(c) VIN late slope of log EV vs log t", st, sp, slo, shi, len(ps)))
+    else:
+        parts.append(
+            _Part("(c) VIN late energy slope", "undecided", *[math.nan] * 3, 0, "no curves")
+        )
+    rows = (
+        pd.concat([_models(at_min), trivial]).drop_duplicates("config_hash")
+        if "config_hash" in v
+        else pd.concat([_models(at_min), trivial])
+    )
+    return _verdict(
+        8,
+        CLAIM_TITLES[8],
+        parts,
+        head,
+        min(ns, default=0),
+        "log(err ResNet / err VIN), fewest data",
+        discs=[discrimination(rows, f"pendulum n_train={n_min}")],
+        n_failed=_n_bad(_models(v)),
+    )
+
+
+def fig_vin(runs, curves, outdir: Path) -> list[Path]:
+    """VIN seed. Left: rollout error vs number of training trajectories (log-log, dashed for
+    noisy data). Right: relative error and energy violation vs time at the fewest data."""
+    runs, trivial = split_trivial(runs)
+    if not len(runs):
+        return []
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    _trivial_lines(a, trivial)
+    for (m, noise), g in runs.groupby(["model", "noise"]):
+        ag = _agg(g, ["n_train"], "rollout_error").sort_values("n_train")
+        a.errorbar(
+            ag["n_train"],
+            ag["mean"],
+            yerr=ag["sem"].fillna(0),
+            marker="o",
+            capsize=3,
+            color=COLORS.get(m),
+            ls="-" if noise == 0 else "--",
+            label=f"{_label(m)}" + (f", noise {noise:g}" if noise else ""),
+        )
+    a.set(
+        xscale="log",
+        yscale="log",
+        xlabel="training trajectories",
+        ylabel="rollout error (long horizon)",
+        title="Data efficiency, pendulum",
+    )
+    a.legend(fontsize=8)
+    n_min = runs["n_train"].min()
+    drawn = False
+    for m, g in runs[(runs["n_train"] == n_min) & (runs["noise"] == 0)].groupby("model"):
+        for col, ls in (("rel_error", "-"), ("energy_violation", ":")):
+            t, v = _curve_mean(curves, g["config_hash"], col)
+            if len(t):
+                drawn = True
+                b.plot(
+                    t,
+                    v,
+                    ls=ls,
+                    color=COLORS.get(m),
+                    label=f"{_label(m)} {'error' if col == 'rel_error' else 'energy'}",
+                )
+    if drawn:
+        b.set(yscale="log")
+        b.legend(fontsize=7)
+    b.set(
+        xlabel="time (s)",
+        ylabel="relative error / energy violation",
+        title=f"Long horizon, n_train = {n_min}",
+    )
+    return _save(fig, outdir, "fig_vin")
+
+
+STUDY = register_study(
+    Study(
+        name="vin",
+        experiments=(VIN,),
+        claim=8,
+        title=CLAIM_TITLES[8],
+        rule=claim_8,
+        reads=("vin",),
+        figure=fig_vin,
+        stem="fig_vin",
+    )
+)
