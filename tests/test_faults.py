@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import bench.core._execute as execute
 import bench.core._runner as runner
 from bench._cli import main
 from bench.core import _store
@@ -367,7 +368,7 @@ def test_full_disk_in_a_run_stops_the_sweep_not_recorded_as_failed(tmp_path, mon
             raise OSError(errno.ENOSPC, "No space left on device", str(cache_root / "x.npz"))
         raise RuntimeError("a bug in this run")  # an ordinary failure: recorded, not fatal
 
-    monkeypatch.setattr(runner, "_build", build)
+    monkeypatch.setattr(execute, "_build", build)
     with pytest.raises(StorageError, match="No space left on device.*after 1 new of 3 runs"):
         runner.sweep(configs, res, progress=False, cache_root=tmp_path / "cache")
     rows = _store.read_rows(res)

@@ -65,3 +65,108 @@ def test_import_models_loads_no_bench():
         "assert not bad, bad"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+# ----------------------------------------------------------------------------- inside bench
+# Layers inside bench (STYLE.md 14): core <- studies <- the CLI, the report and the package's
+# entry points. A module may import its own layer or a lower one, and no import cycle may join
+# bench's modules (lazy imports inside functions count: they are cycles all the same).
+def _layer(module: str) -> int:
+    if module == "bench.core" or module.startswith("bench.core."):
+        return 0
+    if module == "bench.studies" or module.startswith("bench.studies."):
+        return 1
+    return 2
+
+
+def _module_name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _module_graph(root: Path = ROOT, package: str = "bench") -> dict[str, set[str]]:
+    """Module -> the modules of ``package`` it imports (``from pkg import sub`` names ``sub``
+    when it is a module; a parent package that Python imports on the way is not counted)."""
+    mods = {_module_name(p, root): p for p in (root / package).rglob("*.py")}
+    graph = {}
+    for name, path in mods.items():
+        pkg = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        out = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
+                    mod = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    mod = node.module or ""
+                subs = [f"{mod}.{a.name}" for a in node.names]
+                targets = [s for s in subs if s in mods] or [mod]
+            else:
+                continue
+            out |= {t for t in targets if t in mods and t != name}
+        graph[name] = out
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def _upward(graph: dict[str, set[str]]) -> list[str]:
+    return [
+        f"{a} imports {b}" for a in sorted(graph) for b in sorted(graph[a]) if _layer(b) > _layer(a)
+    ]
+
+
+def test_bench_has_no_import_cycle():
+    assert not _cycles(_module_graph()), _cycles(_module_graph())
+
+
+def test_bench_layers_point_one_way():
+    graph = _module_graph()
+    assert "bench.core._runner" in graph and "bench.studies.paper.energy" in graph
+    assert not _upward(graph), "upward imports: " + "; ".join(_upward(graph))
+
+
+def test_graph_checks_can_fail(tmp_path):
+    # A synthetic package: core imports a study lazily and the study imports core back.
+    (tmp_path / "bench" / "core").mkdir(parents=True)
+    (tmp_path / "bench" / "studies").mkdir()
+    for d in ("bench", "bench/core", "bench/studies"):
+        (tmp_path / d / "__init__.py").write_text("")
+    (tmp_path / "bench/core/_a.py").write_text("def f():\n    from ..studies import b\n")
+    (tmp_path / "bench/studies/b.py").write_text("from ..core import _a\n")
+    graph = _module_graph(tmp_path)
+    assert graph["bench.core._a"] == {"bench.studies.b"}
+    assert _cycles(graph) == [["bench.core._a", "bench.studies.b"]]
+    assert _upward(graph) == ["bench.core._a imports bench.studies.b"]
+    assert _cycles({"x": {"y"}, "y": {"z"}, "z": set()}) == []

@@ -11,7 +11,7 @@ unchanged (vmap never mixes members). Each member draws its batches from its own
 as a single run does, so member m of an ensemble is the single run of its config up to
 float32 round-off (batched matmuls may sum in another order).
 
-Rows: a member's row is the row :func:`bench.core._runner.execute_run` writes for its config (the
+Rows: a member's row is the row :func:`bench.core._execute.execute_run` writes for its config (the
 same columns, ``config_hash`` and ``train_hash``; its parameters go to the same params cache),
 plus ``ensemble_size`` (1 for a run trained alone). ``train_seconds`` and
 ``compile_seconds`` of a member are its share (1/M) of the ensemble's.
@@ -282,7 +282,7 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
     Member m rolls out ``models[m]`` from its own test states ``datasets[m].z_test[:, 0]``
     with the evaluation integrator of ``configs[m]`` (all members must share it). Returns,
     per member, ``(pred, stats, rollout_seconds, eval_compile_seconds)`` as
-    :func:`bench.core._runner._evaluate` takes them (seconds: 1/M of the ensemble's).
+    :func:`bench.core._execute._evaluate` takes them (seconds: 1/M of the ensemble's).
     """
     import equinox as eqx
     import jax
@@ -290,7 +290,7 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
 
     import models as M
 
-    from ._runner import eval_integrator
+    from ._execute import eval_integrator
 
     c = configs[0]
     integ = eval_integrator(c)
@@ -328,9 +328,9 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     Never raises for a run's failure: when the ensemble cannot be built or trained (a bad
     config, a failed dataset), every member runs alone and records its own outcome; when the
     vmapped test rollouts fail, each member rolls out alone. A storage error (full disk)
-    propagates, as in :func:`bench.core._runner.execute_run`.
+    propagates, as in :func:`bench.core._execute.execute_run`.
     """
-    from . import _runner as R
+    from . import _execute as R
 
     cache_root = Path(cache_root or R.default_cache_root())
     configs = list(configs)

@@ -1,0 +1,453 @@
+"""Execute one run: data -> model -> training -> test rollouts -> metrics -> a row.
+
+``execute_run(config)`` never raises: every outcome is a row with ``status`` ``ok``,
+``diverged`` (training went non-finite at ``diverged_step``) or ``failed`` (``error`` holds the
+exception's message, the traceback is in the run's artifact directory).
+
+Caches under ``$DECON_CACHE`` (default ``./.cache/decon-bench``, git-ignored):
+
+- ``params/<train_hash>/model.eqx`` + ``train.json`` (with the sha256 of ``model.eqx``): runs
+  that differ only in evaluation settings train once; a params file whose checksum does not
+  match is ignored and the model retrained;
+- ``runs/<config_hash>/``: ``config.json``, ``metrics.json``, ``curves.npz`` (per trajectory
+  and time), ``traceback.txt`` for failures;
+- ``floors/<dataset hash>.json``: the perturbed-ground-truth floor of a test set.
+
+Sweeps over many runs are :mod:`bench.core._runner`'s.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+from . import _metrics as M
+from . import _store
+from ._errors import one_line, storage_error
+from ._experiments import RunConfig
+from ._provenance import provenance
+
+EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 per interval
+# Test states used for the symplectic error (a Jacobian per state: keep it small).
+_SYMPLECTIC_STATES = 64
+
+
+def default_cache_root() -> Path:
+    """$DECON_CACHE, or ./.cache/decon-bench."""
+    return Path(os.environ.get("DECON_CACHE", Path(".cache") / "decon-bench"))
+
+
+def artifact_dir(config_hash: str, cache_root=None) -> Path:
+    """Per-run artifacts: ``<cache>/runs/<config_hash>/``."""
+    return Path(cache_root or default_cache_root()) / "runs" / config_hash
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _write_json(path: Path, obj) -> None:
+    _store._atomic_write_bytes(path, json.dumps(_store._jsonable(obj), indent=1).encode())
+
+
+def base_row(config: RunConfig) -> dict:
+    """The row fields every run has, before any computation."""
+    row = config.to_dict()
+    row.update(
+        config_hash=config.config_hash,
+        train_hash=config.train_hash,
+        status="failed",
+        diverged_step=None,
+        error=None,
+    )
+    return row
+
+
+# -------------------------------------------------------------------------------- one run
+def _build(config: RunConfig, cache_root: Path):
+    import jax
+
+    import models
+    import systems
+
+    system = systems.make(config.system, **config.system_kwargs())
+    dcfg = systems.DatasetConfig(
+        system=config.system,
+        system_params=tuple(sorted(config.system_kwargs().items())),
+        n_generated=config.n_generated,
+        n_train=config.n_train,
+        chunk=config.chunk,
+        dt=config.dt,
+        n_test=config.n_test,
+        test_chunks=config.test_chunks,
+        noise=config.noise,
+        coordinates=config.coordinates,
+        random_args=config.random_args,
+        seed=config.seed,
+    )
+    scene = models.Scene(
+        dof=system.dof,
+        angular=tuple(system.angular),
+        n_args=system.n_args if config.random_args else 0,
+        damped=config.friction > 0,
+        canonical=config.coordinates == "momentum",
+    )
+    model = models.make(
+        config.model,
+        scene,
+        key=jax.random.PRNGKey(config.seed),
+        width=config.width,
+        depth=config.depth,
+        activation=config.activation,
+        dtype=config.dtype,
+        dissipation=config.dissipation,
+        **dict(config.model_options),
+    )
+    data = systems.make_dataset(dcfg, cache_dir=cache_root)
+    return system, data, scene, model
+
+
+def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
+    """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
+    import equinox as eqx
+
+    import models
+
+    from ._train import train
+
+    if isinstance(model, models.AbstractTrivialModel):  # no parameters: nothing to train
+        meta = {
+            "status": "ok",
+            "diverged_step": None,
+            "train_seconds": 0.0,
+            "compile_seconds": 0.0,
+            "steps_done": 0,
+            "final_loss": None,
+            "flops_per_step": 0.0,
+            "train_cached": False,
+        }
+        return model, meta
+    pdir = Path(cache_root) / "params" / config.train_hash
+    pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
+    if pfile.exists() and meta_file.exists():
+        try:
+            meta = json.loads(meta_file.read_text())
+            if meta.get("sha256") == _sha256(pfile):
+                loaded = eqx.tree_deserialise_leaves(pfile, like=model)
+                meta["train_cached"] = True
+                return loaded, meta
+        except Exception:  # a corrupt cache entry: retrain below
+            pass
+    res = train(model, data, train_config(config), progress=progress)
+    return res.model, store_trained(config, res, cache_root)
+
+
+def train_config(config: RunConfig):
+    """The :class:`bench.TrainConfig` of a run."""
+    import models
+
+    from ._train import TrainConfig
+
+    return TrainConfig(
+        steps=config.steps,
+        batch=config.batch,
+        lr=config.lr,
+        loss=config.loss,
+        integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
+        dtype=config.dtype,
+        seed=config.seed,
+    )
+
+
+def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
+    """Write a :class:`bench.TrainResult` to ``params/<train_hash>/``; return its meta."""
+    import equinox as eqx
+
+    pdir = Path(cache_root) / "params" / config.train_hash
+    losses = np.asarray(res.losses, dtype=np.float64)
+    meta = {
+        "status": res.status,
+        "diverged_step": res.diverged_step,
+        "train_seconds": float(res.train_seconds),
+        "compile_seconds": float(res.compile_seconds),
+        "steps_done": int(res.steps_done),
+        "flops_per_step": float(res.flops_per_step),
+        "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
+    }
+    pdir.mkdir(parents=True, exist_ok=True)
+    tmp = pdir / f".tmp-{os.getpid()}.eqx"
+    eqx.tree_serialise_leaves(tmp, res.model)
+    os.replace(tmp, pdir / "model.eqx")
+    meta["sha256"] = _sha256(pdir / "model.eqx")
+    _write_json(pdir / "train.json", meta)
+    np.save(pdir / "losses.npy", losses)
+    meta["train_cached"] = False
+    return meta
+
+
+def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
+    path = Path(cache_root) / "floors" / f"{data.config.hash()}.json"
+    try:
+        return float(json.loads(path.read_text())["floor"])
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    args = data.args_test if config.random_args else None
+    value = M.perturbed_floor(
+        system,
+        data.z_test,
+        data.ts_test,
+        args,
+        key=config.seed,
+        coordinates=config.coordinates,
+        sim_points=getattr(data.config, "n_points", None),
+    )
+    _write_json(path, {"floor": value})
+    return value
+
+
+def _nan_if_none(x) -> float:
+    return float("nan") if x is None else float(x)
+
+
+def _true_maps(system):
+    """The TRUE system's (q, p) <-> (q, qdot) maps, as the trivial predictors take them
+    (args of shape (0,) mean the system's defaults)."""
+    import jax.numpy as jnp
+
+    def fix(a):
+        return None if a is None or jnp.size(a) == 0 else a
+
+    def velocity(q, p, a):
+        return system.velocity(q, p, fix(a))
+
+    def momentum(q, v, a):
+        return system.momentum(jnp.concatenate([q, v]), fix(a))
+
+    return velocity, momentum
+
+
+def to_velocity(system, zs, args=None) -> np.ndarray:
+    """States (N, T, 2d) in (q, p) mapped to (q, qdot) with the TRUE ``system.velocity``;
+    ``args`` None (the system's defaults) or (N, n_args). Non-finite states stay non-finite."""
+    import jax
+    import jax.numpy as jnp
+
+    zs = np.asarray(zs, dtype=np.float64)
+    n, t, w = zs.shape
+    d = w // 2
+    a = np.zeros((n, 0)) if args is None else np.asarray(args, dtype=np.float64).reshape(n, -1)
+    velocity, _ = _true_maps(system)
+    per_traj = jax.vmap(lambda q, p, x: velocity(q, p, x), in_axes=(0, 0, None))
+    finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
+    safe = np.where(finite, zs, 0.0)
+    v = np.asarray(
+        jax.jit(jax.vmap(per_traj))(
+            jnp.asarray(safe[..., :d]), jnp.asarray(safe[..., d:]), jnp.asarray(a)
+        )
+    )
+    out = np.concatenate([zs[..., :d], v], axis=-1)
+    return np.where(finite, out, np.nan)
+
+
+def _predictor(model, system, roll):
+    """f(z0s, ts, args) -> (predictions, stats): the model's rollout, or a trivial
+    predictor's closed form (compiled once, so the second call times the prediction alone)."""
+    import jax
+
+    import models
+
+    if isinstance(model, models.AbstractTrivialModel):
+        velocity, momentum = _true_maps(system)
+        fn = jax.jit(
+            lambda z0s, ts, args: model.predict_batch(
+                z0s, ts, args, velocity=velocity, momentum=momentum
+            )
+        )
+        return lambda z0s, ts, args: (fn(z0s, ts, args), {})
+    return lambda z0s, ts, args: roll(model, z0s, ts, args)
+
+
+def eval_integrator(config: RunConfig):
+    """The test-rollout integrator of a run (adaptive: at most EVAL_MAX_STEPS steps)."""
+    import models
+
+    return models.Integrator(
+        config.eval_integrator,
+        substeps=config.eval_substeps,
+        rtol=config.eval_rtol,
+        max_steps=EVAL_MAX_STEPS,
+    )
+
+
+def _evaluate(config, system, data, model, cache_root, rolled=None):
+    """Metrics, curves and full curves of a trained model on the test set.
+
+    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
+    elsewhere (an ensemble's, vmapped over members: ``bench.core._ensemble``).
+    """
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    import models
+
+    # An adaptive evaluation of a stiff learned field can take millions of steps; a test
+    # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
+    # (non-finite states) instead of holding the sweep.
+    integ = eval_integrator(config)
+    dtype = jnp.dtype(config.dtype)
+    z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
+    ts = jnp.asarray(data.ts_test, dtype=dtype)
+    args = jnp.asarray(data.args_test, dtype=dtype) if config.random_args else None
+
+    @eqx.filter_jit
+    def roll(m, z0s, ts, args):
+        return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
+
+    if rolled is None:
+        predict = _predictor(model, system, roll)
+        t0 = time.perf_counter()
+        jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
+        t1 = time.perf_counter()
+        pred, stats = jax.block_until_ready(predict(z0s, ts, args))
+        t2 = time.perf_counter()
+        rollout_seconds = t2 - t1
+        eval_compile_seconds = max(0.0, (t1 - t0) - rollout_seconds)
+    else:
+        pred, stats, rollout_seconds, eval_compile_seconds = rolled
+    zhat = np.asarray(pred, dtype=np.float64)
+    z = data.z_test
+    angular = tuple(system.angular)
+    h_args = data.args_test if config.random_args else None
+
+    err_t = M.relative_error(zhat, z, angular)
+    h_true = M.energies(system, z, h_args, config.coordinates)
+    h_pred = M.energies(system, zhat, h_args, config.coordinates)
+    ev_t = M.energy_violation_curve(h_pred, h_true)
+    vpt = M.valid_prediction_time(err_t, data.ts_test)
+    finite = bool(np.all(np.isfinite(zhat)))
+    # Momentum-coordinate runs are also scored on (q, qdot), decoded with the TRUE velocity map
+    # (so models fed (q, p) and (q, qdot) can be compared on one footing).
+    err_velocity, mse_velocity = float("nan"), float("nan")
+    if config.coordinates == "momentum":
+        zv_hat, zv = to_velocity(system, zhat, h_args), to_velocity(system, z, h_args)
+        err_velocity = float(M.geometric_mean(M.relative_error(zv_hat, zv, angular)[..., 1:]))
+        mse_velocity = M.mse(zv_hat, zv, angular)
+
+    states = z.reshape(-1, z.shape[-1])
+    pick = np.linspace(0, len(states) - 1, min(_SYMPLECTIC_STATES, len(states))).astype(int)
+    s_args = None
+    if config.random_args:
+        s_args = jnp.asarray(np.repeat(data.args_test, z.shape[1], axis=0)[pick], dtype=dtype)
+    try:
+        nfe = float(np.mean(np.asarray(stats["nfe"])))
+    except Exception:
+        nfe = float("nan")
+    metrics = {
+        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
+        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
+        "mse": M.mse(zhat, z, angular),
+        "valid_time": float(np.mean(vpt)),
+        "rollout_error_ref": M.rollout_error(zhat, z, angular, reference_compatible=True),
+        "energy_violation_ref": M.energy_violation(h_pred, h_true, reference_compatible=True),
+        "energy_pct_max_pe": M.energy_pct_max_pe(
+            h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
+        ),
+        "rollout_error_velocity": err_velocity,
+        "mse_velocity": mse_velocity,
+        "symplectic_error": M.symplectic_error(
+            model, jnp.asarray(states[pick], dtype=dtype), s_args
+        ),
+        "floor": _floor(system, data, config, cache_root),
+        "rollout_finite": finite,
+        "eval_compile_seconds": eval_compile_seconds,
+        "rollout_seconds": rollout_seconds,
+        "rollout_seconds_per_traj": rollout_seconds / max(1, len(zhat)),
+        "nfe": nfe,
+        "n_params": M.n_params(model),
+    }
+    curves = {
+        "t": (data.ts_test - data.ts_test[0]).tolist(),
+        "rel_error": M.geometric_mean(err_t, axis=0).tolist(),
+        "energy_violation": M.geometric_mean(ev_t, axis=0).tolist(),
+        "z_true": z[0].tolist(),
+        "z_pred": zhat[0].tolist(),
+    }
+    full = {"err": err_t, "energy_violation": ev_t, "z_pred": zhat[:4], "z_true": z[:4]}
+    return metrics, curves, full
+
+
+NAN_METRICS = (
+    "rollout_error",
+    "rollout_error_velocity",
+    "energy_violation",
+    "mse",
+    "mse_velocity",
+    "valid_time",
+    "rollout_error_ref",
+    "energy_violation_ref",
+    "energy_pct_max_pe",
+    "symplectic_error",
+)
+
+
+def execute_run(
+    config: RunConfig, cache_root=None, progress=False, trained=None, rolled=None
+) -> dict:
+    """Run one configuration end to end and return its row (never raises).
+
+    The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
+    ``diverged_step``, ``error``, the metrics, the costs, and ``curves`` (small per-time
+    curves, stored in the row file and expanded into curves.parquet).
+
+    ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
+    ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
+    ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
+    """
+    cache_root = Path(cache_root or default_cache_root())
+    row = base_row(config)
+    art = artifact_dir(config.config_hash, cache_root)
+    t_start = time.perf_counter()
+    try:
+        art.mkdir(parents=True, exist_ok=True)
+        _write_json(art / "config.json", config.to_dict())
+        (art / "traceback.txt").unlink(missing_ok=True)
+        config.validate()
+        system, data, _, model = _build(config, cache_root)
+        if trained is None:
+            model, meta = _train_cached(config, model, data, cache_root, progress)
+        else:
+            model, meta = trained
+        row.update(
+            status=meta["status"],
+            diverged_step=meta.get("diverged_step"),
+            train_seconds=meta["train_seconds"],
+            compile_seconds=meta["compile_seconds"],
+            steps_done=meta.get("steps_done"),
+            final_loss=meta.get("final_loss"),
+            flops_per_step=_nan_if_none(meta.get("flops_per_step")),
+            train_cached=meta["train_cached"],
+        )
+        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled)
+        if row["status"] == "diverged" and not metrics["rollout_finite"]:
+            # A model that went non-finite in training has no meaningful prediction.
+            metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))
+        row.update(metrics)
+        row["curves"] = curves
+        np.savez_compressed(art / "curves.npz", **full)
+    except Exception as e:  # one run never stops the sweep...
+        if storage_error(e):  # ...but a full disk does (bench.core._errors), recording nothing
+            raise
+        row["status"] = "failed"
+        row["error"] = one_line(e, 500)
+        (art / "traceback.txt").write_text(traceback.format_exc())
+    row["wall_seconds"] = time.perf_counter() - t_start
+    row.update(provenance())  # versions, device and commit: bench.core._provenance
+    _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
+    return row
