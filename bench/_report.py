@@ -22,27 +22,28 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ._tables import (
+    _discrimination_lines,
+    _experiment_table,
+    _fmt,
+    _md_escape,
+    _missing_cells,
+    _perf_section,
+    _table_variant,
+)
 from .core._env import cpu_count
-from .core._experiments import RunConfig, expand, get
+from .core._experiments import get
 from .core._provenance import compare_results, provenance_markdown
 from .core._query import (
-    _cell_key,
-    _parse_pairs,
     experiment_rows,
     load_tables,
-    option,
-    params_of,
     select,
-    variant,
 )
 from .core._studies import studies
 from .studies.paper import (
-    MODEL_LABELS,
     TRIVIAL_FACTOR,
     TRIVIAL_MODELS,
-    discrimination,
     evaluate_claims,
-    velocity_scores,
 )
 
 __all__ = ["write_report"]
@@ -73,22 +74,6 @@ def _git_commit() -> str:
         return out.stdout.strip() or "unknown"
     except (OSError, subprocess.SubprocessError):
         return "unknown"
-
-
-def _fmt(x, digits: int = 3) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "-"
-    return f"{x:.{digits}g}"
-
-
-def _pm(mean, sem) -> str:
-    if not np.isfinite(mean):
-        return "-"
-    return _fmt(mean) if not np.isfinite(sem) else f"{_fmt(mean)} ± {_fmt(sem, 2)}"
-
-
-def _md_escape(text: str) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
 
 
 def _meta(results_dir: Path, runs: pd.DataFrame) -> list[str]:
@@ -255,191 +240,6 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
             + " |"
         )
     return out + [""]
-
-
-# Columns that tell the cells of an experiment apart, in display order.
-CELL_COLUMNS = (
-    "system",
-    "k",
-    "friction",
-    "initial",
-    "variant",
-    "coordinates",
-    "loss",
-    "weight",
-    "n_train",
-    "noise",
-)
-
-
-def _table_variant(rows: pd.DataFrame) -> pd.Series:
-    """Model label key plus the model options other than the regulariser weight; the Rayleigh
-    HNN is marked as claim 5's extra row."""
-    base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh (extra, not judged)"})
-
-    def opts(v) -> str:
-        o = {a: b for a, b in _parse_pairs(v).items() if a != "weight"}
-        return "[" + ", ".join(f"{a}={b}" for a, b in sorted(o.items())) + "]" if o else ""
-
-    extra = rows["model_options"].map(opts) if "model_options" in rows else ""
-    return base + extra
-
-
-def _initial(rows: pd.DataFrame) -> pd.Series:
-    return params_of(rows).map(lambda p: p.get("initial", "-"))
-
-
-def _experiment_table(rows: pd.DataFrame) -> list[str]:
-    df = rows.assign(
-        variant=_table_variant(rows), weight=option(rows, "weight"), initial=_initial(rows)
-    )
-    cells = [
-        c
-        for c in CELL_COLUMNS
-        if c in df and (df[c].astype(str).nunique() > 1 or c in ("variant", "coordinates"))
-    ]
-    for c in cells:
-        df[c] = df[c].astype(object).where(df[c].notna(), "-")
-    metrics = [
-        ("rollout_error", "rollout error"),
-        ("rollout_error_velocity", "error on (q, qdot)"),
-        ("mse", "MSE"),
-        ("energy_violation", "energy violation"),
-        ("energy_pct_max_pe", "energy % max PE"),
-        ("symplectic_error", "symplectic error"),
-        ("n_params", "params"),
-        ("train_seconds", "train s"),
-        ("flops_per_step", "FLOPs/step"),
-    ]
-    metrics = [m for m in metrics if m[0] in df and pd.to_numeric(df[m[0]], "coerce").notna().any()]
-    head = [*cells, "seeds", *[label for _, label in metrics]]
-    out = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
-    for key, g in df.groupby(cells, sort=True):
-        key = key if isinstance(key, tuple) else (key,)
-        vals = []
-        for col, _ in metrics:
-            x = pd.to_numeric(g[col], errors="coerce").to_numpy(float)
-            x = x[np.isfinite(x)]
-            sem = np.std(x, ddof=1) / math.sqrt(len(x)) if len(x) > 1 else math.nan
-            if col == "n_params" and len(x):
-                vals.append(f"{np.mean(x):.0f}")
-                continue
-            vals.append(_pm(float(np.mean(x)) if len(x) else math.nan, sem))
-        label = [
-            f"{k} (trivial)"
-            if c == "variant" and str(k).split("[")[0] in TRIVIAL_MODELS
-            else str(k)
-            for c, k in zip(cells, key, strict=True)
-        ]
-        out.append("| " + " | ".join([*label, str(g["seed"].nunique()), *vals]) + " |")
-    return out
-
-
-def _group_columns(rows: pd.DataFrame) -> list[str]:
-    return [c for c in ("system", "k", "friction", "initial") if c in rows]
-
-
-def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
-    """One "discriminating: yes/no" line per comparison group (system, k, friction, initial)."""
-    if not len(rows):
-        return []
-    df = rows.assign(initial=_initial(rows))
-    metric_rows = df
-    scores = None
-    if (
-        "rollout_error_velocity" in df
-        and (df["coordinates"] == "momentum").any()
-        and (df["coordinates"] == "velocity").any()
-    ):
-        scores, _ = velocity_scores(df)
-    out = []
-    cols = _group_columns(df)
-    for key, g in metric_rows.groupby(cols, dropna=False, sort=True):
-        key = key if isinstance(key, tuple) else (key,)
-        name = ", ".join(
-            f"{c}={_fmt(k) if isinstance(k, float) else k}"
-            for c, k in zip(cols, key, strict=True)
-            if str(k) not in ("nan", "-", "0.0")
-        )
-        d = discrimination(g, name, scores=scores.loc[g.index] if scores is not None else None)
-        mark = {"yes": "yes", "no": "**no**", "unknown": "unknown"}[d.status]
-        text = (
-            d.text().split(f"discriminating {d.status} ", 1)[-1]
-            if d.status != "unknown"
-            else "no finished trivial-predictor runs"
-        )
-        out.append(f"- discriminating: {mark} ({name}): {text}")
-    return out
-
-
-def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[str]:
-    """The declared cells of experiment ``name`` at ``profile`` that have no stored run."""
-    if profile is None:
-        return []
-    try:
-        want = {}
-        for c in expand(name, profile):
-            want.setdefault(_cell_key(c), c)
-        have = {_cell_key(RunConfig.from_dict(r)) for r in rows.to_dict("records")}
-    except ValueError:
-        return []
-    missing = [c for k, c in want.items() if k not in have]
-    if not missing:
-        return []
-    labels = sorted(
-        {
-            f"{MODEL_LABELS.get(c.model, c.model)} on {c.system}"
-            + (f" k={c.k}" if c.k else "")
-            + (f" {dict(c.model_options)}" if c.model_options else "")
-            + (f" {dict(c.system_params)}" if c.system_params else "")
-            + (f" ({c.coordinates})" if c.coordinates != "velocity" else "")
-            + (f" noise={c.noise:g}" if c.noise else "")
-            + (f" n_train={c.n_train}" if name == "vin" else "")
-            for c in missing
-        }
-    )
-    shown = "; ".join(labels[:12]) + (
-        f"; ... ({len(labels) - 12} more)" if len(labels) > 12 else ""
-    )
-    return [f"No runs for {len(missing)} declared cells (every seed): {_md_escape(shown)}.", ""]
-
-
-def _perf_section(results_dir: Path) -> list[str]:
-    """The performance table of ``results/perf.csv`` (written by ``python -m bench perf``)."""
-    path = results_dir / "perf.csv"
-    head = ["## Performance (training step and test rollout)", ""]
-    if not path.exists():
-        return head + ["No `perf.csv` yet: `python -m bench perf`.", ""]
-    df = pd.read_csv(path)
-    cols = [
-        c
-        for c in (
-            "model",
-            "ms_per_step_median",
-            "reference_step_ms",
-            "speedup_step",
-            "flop_floor_ms",
-            "rollout_ms_median",
-            "reference_rollout_ms",
-            "speedup_rollout",
-            "compile_s",
-        )
-        if c in df
-    ]
-    when = df["date"].iloc[0] if "date" in df else "?"
-    load = f", load average {df['load_avg'].median():.1f}" if "load_avg" in df else ""
-    lines = head + [
-        f"Measured by `python -m bench perf` ({when}{load}) at the reference setting: chain-2, "
-        "2 x 256 tanh, batch 200, chunk 5, RK4 (3/8) one step per dt, float32. Reference = the "
-        "paper's PyTorch code on this machine class (REFERENCE.md); speedup = reference / ours; "
-        "FLOP floor = the step's FLOPs (XLA cost analysis) over the measured matmul peak.",
-        "",
-        "| " + " | ".join(cols) + " |",
-        "|" + "---|" * len(cols),
-    ]
-    for _, r in df.iterrows():
-        lines.append("| " + " | ".join(_fmt(r[c]) if c != "model" else r[c] for c in cols) + " |")
-    return lines + [""]
 
 
 def _extra_sections(results_dir: Path) -> list[str]:

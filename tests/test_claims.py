@@ -16,7 +16,7 @@ from _synthetic import synthetic_tables
 
 from bench.core._query import option
 from bench.studies import paper as C
-from bench.studies.paper import _rules as R
+from bench.studies.paper import _stats as R
 
 
 def _by_key(runs, curves):

@@ -100,16 +100,12 @@ from ._common import (  # noqa: E402
 )
 from ._rules import (  # noqa: E402
     CLAIM_TITLES,
-    MODEL_LABELS,
-    TRIVIAL_FACTOR,
-    VERDICTS,
-    Verdict,
     claim_studies,
     discrimination,
     evaluate_claims,
-    scored,
     succeeds,
 )
+from ._stats import MODEL_LABELS, TRIVIAL_FACTOR, VERDICTS, Verdict, scored  # noqa: E402
 from .relativistic import RELATIVISTIC_CELLS, RELATIVISTIC_EXTRAS, velocity_scores  # noqa: E402
 
 _MODULES = (energy, symplectic, second_order, coordinates, damped, loss, relativistic)

@@ -26,16 +26,18 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
+    _models,
+    _verdict,
+    discrimination,
+)
+from ._stats import (
     DELTA,
     Verdict,
     _boot,
-    _models,
     _n_bad,
     _paired,
     _Part,
     _positive,
-    _verdict,
-    discrimination,
 )
 
 

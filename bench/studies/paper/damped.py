@@ -33,19 +33,21 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
+    _cost_part,
+    _models,
+    _verdict,
+    discrimination,
+)
+from ._stats import (
     DELTA_2,
     Verdict,
     _boot,
     _cell,
-    _cost_part,
-    _models,
     _n_bad,
     _paired,
     _paper_spring,
     _Part,
     _positive,
-    _verdict,
-    discrimination,
 )
 
 # Extra rows of the damped experiment (no verdict): the Rayleigh HNN runs at seed 0 only at

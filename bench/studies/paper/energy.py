@@ -37,22 +37,24 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
-    DELTA_2,
     FAMILIES,
     GROWTH_SLOPE,
     HNN_FAMILY,
+    _curve_slopes,
+    _models,
+    _per_system_disc,
+    _verdict,
+)
+from ._stats import (
+    DELTA_2,
     MODEL_LABELS,
     Verdict,
     _boot,
-    _curve_slopes,
-    _models,
     _n_bad,
     _null,
     _paper_spring,
     _Part,
-    _per_system_disc,
     _threshold,
-    _verdict,
     scored,
 )
 

@@ -33,14 +33,16 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
+    _models,
+    _verdict,
+    discrimination,
+)
+from ._stats import (
     MODEL_LABELS,
     Verdict,
     _boot,
-    _models,
     _n_bad,
     _Part,
-    _verdict,
-    discrimination,
     scored,
 )
 

@@ -29,18 +29,20 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
+    _models,
+    _verdict,
+    discrimination,
+    succeeds,
+)
+from ._stats import (
     TRIVIAL_FACTOR,
     Verdict,
     _bad,
     _cell,
-    _models,
     _n_bad,
     _Part,
     _positive,
-    _verdict,
-    discrimination,
     scored,
-    succeeds,
 )
 
 # (model, coordinates, model_options) of the relativistic test; the extras run at seed 0 only

@@ -26,6 +26,10 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
+    _verdict,
+    discrimination,
+)
+from ._stats import (
     DELTA,
     Verdict,
     _boot,
@@ -34,8 +38,6 @@ from ._rules import (
     _paired,
     _paper_spring,
     _Part,
-    _verdict,
-    discrimination,
 )
 
 SECOND_ORDER = Experiment(

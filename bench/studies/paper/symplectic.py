@@ -33,13 +33,15 @@ from ._plot import (
 )
 from ._rules import (
     CLAIM_TITLES,
-    Verdict,
     _k,
+    _per_system_disc,
+    _verdict,
+)
+from ._stats import (
+    Verdict,
     _n_bad,
     _null,
     _paper_spring,
-    _per_system_disc,
-    _verdict,
     scored,
 )
 

@@ -29,16 +29,18 @@ from ._plot import (
 from ._rules import (
     BOUNDED_SLOPE,
     CLAIM_TITLES,
-    Verdict,
-    _boot,
     _curve_slopes,
     _models,
+    _verdict,
+    discrimination,
+)
+from ._stats import (
+    Verdict,
+    _boot,
     _n_bad,
     _paired,
     _Part,
     _positive,
-    _verdict,
-    discrimination,
 )
 
 # Noisy data are at the smallest data size (n_train 8 at every profile), the VIN seed's
