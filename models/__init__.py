@@ -3,6 +3,7 @@
 Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract model classes,
 :func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
 parameter-free reference predictors), :func:`coordinates` (what a model accepts),
+:func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`),
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve), :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
 """
@@ -21,6 +22,7 @@ from ._integrators import (
 from ._models import available, coordinates, make, n_parameters, trivial_models
 from ._scalar import acceleration_from_lagrangian
 from ._scene import Scene
+from ._spec import ModelSpec, spec
 from ._symplectic import symplectic_error
 from ._trivial import AbstractTrivialModel
 
@@ -37,12 +39,14 @@ __all__ = [
     "AbstractDiscreteModel",
     "AbstractModel",
     "AbstractTrivialModel",
+    "ModelSpec",
     "Scene",
     "acceleration_from_lagrangian",
     "available",
     "coordinates",
     "make",
     "n_parameters",
+    "spec",
     "symplectic_error",
     "trivial_models",
 ]

@@ -28,6 +28,10 @@ class AbstractModel(eqx.Module):
 
     scene: eqx.AbstractVar[Scene]
     dtype: eqx.AbstractVar[str]
+    # Capability markers, read by ``models.spec``: the energy structure the model is built on
+    # ("hamiltonian", "lagrangian" or None) and whether it is a parameter-free predictor.
+    structure: ClassVar[str | None] = None
+    trivial: ClassVar[bool] = False
 
     def penalty(self, zs, args) -> Array:
         return jnp.zeros((), self.dtype)

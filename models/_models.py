@@ -27,7 +27,8 @@ part when the scene is damped (or ``dissipation=True``).
 from __future__ import annotations
 
 import difflib
-from typing import ClassVar
+from collections.abc import Callable
+from typing import ClassVar, NamedTuple
 
 import equinox as eqx
 import jax
@@ -156,6 +157,8 @@ class HNN(AbstractContinuousModel):
     ``internal_field`` = J grad H + Q), where the mass network is not evaluated per stage.
     """
 
+    structure: ClassVar[str | None] = "hamiltonian"
+
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     hamiltonian_part: GeneralHamiltonian | SeparableHamiltonian
@@ -266,6 +269,8 @@ class SeparableHNN(AbstractContinuousModel):
     and a jvp of M^-1.
     """
 
+    structure: ClassVar[str | None] = "hamiltonian"
+
     second_order: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
@@ -355,6 +360,8 @@ class MixtureHNN(AbstractContinuousModel):
     Rayleigh variant ``hnn_so`` + ``Dissipation`` (Q = -D(q) qdot on dp/dt) is the correctly
     specified, stronger model for the benchmark's damped systems.
     """
+
+    structure: ClassVar[str | None] = "hamiltonian"
 
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
@@ -469,6 +476,8 @@ class LNN(AbstractContinuousModel):
     With friction Q = -D(q) qdot the energy E = qdot . dL/dqdot - L has dE/dt = qdot . Q <= 0.
     """
 
+    structure: ClassVar[str | None] = "lagrangian"
+
     second_order: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
@@ -546,6 +555,8 @@ class VIN(AbstractDiscreteModel):
     Lagrange-d'Alembert force (see :func:`verlet_step`).
     """
 
+    structure: ClassVar[str | None] = "lagrangian"
+
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     features: Features
@@ -607,6 +618,8 @@ class ImplicitVIN(AbstractDiscreteModel):
     keeps d2L/dv2 near the identity at initialisation, so both Newton solves are well posed;
     the MLP can learn any correction. With dissipation, Q = -D(q) v (learned PSD D(q)).
     """
+
+    structure: ClassVar[str | None] = "lagrangian"
 
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
@@ -698,56 +711,59 @@ def _trivial(cls):
     def build(s, width, depth, activation, dtype, *, key, dissipation):
         return cls(s, dtype)
 
-    build.trivial = True
     return build
 
 
-# name -> (builder, {option: validator}, structured (takes dissipation), coordinates it
-#          needs (None: either), default activation)
+class _Entry(NamedTuple):
+    """A registered model: its class (whose markers the spec reads), how to build it, its
+    options (name -> validator), whether it takes a dissipation term (the structured models),
+    the coordinates it needs (None: either) and its default activation."""
+
+    cls: type
+    build: Callable
+    options: dict = {}
+    structured: bool = False
+    needs: str | None = None
+    activation: str = "tanh"
+
+
+def _plain(cls):
+    """The builder of a model class that takes no dissipation term."""
+
+    def build(s, *a, key, dissipation, **options):
+        return cls(s, *a, key=key, **options)
+
+    return build
+
+
 _V, _P = "velocity", "momentum"
 _REGISTRY = {
-    "node": (lambda s, *a, key, dissipation: NeuralODE(s, *a, key=key), {}, False, None, "tanh"),
-    "node_so": (
-        lambda s, *a, key, dissipation: SecondOrderODE(s, *a, key=key),
-        {},
-        False,
-        None,
-        "tanh",
-    ),
-    "hnn": (_build_hnn, {"momentum_map": _boolean("momentum_map")}, True, None, "tanh"),
-    "hnn_so": (
+    "node": _Entry(NeuralODE, _plain(NeuralODE)),
+    "node_so": _Entry(SecondOrderODE, _plain(SecondOrderODE)),
+    "hnn": _Entry(HNN, _build_hnn, {"momentum_map": _boolean("momentum_map")}, True),
+    "hnn_so": _Entry(
+        SeparableHNN,
         lambda s, *a, key, dissipation: _build_hnn(
             s, *a, key=key, separable=True, dissipation=dissipation
         ),
-        {},
-        True,
-        None,
-        "tanh",
+        structured=True,
     ),
-    "mixture_hnn": (
-        lambda s, *a, key, dissipation: MixtureHNN(s, *a, key=key),
-        {},
-        False,
-        None,
-        "tanh",
-    ),
-    "node_symreg": (
+    "mixture_hnn": _Entry(MixtureHNN, _plain(MixtureHNN)),
+    "node_symreg": _Entry(
+        NeuralODE,
         lambda s, *a, key, dissipation, weight=1.0: NeuralODE(s, *a, key=key, weight=weight),
         {"weight": _positive_float("weight")},
-        False,
-        None,
-        "tanh",
     ),
-    "node_so_symreg": (
+    "node_so_symreg": _Entry(
+        CanonicalSecondOrderODE,
         lambda s, *a, key, dissipation, weight=1.0: CanonicalSecondOrderODE(
             s, *a, key=key, weight=weight
         ),
         {"weight": _positive_float("weight")},
-        False,
-        _P,
-        "tanh",
+        needs=_P,
     ),
-    "lnn": (
+    "lnn": _Entry(
+        LNN,
         LNN,
         {
             "solve": _choice("solve", SOLVES),
@@ -759,17 +775,13 @@ _REGISTRY = {
         _V,
         "softplus",
     ),
-    "vin": (VIN, {}, True, _V, "tanh"),
-    "vin_implicit": (
-        ImplicitVIN,
-        {"newton_steps": _positive_int("newton_steps")},
-        True,
-        _V,
-        "tanh",
+    "vin": _Entry(VIN, VIN, {}, True, _V),
+    "vin_implicit": _Entry(
+        ImplicitVIN, ImplicitVIN, {"newton_steps": _positive_int("newton_steps")}, True, _V
     ),
-    "resnet": (lambda s, *a, key, dissipation: ResNet(s, *a, key=key), {}, False, None, "tanh"),
-    "constant_velocity": (_trivial(ConstantVelocity), {}, False, None, "tanh"),
-    "at_rest": (_trivial(AtRest), {}, False, None, "tanh"),
+    "resnet": _Entry(ResNet, _plain(ResNet)),
+    "constant_velocity": _Entry(ConstantVelocity, _trivial(ConstantVelocity)),
+    "at_rest": _Entry(AtRest, _trivial(AtRest)),
 }
 
 
@@ -780,14 +792,14 @@ def available() -> list[str]:
 
 def trivial_models() -> list[str]:
     """Names of the registered trivial predictors (no parameters, nothing to train)."""
-    return [n for n, entry in _REGISTRY.items() if getattr(entry[0], "trivial", False)]
+    return [n for n, entry in _REGISTRY.items() if entry.cls.trivial]
 
 
 def coordinates(name: str) -> tuple[str, ...]:
     """The coordinate settings ("velocity", "momentum") that model ``name`` accepts."""
     if name not in _REGISTRY:
         raise ValueError(f"unknown model {name!r}; allowed: {available()}")
-    needs = _REGISTRY[name][3]
+    needs = _REGISTRY[name].needs
     return (_V, _P) if needs is None else (needs,)
 
 
@@ -813,7 +825,7 @@ def make(
         close = difflib.get_close_matches(str(name), list(_REGISTRY), n=1)
         hint = f" (closest: {close[0]!r})" if close else ""
         raise ValueError(f"unknown model {name!r}{hint}; allowed: {available()}")
-    builder, allowed, structured, needs, default_activation = _REGISTRY[name]
+    builder, allowed, structured, needs, default_activation = _REGISTRY[name][1:]
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a models.Scene, got {type(scene).__name__}")
     for field, value in (("width", width), ("depth", depth)):

@@ -14,8 +14,9 @@ CHAIN2 = Scene(dof=2, angular=(True, True))
 CHAIN2_CANONICAL = Scene(dof=2, angular=(True, True), canonical=True)
 # the models with parameters (the trivial predictors have none and no vector field)
 TRAINABLE = [n for n in models.available() if n not in models.trivial_models()]
-STRUCTURED = ("hnn", "hnn_so", "lnn", "vin", "vin_implicit")
-VELOCITY_ONLY = ("lnn", "vin", "vin_implicit")
+# the models with a dissipation switch, and those that accept velocity coordinates only
+STRUCTURED = tuple(n for n in models.available() if models.spec(n).takes_dissipation)
+VELOCITY_ONLY = tuple(n for n in models.available() if models.spec(n).coordinates == ("velocity",))
 G = 9.81
 
 

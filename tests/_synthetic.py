@@ -20,6 +20,7 @@ from collections.abc import Iterable
 import numpy as np
 import pandas as pd
 
+import models
 from bench.core import _store
 from bench.core._experiments import expand
 from bench.core._query import _parse_pairs
@@ -60,7 +61,7 @@ def _error(c, scenario: str) -> tuple[float, float, str]:
     growth is "linear", "flat" or "bounded" (the energy violation's shape in time)."""
     contradict = scenario == "contradict"
     key = "contradict" if contradict else "reproduce"
-    if c.model in ("constant_velocity", "at_rest"):
+    if models.spec(c.model).trivial:
         err = TRIVIAL_ERROR if c.model == "constant_velocity" else TRIVIAL_ERROR * 1.2
         if c.system == "relativistic_particle":
             err = RELATIVISTIC[key]["trivial"]
@@ -107,7 +108,7 @@ def _error(c, scenario: str) -> tuple[float, float, str]:
 def _cost(c, scenario: str) -> tuple[float, float]:
     """(training seconds, FLOPs per step): NODE+SO cheaper than the HNNs, except that in the
     "contradict" scenario it costs more than the damped HNN."""
-    if c.model in ("constant_velocity", "at_rest"):
+    if models.spec(c.model).trivial:
         return 0.0, 0.0
     if c.model == "node_so" and scenario == "contradict":
         return 60.0, 5e5
@@ -149,7 +150,7 @@ def synthetic_tables(
                 ev_t = ev * growth * np.exp(noise * gen.standard_normal(len(t)))
                 q = np.sin(t)[:, None] * np.ones((1, 2 * max(1, c.k or 1)))
                 w = _parse_pairs(c.model_options).get("weight", 0.0)
-                trivial = c.model in ("constant_velocity", "at_rest")
+                trivial = models.spec(c.model).trivial
                 momentum = c.coordinates == "momentum"
                 row = c.to_dict()
                 row.update(

@@ -113,12 +113,33 @@ def test_variant_scene_uses_args_and_dissipation(name):
     model, out1, out2 = _variant(name)
     assert out1.shape == (5, 4) and bool(jnp.all(jnp.isfinite(out1)))
     assert float(jnp.max(jnp.abs(out1 - out2))) > 1e-8  # args are inputs
-    if name in STRUCTURED:
+    if name in STRUCTURED:  # spec(name).takes_dissipation: a damped scene adds the term
         assert model.dissipation is not None
+    else:
+        assert getattr(model, "dissipation", None) is None
     plain = models.make(
         name, _variant(name)[0].scene, key=jr.PRNGKey(3), width=W, dissipation=False
     )
     assert getattr(plain, "dissipation", None) is None
+
+
+def test_spec_agrees_with_the_built_models():
+    # models.spec reads the capabilities off the classes; a built model must show each of them.
+    for name in models.available():
+        s = models.spec(name)
+        model = models.make(name, _scene_for(name), key=jr.PRNGKey(0), width=W)
+        assert s.continuous == isinstance(model, AbstractContinuousModel), name
+        assert s.discrete == isinstance(model, models.AbstractDiscreteModel), name
+        assert s.trivial == isinstance(model, models.AbstractTrivialModel), name
+        assert s.second_order == bool(getattr(model, "second_order", False)), name
+        assert set(s.coordinates) == set(models.coordinates(name)), name
+        assert s.default_activation in ("tanh", "softplus")
+    assert [n for n in models.available() if models.spec(n).trivial] == models.trivial_models()
+    hnn, lnn, vin, node = (models.spec(n) for n in ("hnn", "lnn", "vin", "node"))
+    assert hnn.hamiltonian and lnn.lagrangian and vin.lagrangian and node.structure is None
+    assert vin.discrete and not vin.continuous and hnn.options == ("momentum_map",)
+    with pytest.raises(ValueError, match="unknown model 'nope'"):
+        models.spec("nope")
 
 
 def test_registry_and_errors():

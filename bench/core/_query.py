@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+import models
+
 from . import _store
 
 
@@ -176,7 +178,9 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
 
 
 def variant(df: pd.DataFrame) -> pd.Series:
-    """Model label key: ``hnn_so_diss`` for an HNN with the dissipation term, else the model."""
+    """Model label key: ``<model>_diss`` (e.g. ``hnn_so_diss``) for a model run with its
+    dissipation term on, else the model."""
     diss = df["dissipation"] if "dissipation" in df else pd.Series(None, index=df.index)
     is_diss = diss.map(lambda v: v is True or v == 1 or v == "True" or v == "true")
-    return df["model"].where(~(is_diss & df["model"].str.startswith("hnn")), df["model"] + "_diss")
+    takes = df["model"].map(lambda m: m in models.available() and models.spec(m).takes_dissipation)
+    return df["model"].where(~(is_diss & takes.astype(bool)), df["model"] + "_diss")

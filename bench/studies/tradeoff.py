@@ -33,6 +33,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+import models
+
 from ..core._experiments import PROFILES, Experiment, RunConfig, expand, field_names
 from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
@@ -43,7 +45,6 @@ MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
 # on 2026-11-22: every adaptive and implicit evaluation solves its Hessian at each stage), so at
 # quick it runs in the paper profile only and the 30-minute budget of `make bench` holds.
 PROFILE_MODELS = {"smoke": MODELS, "quick": ("node", "node_so", "hnn_so", "vin"), "paper": MODELS}
-DISCRETE = ("vin", "resnet")
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
 BASE_TRAIN_INTEGRATOR = "rk4_38"
 BASE_EVAL = ("rk4_38", 1)
@@ -99,6 +100,11 @@ TRAIN_VARIANTS = {
 QUICK_TRAIN_INTEGRATORS = ("rk4_38", "euler")
 
 
+def _discrete(model) -> bool:
+    """Whether ``model`` (a name from a stored row) is a learned map (its own integrator)."""
+    return model in models.available() and models.spec(model).discrete
+
+
 def profile_of(cfg: RunConfig) -> str:
     """The profile a run was expanded under, recognised by its data size (n_generated,
     n_train), which each profile sets and this experiment does not change."""
@@ -133,7 +139,7 @@ def include(cfg: RunConfig) -> bool:
     rule = TRAIN_VARIANTS[profile]
     if changed and (cfg.model not in rule["models"] or cfg.system not in rule["systems"]):
         return False
-    if cfg.model in DISCRETE:
+    if models.spec(cfg.model).discrete:
         return "train_integrator" not in changed and _is_base_eval(cfg)
     if cfg.eval_integrator == "adaptive":
         if cfg.eval_substeps != 1:
@@ -220,7 +226,7 @@ def estimate(
     total = 0.0
     for c in trainings.values():
         dof = 3 * (c.k or 1) if c.system == "spring_pendulum" else (c.k or 1)
-        free = c.model in ("node", "node_so", "resnet")
+        free = models.spec(c.model).structure is None
         g = 1.0 if free else max(1.0, dof / 2) ** (math.log(60 / 35) / math.log(3))
         width = (c.width / 128) ** 1.5  # between linear (small widths) and quadratic
         steps_ms = ms.get(c.model, 20.0) * (min(c.batch, c.n_train) / 200) * g * width
@@ -328,7 +334,7 @@ def label(df: pd.DataFrame) -> pd.Series:
     """A short text per configuration: ``rk4x2``, ``adaptive@1e-09``, ``w256``, ``s3000``..."""
 
     def one(r):
-        if r.get("model") in DISCRETE:
+        if _discrete(r.get("model")):
             ev = "native"  # a discrete model is its own integrator
         elif r.get("eval_integrator") == "adaptive":
             ev = f"adaptive@{float(r['eval_rtol']):.0e}"
@@ -354,7 +360,7 @@ def tradeoff_table(runs: pd.DataFrame, cost: str = "rollout_seconds_per_traj") -
     fronts = []
     for _, g in agg.groupby(["system", "model"], sort=True):
         f = pareto_front(g, cost).assign(on_front="yes")
-        if "eval_integrator" in g and not (g["model"].isin(DISCRETE)).all():
+        if "eval_integrator" in g and not g["model"].map(_discrete).all():
             e = pd.to_numeric(g[ERROR], errors="coerce")
             c = pd.to_numeric(g[cost], errors="coerce")
             rest = g[np.isfinite(e) & np.isfinite(c) & ~g.index.isin(f.index)]

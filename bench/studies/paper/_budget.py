@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 
+import models
+
 from ...core._experiments import Experiment, RunConfig, expand
 from ._common import (
     TRIVIAL_MODELS,
-    _free,
 )
 from .coordinates import COORDINATES
 from .damped import DAMPED
@@ -85,6 +86,13 @@ TRADEOFF_S = 1248.0 / 2
 SWEEP_RATIO = 25.8 / 27.0
 
 
+def _dof_scaled(model: str) -> bool:
+    """Whether a model's step cost is scaled with the dof: the Hamiltonian models with a
+    dissipation switch (hnn, hnn_so), whose step cost was measured against the dof."""
+    s = models.spec(model)
+    return s.hamiltonian and s.takes_dissipation
+
+
 def _dof(c: RunConfig) -> int:
     if c.system == "spring_pendulum":
         return 3 * (c.k or 1)
@@ -126,7 +134,11 @@ def estimate_seconds(
         train, other = _wall(c)
         # the dof at which WALL_S was measured: chain-2 / spring-2 (6), k = 1, the particle
         dof_quick = {"spring_pendulum": 6, "chain_pendulum": min(2, _dof(c))}.get(c.system, 1)
-        g = 1.0 if _free(c.model) else (_dof(c) / dof_quick) ** (math.log(60 / 35) / math.log(3))
+        g = (
+            1.0
+            if not _dof_scaled(c.model)
+            else (_dof(c) / dof_quick) ** (math.log(60 / 35) / math.log(3))
+        )
         s = (c.steps / 1000) * (c.batch / 100) * (c.width / 128) * g
         total += train * s + other
     return {

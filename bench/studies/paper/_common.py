@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import models
+
 from ...core._experiments import RunConfig
 
 PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
-TRIVIAL_MODELS = ("constant_velocity", "at_rest")
+# the parameter-free reference predictors, in the registry's order
+TRIVIAL_MODELS = tuple(models.trivial_models())
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
 # Fig. 3's grid: log-spaced from 1e-6 to 1e3 (REFERENCE.md), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
@@ -43,12 +46,12 @@ def _shared(extra: Mapping[str, Mapping[str, object]] | None = None) -> dict:
 
 
 def _free(model: str) -> bool:
-    """Models without a dissipation switch (everything but the HNN family)."""
-    return not model.startswith("hnn")
+    """Models without a dissipation switch (their cells leave ``dissipation`` unset)."""
+    return not models.spec(model).takes_dissipation
 
 
 def _trivial(model: str) -> bool:
-    return model in TRIVIAL_MODELS
+    return models.spec(model).trivial
 
 
 def _initial_ok(c: RunConfig, allowed=(SPRING_PAPER,)) -> bool:

@@ -1,0 +1,66 @@
+"""What a registered model can do, as data: :func:`spec` reads it off the model's class and its
+registry entry, so no list of model names is kept anywhere else."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+from ._base import AbstractContinuousModel, AbstractDiscreteModel
+from ._models import _REGISTRY, available, coordinates
+
+__all__ = ["ModelSpec", "spec"]
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """The capabilities of a registered model.
+
+    ``continuous``: a learned vector field dz/dt = F(z), integrated by ``models.rollout``;
+    ``discrete``: a learned map z_n -> z_{n+1} over one dt (the integrator is the model); a
+    trivial predictor is neither. ``second_order``: dq/dt = qdot holds exactly. ``structure``:
+    the energy function the model is built on, "hamiltonian" (H(q, p)), "lagrangian"
+    (L(q, qdot)) or None (a free model). ``takes_dissipation``: the model adds a learned
+    dissipation term in damped scenes (``make(..., dissipation=...)``). ``coordinates``: the
+    scene coordinates it accepts ("velocity", "momentum"). ``options``: the names of its
+    ``make`` options."""
+
+    name: str
+    continuous: bool
+    discrete: bool
+    second_order: bool
+    structure: str | None
+    trivial: bool
+    takes_dissipation: bool
+    coordinates: tuple[str, ...]
+    default_activation: str
+    options: tuple[str, ...]
+
+    @property
+    def hamiltonian(self) -> bool:
+        return self.structure == "hamiltonian"
+
+    @property
+    def lagrangian(self) -> bool:
+        return self.structure == "lagrangian"
+
+
+@functools.cache
+def spec(name: str) -> ModelSpec:
+    """The :class:`ModelSpec` of the registered model ``name`` (ValueError naming them)."""
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown model {name!r}; allowed: {available()}")
+    entry = _REGISTRY[name]
+    cls = entry.cls
+    return ModelSpec(
+        name=name,
+        continuous=issubclass(cls, AbstractContinuousModel),
+        discrete=issubclass(cls, AbstractDiscreteModel),
+        second_order=bool(getattr(cls, "second_order", False)),
+        structure=cls.structure,
+        trivial=bool(cls.trivial),
+        takes_dissipation=bool(entry.structured),
+        coordinates=coordinates(name),
+        default_activation=entry.activation,
+        options=tuple(sorted(entry.options)),
+    )
