@@ -35,6 +35,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._coordinates import to_momentum
 from ._registry import make
 
 FORMAT_VERSION = 1
@@ -204,8 +205,8 @@ def _generate(system, config: DatasetConfig) -> dict[str, np.ndarray]:
     z_test = _windows(traj[config.n_train :], k_start_test, config.test_chunks * config.chunk)
 
     if config.coordinates == "momentum":
-        z_train = _to_momentum(system, z_train, args_train)
-        z_test = _to_momentum(system, z_test, args_test)
+        z_train = to_momentum(system, z_train, args_train)
+        z_test = to_momentum(system, z_test, args_test)
     if config.noise > 0:
         z_train = z_train + config.noise * np.asarray(
             jax.random.normal(k_noise, z_train.shape, dtype=jnp.float64)
@@ -218,14 +219,6 @@ def _generate(system, config: DatasetConfig) -> dict[str, np.ndarray]:
         "z_test": np.ascontiguousarray(z_test, dtype=np.float64),
         "args_test": args_test,
     }
-
-
-def _to_momentum(system, z, args):
-    """(q, qdot) -> (q, p) along every trajectory; args (N, P) per trajectory."""
-    d = system.dof
-    per_state = jax.vmap(lambda zz, a: system.momentum(zz, a), in_axes=(0, None))
-    p = jax.jit(jax.vmap(per_state))(jnp.asarray(z), jnp.asarray(args))
-    return np.concatenate([z[..., :d], np.asarray(p)], axis=-1)
 
 
 def _checksum(arrays) -> str:

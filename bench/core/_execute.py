@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _metrics as M
 from . import _store
+from ._env import cache_root as _env_cache_root
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig
 from ._provenance import provenance
@@ -39,8 +40,8 @@ _SYMPLECTIC_STATES = 64
 
 
 def default_cache_root() -> Path:
-    """$DECON_CACHE, or ./.cache/decon-bench."""
-    return Path(os.environ.get("DECON_CACHE", Path(".cache") / "decon-bench"))
+    """The suite's cache root (:func:`bench.core._env.cache_root`) as a path."""
+    return Path(_env_cache_root())
 
 
 def artifact_dir(config_hash: str, cache_root=None) -> Path:
@@ -235,24 +236,9 @@ def _true_maps(system):
 def to_velocity(system, zs, args=None) -> np.ndarray:
     """States (N, T, 2d) in (q, p) mapped to (q, qdot) with the TRUE ``system.velocity``;
     ``args`` None (the system's defaults) or (N, n_args). Non-finite states stay non-finite."""
-    import jax
-    import jax.numpy as jnp
+    import systems
 
-    zs = np.asarray(zs, dtype=np.float64)
-    n, t, w = zs.shape
-    d = w // 2
-    a = np.zeros((n, 0)) if args is None else np.asarray(args, dtype=np.float64).reshape(n, -1)
-    velocity, _ = _true_maps(system)
-    per_traj = jax.vmap(lambda q, p, x: velocity(q, p, x), in_axes=(0, 0, None))
-    finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
-    safe = np.where(finite, zs, 0.0)
-    v = np.asarray(
-        jax.jit(jax.vmap(per_traj))(
-            jnp.asarray(safe[..., :d]), jnp.asarray(safe[..., d:]), jnp.asarray(a)
-        )
-    )
-    out = np.concatenate([zs[..., :d], v], axis=-1)
-    return np.where(finite, out, np.nan)
+    return systems.to_velocity(system, zs, args)
 
 
 def _predictor(model, system, roll):

@@ -226,27 +226,19 @@ def perturbed_floor(
     z_test = np.asarray(z_test, dtype=np.float64)
     rng = np.random.default_rng(key)
     z0 = z_test[:, 0] + scale * rng.standard_normal(z_test[:, 0].shape)
-    d = z0.shape[-1] // 2
     n_t = len(ts)
     ts = np.asarray(ts, dtype=np.float64)
     if sim_points is not None and sim_points > n_t:
         ts = ts[0] + np.arange(sim_points) * (ts[1] - ts[0])
     a = None if args is None or np.asarray(args).size == 0 else np.asarray(args)
     if coordinates == "momentum":
-        import jax
-        import jax.numpy as jnp
+        from systems import to_momentum, to_velocity
 
         aa = a if a is not None else np.zeros((z0.shape[0], 0))
         if aa.ndim == 1:
             aa = np.broadcast_to(aa, (z0.shape[0], aa.shape[0]))
-        vel = jax.vmap(lambda q, p, x: system.velocity(q, p, None if x.size == 0 else x))
-        mom = jax.vmap(lambda zz, x: system.momentum(zz, None if x.size == 0 else x))
-        z0 = np.concatenate([z0[:, :d], np.asarray(vel(z0[:, :d], z0[:, d:], aa))], axis=-1)
-        zs = np.asarray(system.simulate_batch(z0, ts - ts[0], a))
-        n, t = zs.shape[:2]
-        flat = zs.reshape(n * t, -1)
-        p = np.asarray(mom(jnp.asarray(flat), jnp.asarray(np.repeat(aa, t, axis=0))))
-        zs = np.concatenate([flat[:, :d], p], axis=-1).reshape(n, t, -1)
+        z0 = to_velocity(system, z0, aa)
+        zs = to_momentum(system, np.asarray(system.simulate_batch(z0, ts - ts[0], a)), aa)
     else:
         zs = np.asarray(system.simulate_batch(z0, ts - ts[0], a))
     zs = zs[:, :n_t]

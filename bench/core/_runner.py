@@ -209,7 +209,7 @@ def _sweep_ray(groups, finish, cache_root, address, cores):
         "DECON_CACHE": str(cache_root),
         # Workers start elsewhere: let them import this checkout whether or not it is installed.
         "PYTHONPATH": os.pathsep.join(
-            p for p in (str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")) if p
+            p for p in (str(Path(__file__).resolve().parents[2]), os.environ.get("PYTHONPATH")) if p
         ),
     }
     started = False

@@ -39,6 +39,7 @@ from ..core._experiments import PROFILES, Experiment, RunConfig, expand, field_n
 from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study
+from ._figure import save_figure
 
 MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
 # The LNN's evaluations were two thirds of the quick trade-off's cost (821 of 1248 s of run time
@@ -475,13 +476,7 @@ def tradeoff_figure(results_dir="results", profile: str | None = None) -> list[P
             )
             ax.legend(fontsize=8)
     fig.tight_layout()
-    out = Path(results_dir) / "figures"
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "tradeoff.png", out / "tradeoff.pdf"]
-    for p in paths:
-        fig.savefig(p, dpi=120)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, Path(results_dir) / "figures", "tradeoff", dpi=120, tight=False)
 
 
 STUDY = register_study(

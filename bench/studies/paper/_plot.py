@@ -19,6 +19,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ...core._query import variant  # noqa: E402
+from .._figure import save_figure  # noqa: E402
 from ._common import TRIVIAL_MODELS  # noqa: E402
 from ._stats import MODEL_LABELS  # noqa: E402
 
@@ -59,17 +60,6 @@ def _agg(df: pd.DataFrame, by: Sequence[str], metric: str) -> pd.DataFrame:
     g = df.groupby(list(by), sort=True)["_x"]
     out = pd.DataFrame({"n": g.count(), "mean": g.mean(), "std": g.std(ddof=1)}).reset_index()
     out["sem"] = out["std"] / np.sqrt(out["n"].clip(lower=1))
-    return out
-
-
-def _save(fig, outdir: Path, stem: str) -> list[Path]:
-    outdir.mkdir(parents=True, exist_ok=True)
-    out = []
-    for ext in ("png", "pdf"):
-        p = outdir / f"{stem}.{ext}"
-        fig.savefig(p, dpi=130, bbox_inches="tight")
-        out.append(p)
-    plt.close(fig)
     return out
 
 
@@ -212,4 +202,4 @@ def _model_bars(
         ylabel=ylabel,
     )
     ax.set_title(title)
-    return _save(fig, outdir, stem)
+    return save_figure(fig, outdir, stem)

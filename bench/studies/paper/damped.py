@@ -13,6 +13,7 @@ from ...core._query import (
     variant,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     SPRING_PAPER,
     SYSTEMS,
@@ -27,7 +28,6 @@ from ._plot import (
     _bars,
     _label,
     _order,
-    _save,
     _trivial_lines,
     split_trivial,
 )
@@ -186,7 +186,7 @@ def fig_damped(runs, curves, outdir: Path) -> list[Path]:
     _trivial_lines(axes[0], trivial, "rollout_error", systems_)
     axes[0].legend(fontsize=7)
     axes[0].set_title("Damped systems (friction > 0)")
-    return _save(fig, outdir, "fig6_damped")
+    return save_figure(fig, outdir, "fig6_damped")
 
 
 STUDY = register_study(

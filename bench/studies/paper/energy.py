@@ -15,6 +15,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     PAPER_MODELS,
     SPRING_PAPER,
@@ -32,7 +33,6 @@ from ._plot import (
     _gmean,
     _label,
     _order,
-    _save,
     split_trivial,
 )
 from ._rules import (
@@ -248,7 +248,7 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
         b.set(xscale="log", yscale="log")
         b.legend(fontsize=6, ncol=2)
     b.set(xlabel="time (s)", ylabel="energy violation", title="Energy violation over time")
-    return _save(fig, outdir, "fig2_energy")
+    return save_figure(fig, outdir, "fig2_energy")
 
 
 STUDY = register_study(

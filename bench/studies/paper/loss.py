@@ -14,6 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     PAPER_MODELS,
     TRIVIAL_MODELS,
@@ -27,7 +28,6 @@ from ._plot import (
     _bars,
     _label,
     _order,
-    _save,
     _trivial_lines,
     split_trivial,
 )
@@ -177,7 +177,7 @@ def fig_loss(runs, curves, outdir: Path) -> list[Path]:
     )
     ax.set_xticklabels([_label(m) for m in _order(runs["model"], MODEL_ORDER)])
     ax.set_title("L1 vs L2 loss, chain pendulum")
-    return _save(fig, outdir, "fig8_loss")
+    return save_figure(fig, outdir, "fig8_loss")
 
 
 STUDY = register_study(

@@ -15,6 +15,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     RELATIVISTIC_TEST_PARAMS,
     TRIVIAL_MODELS,
@@ -23,7 +24,6 @@ from ._plot import (
     _agg,
     _bars,
     _label,
-    _save,
     _trivial_lines,
     split_trivial,
 )
@@ -263,7 +263,7 @@ def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
     b.set(xlabel="time (s)", ylabel="q", title="First test trajectory (lowest seed)")
     if true_drawn:
         b.legend(fontsize=8)
-    return _save(fig, outdir, "fig_relativistic")
+    return save_figure(fig, outdir, "fig_relativistic")
 
 
 STUDY = register_study(

@@ -14,6 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     SPRING_PAPER,
     SYMREG_WEIGHTS,
@@ -27,7 +28,6 @@ from ._plot import (
     SYSTEM_LABELS,
     _agg,
     _label,
-    _save,
     _trivial_lines,
     split_trivial,
 )
@@ -188,7 +188,7 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
         title="Error vs achieved symplecticity (colour: log10 w, w=0 at -7)",
     )
     b.legend(fontsize=7)
-    return _save(fig, outdir, "fig3_symplectic")
+    return save_figure(fig, outdir, "fig3_symplectic")
 
 
 STUDY = register_study(

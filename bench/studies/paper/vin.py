@@ -13,6 +13,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
+from .._figure import save_figure
 from ._common import (
     TRIVIAL_MODELS,
     _trivial,
@@ -22,7 +23,6 @@ from ._plot import (
     _agg,
     _curve_mean,
     _label,
-    _save,
     _trivial_lines,
     split_trivial,
 )
@@ -199,7 +199,7 @@ def fig_vin(runs, curves, outdir: Path) -> list[Path]:
         ylabel="relative error / energy violation",
         title=f"Long horizon, n_train = {n_min}",
     )
-    return _save(fig, outdir, "fig_vin")
+    return save_figure(fig, outdir, "fig_vin")
 
 
 STUDY = register_study(

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core._errors import one_line
+from .._figure import save_figure
 from ._core import (
     COLUMNS,
     METHOD_NOTES,
@@ -158,13 +159,7 @@ def stability_figure(results_dir="results") -> list[Path]:
     else:
         ax.set_axis_off()
     fig.tight_layout()
-    out = Path(results_dir) / "figures"
-    out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "stability.png", out / "stability.pdf"]
-    for p in paths:
-        fig.savefig(p, dpi=120)
-    plt.close(fig)
-    return paths
+    return save_figure(fig, Path(results_dir) / "figures", "stability", dpi=120, tight=False)
 
 
 def stability_section(results_dir="results") -> str:

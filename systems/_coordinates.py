@@ -1,0 +1,49 @@
+"""The one (q, qdot) <-> (q, p) conversion of stored states, with the TRUE system's maps.
+
+``p = dL/dqdot`` (:meth:`AbstractSystem.momentum`) and its inverse ``qdot = M(q)^-1 p``
+(:meth:`AbstractSystem.velocity`), applied to every state of a batch of trajectories
+(..., 2 dof) in one compiled program. Non-finite states stay non-finite (they are mapped as
+zeros and masked back), so a diverged prediction can be converted too.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+__all__ = ["to_momentum", "to_velocity"]
+
+
+def _convert(fn, system, zs, args) -> np.ndarray:
+    zs = np.asarray(zs, dtype=np.float64)
+    if zs.ndim == 1:
+        return _convert(fn, system, zs[None], None if args is None else np.asarray(args)[None])[0]
+    n, d = zs.shape[0], zs.shape[-1] // 2
+    a = np.zeros((n, 0)) if args is None else np.asarray(args, dtype=np.float64).reshape(n, -1)
+    finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
+    safe = np.where(finite, zs, 0.0)
+    flat = safe.reshape(n, -1, 2 * d)
+
+    def per_state(q, x, aa):
+        return fn(system, q, x, None if aa.size == 0 else aa)
+
+    per_traj = jax.vmap(per_state, in_axes=(0, 0, None))
+    second = jax.jit(jax.vmap(per_traj))(
+        jnp.asarray(flat[..., :d]), jnp.asarray(flat[..., d:]), jnp.asarray(a)
+    )
+    out = np.concatenate([zs[..., :d], np.asarray(second).reshape(zs[..., d:].shape)], axis=-1)
+    return np.where(finite, out, np.nan)
+
+
+def to_momentum(system, zs, args=None) -> np.ndarray:
+    """States (N, ..., 2d) in (q, qdot) -> (q, p) with ``system.momentum``. ``args``: None
+    (the system's defaults) or one row per trajectory (N, n_args); a state (2d,) takes
+    ``args`` (n_args,)."""
+    return _convert(lambda s, q, v, a: s.momentum(jnp.concatenate([q, v]), a), system, zs, args)
+
+
+def to_velocity(system, zs, args=None) -> np.ndarray:
+    """States (N, ..., 2d) in (q, p) -> (q, qdot) with ``system.velocity`` (the inverse of
+    :func:`to_momentum`); ``args`` as there."""
+    return _convert(lambda s, q, p, a: s.velocity(q, p, a), system, zs, args)
