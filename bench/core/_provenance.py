@@ -40,7 +40,7 @@ DEVICE_COLUMNS = ("backend", "device")
 GIT_COLUMNS = ("git_commit", "git_dirty")
 PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *GIT_COLUMNS)
 UNKNOWN = "unknown"
-_REPO = Path(__file__).resolve().parents[1]
+_REPO = Path(__file__).resolve().parents[2]
 
 
 def _version(package: str) -> str:
