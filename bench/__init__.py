@@ -4,20 +4,15 @@ Layers, each importing only those below it: ``bench.core`` (experiments, trainin
 runner, store, query layer, study registry) <- ``bench.studies`` (the paper experiments with
 their verdict rules and figures, the trade-off, the stability study, perf) <- the CLI
 (``bench._cli``) and the report (``bench._report``). Importing ``bench`` registers the built-in
-studies.
+studies and changes nothing in the process: the entry points set threads and the compilation
+cache up (``bench.core._env.setup_process``).
 """
 
-from .core._env import configure_compilation_cache as _configure_compilation_cache
-from .core._env import configure_threads as _configure_threads
-
-_configure_threads()
-_configure_compilation_cache()
-
-from . import studies  # noqa: E402  (registers the built-in studies)
-from .core import _experiments as experiments  # noqa: E402
-from .core import _metrics as metrics  # noqa: E402
-from .core._ensemble import train_ensemble  # noqa: E402
-from .core._experiments import (  # noqa: E402
+from . import studies  # registers the built-in studies
+from .core import _experiments as experiments
+from .core import _metrics as metrics
+from .core._ensemble import train_ensemble
+from .core._experiments import (
     PROFILES,
     Experiment,
     RunConfig,
@@ -26,16 +21,16 @@ from .core._experiments import (  # noqa: E402
     get,
     register,
 )
-from .core._provenance import (  # noqa: E402
+from .core._provenance import (
     PROVENANCE_COLUMNS,
     compare_provenance,
     provenance_markdown,
 )
-from .core._runner import execute_run, sweep  # noqa: E402
-from .core._store import aggregate, load_curves, load_runs, runs_of  # noqa: E402
-from .core._studies import Study, register_study  # noqa: E402
-from .core._studies import studies as registered_studies  # noqa: E402
-from .core._train import TrainConfig, TrainResult, train  # noqa: E402
+from .core._runner import execute_run, sweep
+from .core._store import aggregate, load_curves, load_runs, runs_of
+from .core._studies import Study, register_study
+from .core._studies import studies as registered_studies
+from .core._train import TrainConfig, TrainResult, train
 
 __all__ = [
     "PROFILES",

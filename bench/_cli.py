@@ -395,8 +395,10 @@ _show_warning = warnings.showwarning
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (2 for bad input, 1 for no runs or a failed write)."""
+    from .core._env import setup_process
     from .core._errors import StorageError
 
+    setup_process()
     if hasattr(signal, "SIGXFSZ"):  # a file-size limit: an OSError (EFBIG), not a core dump
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     try:

@@ -1,4 +1,3 @@
-from bench.core._env import configure_compilation_cache, configure_threads
+from bench.core._env import setup_process
 
-configure_threads()
-configure_compilation_cache()
+setup_process()

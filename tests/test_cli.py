@@ -92,16 +92,20 @@ def test_run_prints_metrics_and_adds_row(capsys, tmp_path, monkeypatch):
 
 
 def test_env_pins_cores_and_compilation_cache():
-    # XLA sizes its thread pools from the affinity mask: configure_threads(1) must shrink it,
-    # and `import bench` must turn on the persistent compilation cache before jax starts.
+    # XLA sizes its thread pools from the affinity mask: setup_process(1) must shrink it and
+    # turn on the persistent compilation cache, in jax's settings too (jax is imported by then:
+    # `import bench` loads the studies but changes nothing in the process).
     code = (
-        "import os, bench, bench.core._env as e; n = e.configure_threads(1); "
-        "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'])"
+        "import os, jax, bench, bench.core._env as e; "
+        "assert 'JAX_COMPILATION_CACHE_DIR' not in os.environ; n = e.setup_process(1); "
+        "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'], "
+        "jax.config.jax_compilation_cache_dir)"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120,
         env={k: v for k, v in os.environ.items() if not k.startswith("JAX_COMPILATION")},
     )  # fmt: skip
-    n, mask, cache = out.stdout.split()
+    n, mask, cache, in_jax = out.stdout.split()
     assert (n, mask) == ("1", "1"), out.stderr
+    assert in_jax == cache, "jax was not told where the cache is"
     assert cache.endswith(os.path.join("decon-bench", "jax"))

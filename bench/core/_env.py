@@ -1,13 +1,16 @@
 """Process settings for XLA on the CPU: cores (thread pools) and the compilation cache.
 
 Threads beyond the cores cost 3-5x on small training steps (measured on the reference code), so
-sweep workers are pinned to their own cores. These must run before jax creates its backend,
-which is why ``bench/__init__.py`` calls them first.
+sweep workers are pinned to their own cores. These must run before jax creates its backend
+(its first computation), and only entry points call them (:func:`setup_process`): the CLI's
+``main`` (``python -m bench``), the sweep's pool and Ray workers, the other ``main`` functions
+and ``tests/conftest.py``. Importing ``bench`` changes nothing in the process.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 
 
 def cpu_count() -> int:
@@ -60,4 +63,24 @@ def configure_compilation_cache(path: str | None = None) -> str | None:
     os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", path)
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")
+    if "jax" in sys.modules:  # jax read its settings from the environment at import: tell it
+        import jax
+
+        jax.config.update("jax_compilation_cache_dir", os.environ["JAX_COMPILATION_CACHE_DIR"])
+        jax.config.update(
+            "jax_persistent_cache_min_compile_time_secs",
+            float(os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"]),
+        )
+        jax.config.update(
+            "jax_persistent_cache_min_entry_size_bytes",
+            int(os.environ["JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES"]),
+        )
     return os.environ["JAX_COMPILATION_CACHE_DIR"]
+
+
+def setup_process(n: int | None = None, cores: list[int] | None = None) -> int:
+    """An entry point's process setup, before any computation: :func:`configure_threads`
+    (``n``, ``cores``) and :func:`configure_compilation_cache`. Returns the cores in effect."""
+    count = configure_threads(n, cores)
+    configure_compilation_cache()
+    return count

@@ -182,15 +182,19 @@ def _sweep_pool(groups, finish, cache_root, workers, cores):
 
 
 def _pin_worker(slots) -> None:
-    from ._env import configure_threads
+    """A pool worker's initializer: its own cores, then the compilation cache."""
+    from ._env import setup_process
 
     cores = slots.get()
+    setup_process(cores=cores or None)
     if cores:
-        configure_threads(cores=cores)
         os.environ["OMP_NUM_THREADS"] = str(len(cores))
 
 
 def _star_execute(job):
+    from ._env import configure_compilation_cache
+
+    configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
     dicts, cache_root = job
     if len(dicts) == 1:
         return [_execute_dict(dicts[0], cache_root)]

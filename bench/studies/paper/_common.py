@@ -32,7 +32,7 @@ SPRING_EQUILIBRIUM = ()
 # probes the ultra-relativistic regime, where no model can be told from a trivial one.
 RELATIVISTIC_TEST_PARAMS = (("g_max", 0.3), ("g_min", 0.05), ("v0_max", 0.3))
 
-# Overrides of the profile defaults that every shared cell carries. Empty for now: the profile
+# Overrides of the profile defaults that every shared cell carries. Empty: the profile
 # defaults (quick: 200 chunks, width 128, 1000 steps, batch 100) are used as they are. Any entry
 # here is applied to every experiment that shares cells, so the hashes stay equal.
 SHARED_OVERRIDES: dict[str, dict[str, object]] = {"smoke": {}, "quick": {}, "paper": {}}

@@ -235,6 +235,9 @@ def main(argv=None) -> int:
     parser.add_argument("--results", default="results")
     parser.add_argument("--case", action="append", choices=list(CASES))
     ns = parser.parse_args(argv)
+    from ...core._env import setup_process
+
+    setup_process()
     df = run_stability(ns.results, ns.profile, ns.case)
     print(df.to_string(max_rows=400))
     return 0
