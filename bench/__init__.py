@@ -26,8 +26,9 @@ from .core._provenance import (
     compare_provenance,
     provenance_markdown,
 )
+from .core._query import aggregate
 from .core._runner import execute_run, sweep
-from .core._store import aggregate, load_curves, load_runs, runs_of
+from .core._store import load_curves, load_runs, runs_of
 from .core._studies import Study, register_study
 from .core._studies import studies as registered_studies
 from .core._train import TrainConfig, TrainResult, train

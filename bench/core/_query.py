@@ -10,7 +10,7 @@ from __future__ import annotations
 import ast
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -184,3 +184,57 @@ def variant(df: pd.DataFrame) -> pd.Series:
     is_diss = diss.map(lambda v: v is True or v == 1 or v == "True" or v == "true")
     takes = df["model"].map(lambda m: m in models.available() and models.spec(m).takes_dissipation)
     return df["model"].where(~(is_diss & takes.astype(bool)), df["model"] + "_diss")
+
+
+def aggregate(
+    df: pd.DataFrame,
+    by: Sequence[str],
+    metric: str,
+    *,
+    n_resamples: int = 2000,
+    seed: int = 0,
+    bootstrap: bool = True,
+) -> pd.DataFrame:
+    """The seed aggregation: summaries of ``metric`` per group of ``by`` over the runs.
+
+    Columns: n (finite values), mean, std (ddof=1), sem = std / sqrt(n), gmean =
+    exp(mean(log x)) (NaN unless every value is > 0), median, and the bootstrap 95% interval
+    of the mean (scipy.stats.bootstrap, BCa falling back to percentile; NaN when n < 2, the
+    values are all equal, or ``bootstrap`` is False).
+    """
+    from scipy import stats
+
+    by = list(by)
+    if metric not in df.columns:
+        raise ValueError(f"unknown metric {metric!r}; columns: {', '.join(df.columns)}")
+    out = []
+    for key, g in df.groupby(by, dropna=False, sort=True):
+        x = pd.to_numeric(g[metric], errors="coerce").to_numpy(dtype=float)
+        x = x[np.isfinite(x)]
+        n = len(x)
+        rec = dict(zip(by, key if isinstance(key, tuple) else (key,), strict=True))
+        std = float(np.std(x, ddof=1)) if n > 1 else float("nan")
+        lo = hi = float("nan")
+        if bootstrap and n > 1 and np.ptp(x) > 0:
+            for method in ("BCa", "percentile"):
+                try:
+                    res = stats.bootstrap(
+                        (x,), np.mean, n_resamples=n_resamples, method=method, random_state=seed
+                    )
+                    lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
+                    if np.isfinite(lo) and np.isfinite(hi):
+                        break
+                except Exception:
+                    continue
+        rec.update(
+            n=n,
+            mean=float(np.mean(x)) if n else float("nan"),
+            std=std,
+            sem=std / math.sqrt(n) if n > 1 else float("nan"),
+            gmean=float(np.exp(np.mean(np.log(x)))) if n and np.all(x > 0) else float("nan"),
+            median=float(np.median(x)) if n else float("nan"),
+            ci_low=lo,
+            ci_high=hi,
+        )
+        out.append(rec)
+    return pd.DataFrame(out)

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from ...core._query import variant  # noqa: E402
+from ...core._query import aggregate, variant  # noqa: E402
 from .._figure import save_figure  # noqa: E402
 from ._common import TRIVIAL_MODELS  # noqa: E402
 from ._stats import MODEL_LABELS  # noqa: E402
@@ -49,18 +49,14 @@ TRIVIAL_STYLE = {"constant_velocity": ("black", "--"), "at_rest": ("dimgray", ":
 
 
 def _agg(df: pd.DataFrame, by: Sequence[str], metric: str) -> pd.DataFrame:
-    """Per group of ``by``: n, mean and sem = std(ddof=1) / sqrt(n) of the finite values
-    (the columns of ``bench.core._store.aggregate``, without its bootstrap)."""
+    """Per group of ``by``: n, mean, std and sem of the finite values (the seed aggregation,
+    without its bootstrap, which figures don't use); NaN keys (k of the relativistic
+    particle) group as "-"."""
     df = df.copy()
-    for col in by:  # groupby on NaN keys (k of the relativistic particle) needs a value
+    for col in by:
         if df[col].isna().any():
             df[col] = df[col].astype(object).where(df[col].notna(), "-")
-    x = pd.to_numeric(df[metric], errors="coerce")
-    df = df.assign(_x=x.where(np.isfinite(x)))
-    g = df.groupby(list(by), sort=True)["_x"]
-    out = pd.DataFrame({"n": g.count(), "mean": g.mean(), "std": g.std(ddof=1)}).reset_index()
-    out["sem"] = out["std"] / np.sqrt(out["n"].clip(lower=1))
-    return out
+    return aggregate(df, by, metric, bootstrap=False)
 
 
 def _bars(
