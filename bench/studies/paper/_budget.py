@@ -74,12 +74,12 @@ MS_PER_STEP = {
 }
 
 
-# Measured 2026-11-22 at quick (bench_meta.json): the stability study and the trade-off
-# experiment's share of the run time, in seconds of wall time at 2 workers.
-STABILITY_S = 243.0
-
-
-TRADEOFF_S = 1248.0 / 2
+# The stability study at quick, measured 2026-11-22 on the quiet 2-core machine after the
+# integrator rework (`python -m bench stability --profile quick`: 6 min 22 s), and the trade-off
+# experiment's share of the run time: the measured 1248 s of run time less the LNN's 821 s (now
+# paper only), plus about 80 s for the new implicit evaluations, at 2 workers.
+STABILITY_S = 382.0
+TRADEOFF_S = (1248.0 - 821.0 + 80.0) / 2
 
 
 # Measured sweep time / sum of per-run wall_seconds at 2 workers (25.8 / 27.0 min).
