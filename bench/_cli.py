@@ -22,10 +22,10 @@ from .core._experiments import (
     PROFILES,
     RunConfig,
     check_choice,
-    check_runnable,
     field_names,
     profile_defaults,
 )
+from .core._runnable import check_runnable
 
 
 class UsageError(Exception):

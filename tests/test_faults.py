@@ -31,7 +31,8 @@ import bench.core._runner as runner
 from bench._cli import main
 from bench.core import _store
 from bench.core._errors import StorageError, storage_error
-from bench.core._experiments import Experiment, RunConfig, check_runnable, expand, register
+from bench.core._experiments import Experiment, RunConfig, expand, register
+from bench.core._runnable import check_runnable
 
 ROOT = Path(__file__).resolve().parents[1]
 

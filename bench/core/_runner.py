@@ -74,7 +74,7 @@ def sweep(
     written atomically as it arrives and the tables are rebuilt, so a killed sweep resumes.
 
     Before anything runs, every run to execute is checked by
-    :func:`bench.core._experiments.check_runnable` (ValueError for a run that can never run, e.g.
+    :func:`bench.core._runnable.check_runnable` (ValueError for a run that can never run, e.g.
     leapfrog on a first-order model). A write that fails for want of space or permission (in
     a run or when storing its row) stops the sweep with :class:`bench.core._errors.StorageError`;
     the rows stored so far are whole and the next sweep resumes. A damaged row file counts
@@ -84,7 +84,8 @@ def sweep(
     accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
     ``ensemble_max`` members, one per task (see ``bench.core._ensemble``).
     """
-    from ._experiments import check_choice, check_runnable
+    from ._experiments import check_choice
+    from ._runnable import check_runnable
 
     check_choice("executor", executor, EXECUTORS)
     results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...

@@ -229,7 +229,6 @@ def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
     trajectory's q(t), true vs predicted, of the lowest seed of each variant."""
     if not len(runs):
         return []
-    from ._claims import velocity_scores
 
     scores, _ = velocity_scores(runs)
     runs = runs.assign(score=scores)
