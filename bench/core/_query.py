@@ -194,13 +194,15 @@ def aggregate(
     n_resamples: int = 2000,
     seed: int = 0,
     bootstrap: bool = True,
+    sort: bool = True,
 ) -> pd.DataFrame:
     """The seed aggregation: summaries of ``metric`` per group of ``by`` over the runs.
 
     Columns: n (finite values), mean, std (ddof=1), sem = std / sqrt(n), gmean =
     exp(mean(log x)) (NaN unless every value is > 0), median, and the bootstrap 95% interval
     of the mean (scipy.stats.bootstrap, BCa falling back to percentile; NaN when n < 2, the
-    values are all equal, or ``bootstrap`` is False).
+    values are all equal, or ``bootstrap`` is False). ``sort``: groups in key order, else in
+    order of first appearance.
     """
     from scipy import stats
 
@@ -208,7 +210,7 @@ def aggregate(
     if metric not in df.columns:
         raise ValueError(f"unknown metric {metric!r}; columns: {', '.join(df.columns)}")
     out = []
-    for key, g in df.groupby(by, dropna=False, sort=True):
+    for key, g in df.groupby(by, dropna=False, sort=sort):
         x = pd.to_numeric(g[metric], errors="coerce").to_numpy(dtype=float)
         x = x[np.isfinite(x)]
         n = len(x)

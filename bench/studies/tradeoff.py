@@ -36,7 +36,7 @@ import pandas as pd
 import models
 
 from ..core._experiments import PROFILES, Experiment, RunConfig, expand, field_names
-from ..core._query import experiment_rows, pick_profile
+from ..core._query import aggregate, experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study
 from ._figure import save_figure
@@ -266,7 +266,8 @@ def pareto_front(df: pd.DataFrame, cost: str, error: str = ERROR) -> pd.DataFram
 
 
 def aggregate_seeds(df: pd.DataFrame, error: str = ERROR, costs: Sequence[str] = COSTS):
-    """One row per configuration (every RunConfig field but ``seed``) over its ``ok`` runs.
+    """One row per configuration (every RunConfig field but ``seed``) over its ``ok`` runs,
+    from the seed aggregation (:func:`bench.core._query.aggregate`).
 
     ``error``: geometric mean over seeds (errors are compared on a log scale); costs: mean;
     ``n_seeds``: how many ok runs entered; ``diverged``: how many runs did not end ``ok``.
@@ -278,23 +279,25 @@ def aggregate_seeds(df: pd.DataFrame, error: str = ERROR, costs: Sequence[str] =
     for col in keys:  # tuples and None group badly: group on their text
         d[col] = d[col].map(lambda v: v if isinstance(v, int | float | str | bool) else str(v))
     status = d["status"] if "status" in d else pd.Series("ok", index=d.index)
-    d["_ok"] = status == "ok"
-    out = []
-    for key, g in d.groupby(keys, dropna=False, sort=False):
-        rec = dict(zip(keys, key if isinstance(key, tuple) else (key,), strict=True))
-        good = g[g["_ok"]]
-        x = pd.to_numeric(good[error], errors="coerce").to_numpy(dtype=float)
-        x = x[np.isfinite(x) & (x > 0)]
-        rec[error] = float(np.exp(np.mean(np.log(x)))) if len(x) else float("nan")
-        for col in costs:
-            if col in good:
-                v = pd.to_numeric(good[col], errors="coerce").to_numpy(dtype=float)
-                v = v[np.isfinite(v)]
-                rec[col] = float(np.mean(v)) if len(v) else float("nan")
-        rec["n_seeds"] = len(x)
-        rec["diverged"] = int((~g["_ok"]).sum())
-        out.append(rec)
-    return pd.DataFrame(out)
+    ok = status == "ok"
+    x = pd.to_numeric(d[error], errors="coerce")
+    d["_error"] = x.where(ok & np.isfinite(x) & (x > 0))  # only ok runs with a usable error
+    d["_diverged"] = (~ok).astype(float)
+
+    def agg(column: str) -> pd.DataFrame:
+        return aggregate(d, keys, column, bootstrap=False, sort=False)
+
+    err = agg("_error")
+    out = err[keys].copy()
+    out[error] = err["gmean"]
+    for col in costs:
+        if col in d:
+            d["_cost"] = pd.to_numeric(d[col], errors="coerce").where(ok)
+            out[col] = agg("_cost")["mean"]
+    out["n_seeds"] = err["n"]
+    div = agg("_diverged")  # mean of the 0/1 flags over all the runs of the configuration
+    out["diverged"] = (div["mean"] * div["n"]).round().astype(int)
+    return out
 
 
 def cheapest_within(
