@@ -89,3 +89,25 @@ def test_report_table_shows_mean_and_sem(results):
     assert re.search(
         r"\| chain_pendulum \| - \| hnn_so \| velocity \| 3 \| [0-9.e-]+ ± [0-9.e-]+", section
     )
+
+
+def test_a_registered_study_is_drawn_and_reported(tmp_path, monkeypatch):
+    # A study is a plug-in: registering it is all it takes for its figure and its section.
+    import bench._report as report
+    from bench.core import _studies
+
+    drawn = []
+
+    def figure(results_dir):
+        drawn.append(results_dir)
+        return [results_dir / "figures" / "toy.png"]
+
+    toy = _studies.Study(name="toy", results_figure=figure, section=lambda d: "## Toy\n\nhi")
+    broken = _studies.Study(name="broken", section=lambda d: 1 / 0, section_title="Broken")
+    monkeypatch.setitem(_studies._STUDIES, "toy", toy)
+    monkeypatch.setitem(_studies._STUDIES, "broken", broken)
+    assert [s.name for s in _studies.studies()][-2:] == ["toy", "broken"]
+    assert tmp_path / "figures" / "toy.png" in make_figures(tmp_path) and drawn == [tmp_path]
+    text = "\n".join(report._extra_sections(tmp_path))
+    assert "## Toy\n\nhi" in text
+    assert "## Broken\n\n(section failed: division by zero)" in text
