@@ -1,0 +1,39 @@
+"""Performance benchmark: training-step and rollout cost of every model at the reference setting.
+
+Setting (REFERENCE.md, "Cost of the reference code"): 2-link chain (dof 2, angles), MLP width
+256 x 2 hidden layers, batch 200 chunks of 5 points, rk4_38 one step per dt, float32. The
+training data are synthetic (timing does not depend on their values; no simulation needed).
+
+Per model: the median ms per training step, timed over blocks of ``block`` steps run as one
+compiled ``lax.scan`` exactly as ``bench.train`` runs them (compile first, then ``repeats``
+blocks, each waited for); the compile time; the median ms of a 40 x 100-step test rollout
+(jitted ``rollout_batch``, no gradient); the step's FLOPs from XLA's cost analysis of one
+step; and the FLOP floor = FLOPs / measured float32 matmul peak. The load average is recorded
+beside each measurement because the machine may be shared.
+
+``python -m bench perf --ensemble`` (:func:`ensemble_table`) writes
+``results/perf_ensemble.csv``: training runs per minute, M runs as one ensemble
+(``bench.core._ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
+paper models.
+
+``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
+writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
+``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the
+``compile_cache`` column); ``DECON_JAX_CACHE=0`` measures cold compiles.
+"""
+
+from ._ensemble import ENSEMBLE_MODELS, ENSEMBLE_SIZES, ensemble_table
+from ._main import main
+from ._timing import REFERENCE, TARGET_STEP_MS, THREADS, bench_model, matmul_peak_gflops
+
+__all__ = [
+    "ENSEMBLE_MODELS",
+    "ENSEMBLE_SIZES",
+    "REFERENCE",
+    "TARGET_STEP_MS",
+    "THREADS",
+    "bench_model",
+    "ensemble_table",
+    "main",
+    "matmul_peak_gflops",
+]
