@@ -51,6 +51,12 @@ def register_study(study: Study) -> Study:
     if not isinstance(study, Study):
         raise ValueError(f"register_study expects a Study; got {type(study).__name__}")
     for exp in study.experiments:
+        if study.claim is not None and exp.claim not in (None, study.claim):
+            raise ValueError(
+                f"study {study.name!r} judges claim {study.claim}; its experiment {exp.name!r} "
+                f"says claim {exp.claim}"
+            )
+    for exp in study.experiments:
         register(exp, replace=True)
     _STUDIES[study.name] = study
     return study
