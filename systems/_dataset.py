@@ -144,9 +144,10 @@ class Dataset:
     angular: tuple[bool, ...]
 
 
-def default_cache_dir() -> Path:
-    """$DECON_CACHE, or ./.cache/decon-bench."""
-    return Path(os.environ.get("DECON_CACHE", Path(".cache") / "decon-bench"))
+def cache_root() -> Path:
+    """The suite's git-ignored cache root, the one definition (bench's caches live under it
+    too): ``$DECON_CACHE``, or ``./.cache/decon-bench``."""
+    return Path(os.environ.get("DECON_CACHE") or Path(".cache") / "decon-bench")
 
 
 def make_dataset(config: DatasetConfig, cache_dir=None) -> Dataset:
@@ -154,7 +155,7 @@ def make_dataset(config: DatasetConfig, cache_dir=None) -> Dataset:
     if not isinstance(config, DatasetConfig):
         raise ValueError(f"config must be a DatasetConfig; got {type(config).__name__}")
     system = make(config.system, **dict(config.system_params))
-    path = Path(cache_dir if cache_dir is not None else default_cache_dir())
+    path = Path(cache_dir if cache_dir is not None else cache_root())
     path = path / "datasets" / f"{config.hash()}.npz"
     arrays = _load(path, config)
     if arrays is None:

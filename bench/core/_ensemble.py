@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+import systems
+
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig, check_choice
 
@@ -332,7 +334,7 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     """
     from . import _execute as R
 
-    cache_root = Path(cache_root or R.default_cache_root())
+    cache_root = Path(cache_root or systems.cache_root())
     configs = list(configs)
     trained: list = [None] * len(configs)
     rolled: list = [None] * len(configs)

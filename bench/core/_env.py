@@ -44,11 +44,6 @@ def configure_threads(n: int | None = None, cores: list[int] | None = None) -> i
     return count
 
 
-def cache_root() -> str:
-    """Root of the suite's git-ignored caches: ``$DECON_CACHE`` or ``./.cache/decon-bench``."""
-    return os.environ.get("DECON_CACHE") or os.path.join(os.getcwd(), ".cache", "decon-bench")
-
-
 def configure_compilation_cache(path: str | None = None) -> str | None:
     """Turn on JAX's persistent compilation cache (before jax is imported).
 
@@ -59,7 +54,10 @@ def configure_compilation_cache(path: str | None = None) -> str | None:
     """
     if os.environ.get("DECON_JAX_CACHE", "1") == "0":
         return None
-    path = path or os.path.join(cache_root(), "jax")
+    if path is None:
+        import systems
+
+        path = os.path.join(os.path.abspath(systems.cache_root()), "jax")
     os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", path)
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES", "0")

@@ -27,9 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+import systems
+
 from . import _metrics as M
 from . import _store
-from ._env import cache_root as _env_cache_root
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig
 from ._provenance import provenance
@@ -39,14 +40,9 @@ EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 pe
 _SYMPLECTIC_STATES = 64
 
 
-def default_cache_root() -> Path:
-    """The suite's cache root (:func:`bench.core._env.cache_root`) as a path."""
-    return Path(_env_cache_root())
-
-
 def artifact_dir(config_hash: str, cache_root=None) -> Path:
     """Per-run artifacts: ``<cache>/runs/<config_hash>/``."""
-    return Path(cache_root or default_cache_root()) / "runs" / config_hash
+    return Path(cache_root or systems.cache_root()) / "runs" / config_hash
 
 
 def _sha256(path: Path) -> str:
@@ -75,7 +71,6 @@ def _build(config: RunConfig, cache_root: Path):
     import jax
 
     import models
-    import systems
 
     system = systems.make(config.system, **config.system_kwargs())
     dcfg = systems.DatasetConfig(
@@ -236,8 +231,6 @@ def _true_maps(system):
 def to_velocity(system, zs, args=None) -> np.ndarray:
     """States (N, T, 2d) in (q, p) mapped to (q, qdot) with the TRUE ``system.velocity``;
     ``args`` None (the system's defaults) or (N, n_args). Non-finite states stay non-finite."""
-    import systems
-
     return systems.to_velocity(system, zs, args)
 
 
@@ -396,7 +389,7 @@ def execute_run(
     ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
     ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
     """
-    cache_root = Path(cache_root or default_cache_root())
+    cache_root = Path(cache_root or systems.cache_root())
     row = base_row(config)
     art = artifact_dir(config.config_hash, cache_root)
     t_start = time.perf_counter()

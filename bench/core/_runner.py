@@ -13,6 +13,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import systems
+
 from . import _store
 from ._env import cpu_count
 from ._errors import StorageError, one_line, storage_error
@@ -20,7 +22,6 @@ from ._execute import (
     EVAL_MAX_STEPS,
     artifact_dir,
     base_row,
-    default_cache_root,
     eval_integrator,
     execute_run,
     to_velocity,
@@ -32,7 +33,6 @@ __all__ = [
     "EXECUTORS",
     "artifact_dir",
     "base_row",
-    "default_cache_root",
     "eval_integrator",
     "execute_run",
     "run_experiments",
@@ -89,7 +89,7 @@ def sweep(
 
     check_choice("executor", executor, EXECUTORS)
     results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
-    cache_root = Path(cache_root or default_cache_root()).resolve()
+    cache_root = Path(cache_root or systems.cache_root()).resolve()
     done = _store.done_hashes(results_dir)
     todo, seen = [], set()
     for c in configs:
