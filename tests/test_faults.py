@@ -263,12 +263,14 @@ def test_integrator_rule_follows_model_capabilities(tmp_path):
     # Second-order models take leapfrog; discrete models ignore the integrator.
     for model in ("node_so", "vin"):
         check_runnable(RunConfig(model=model, train_integrator="leapfrog", **base))
-    # hnn_so is second order in velocity coordinates only (in momentum ones it is an HNN).
+    # hnn_so takes leapfrog in both coordinates: second order in (q, qdot), and in (q, p) the
+    # generalised Stormer-Verlet of its Hamiltonian; the explicit kick needs a second-order model.
     check_runnable(RunConfig(model="hnn_so", eval_integrator="leapfrog", **base))
-    with pytest.raises(ValueError, match="eval_integrator 'leapfrog' cannot run"):
-        check_runnable(
-            RunConfig(model="hnn_so", eval_integrator="leapfrog", coordinates="momentum", **base)
-        )
+    check_runnable(
+        RunConfig(model="hnn_so", eval_integrator="leapfrog", coordinates="momentum", **base)
+    )
+    with pytest.raises(ValueError, match="eval_integrator 'leapfrog_explicit' cannot run"):
+        check_runnable(RunConfig(model="node", eval_integrator="leapfrog_explicit", **base))
     # The Python API refuses before anything runs.
     bad = RunConfig(model="node", eval_integrator="leapfrog", **base)
     with pytest.raises(ValueError, match="leapfrog"):

@@ -106,7 +106,7 @@ def test_declaration_registered_and_drops_invalid(quick_runs):
     assert "tradeoff" in E.available()
     assert len(quick_runs) == len({c.config_hash for c in quick_runs})
     models = {c.model for c in quick_runs}
-    assert models == set(T.MODELS)
+    assert models == set(T.PROFILE_MODELS["quick"])
     for c in quick_runs:
         if c.model == "node":
             assert "leapfrog" not in (c.eval_integrator, c.train_integrator)

@@ -64,7 +64,9 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     with a seed bootstrap. Each system's part holds when the fraction's CI lies above 0.5
     ("most"), contradicts when below 0.5, and is undecided otherwise, or when HNN+SO has no
     meaningful advantage to explain (``mean(gap) < log 1.25``). Headline: the fraction pooled
-    over the systems (per-seed means of closed and gap)."""
+    (per-seed means of closed and gap) over the systems that have such an advantage; a system
+    where HNN+SO does not beat NODE has a near-zero denominator and would make the pooled
+    fraction meaningless."""
     p = _paper_spring(select(plain(runs), loss="l2", ok=False))
     ks = p["k"].dropna().unique() if "k" in p and len(p) else []
     k = 2 if 2 in set(ks) else None
@@ -80,11 +82,14 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             continue
         n_failed += _n_bad(_cell(p, {**s, "model": ["node", "node_so", "hnn_so"]}))
         discs.append(discrimination(_cell(p, s), system))
-        closed_all.append(both["c"])
-        gap_all.append(both["g"])
         parts.append(_fraction_part(system, both["c"].to_numpy(), both["g"].to_numpy()))
+        if both["g"].mean() >= DELTA:  # only a system with an advantage to explain is pooled
+            closed_all.append(both["c"])
+            gap_all.append(both["g"])
     if not parts:
         return _verdict(3, CLAIM_TITLES[3], [], None, 0, "fraction of the log gap closed by SO")
+    if not gap_all:  # no system shows a meaningful HNN+SO advantage: the headline is undecided
+        closed_all, gap_all = [pd.Series(dtype=float)], [pd.Series(dtype=float)]
     c = pd.concat(closed_all, axis=1).dropna().mean(axis=1)
     g = pd.concat(gap_all, axis=1).dropna().mean(axis=1)
     both = pd.concat([c, g], axis=1, keys=["c", "g"]).dropna()
