@@ -28,15 +28,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-INTEGRATORS = (
-    "euler",
-    "rk4",
-    "rk4_38",
-    "leapfrog",
-    "leapfrog_explicit",
-    "implicit_midpoint",
-    "adaptive",
-)
+from models import METHODS as INTEGRATORS  # the one list of integrator names
+
 COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")

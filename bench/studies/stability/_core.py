@@ -155,14 +155,7 @@ class StabilitySize:
     speeds: tuple[float, ...] = (0.99, 0.999, 0.9999)
     dts: tuple[float, ...] = (3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
     high_energy_steps: int = 200
-    dt_methods: tuple[str, ...] = (
-        "euler",
-        "rk4",
-        "rk4_38",
-        "leapfrog",
-        "leapfrog_explicit",
-        "implicit_midpoint",
-    )
+    dt_methods: tuple[str, ...] = tuple(m for m in _integrators.METHODS if m != "adaptive")
     stiff_solvers: tuple[str, ...] = ("tsit5", "kvaerno5")
     stiff_horizon: float = 1.0  # seconds of the stiffness case (each call counted on the host)
     stiff_fixed: tuple[str, ...] = ("rk4", "implicit_midpoint")
