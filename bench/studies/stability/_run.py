@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core._errors import one_line
+from ...core._provenance import provenance
 from .._figure import save_figure
 from ._core import (
     COLUMNS,
@@ -80,6 +81,8 @@ def run_stability(results_dir="results", profile: str = "quick", cases=None):
     results_dir.mkdir(parents=True, exist_ok=True)
     df = to_frame(run_cases(profile, cases))
     df.insert(0, "profile", profile)
+    for name, value in provenance().items():  # versions, backend, device, commit (issue 14)
+        df[name] = value
     df.to_csv(results_dir / "stability.csv", index=False)
     try:
         df.to_parquet(results_dir / "stability.parquet", index=False)
