@@ -151,7 +151,7 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     import jax
     import jax.numpy as jnp
 
-    from ._train import TrainResult, _Batches, optimizer, prepare
+    from ._train import Snapshot, TrainResult, _Batches, optimizer, prepare
 
     m_count = len(models)
     if not (m_count == len(datasets) == len(configs)):
@@ -187,10 +187,13 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
         return (stacked, lr, jnp.asarray(idx), jnp.asarray(active))
 
     block_in = inputs(0)
-    run, compile_seconds = _compiled(block_in, params, static, opt_state, dead, good, cfg)
+    program_cfg = dataclasses.replace(cfg, checkpoints=())  # snapshots are taken outside it
+    run, compile_seconds = _compiled(block_in, params, static, opt_state, dead, good, program_cfg)
 
     losses: list[list[np.ndarray]] = [[] for _ in range(m_count)]
     diverged: list[int | None] = [None] * m_count
+    snapshots: list[list] = [[] for _ in range(m_count)]
+    pending = list(cfg.checkpoints)
     train_seconds = 0.0
     done = 0
     while done < cfg.steps and any(d is None for d in diverged):
@@ -213,6 +216,14 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
             else:
                 losses[i].append(block_losses[:, i])
         done += len(block_losses)
+        if pending and done >= pending[0]:  # as in bench.core._train.train, per live member
+            kept = params if done >= cfg.steps else jax.tree.map(jnp.copy, params)
+            for i in range(m_count):
+                if diverged[i] is None:
+                    model_i = eqx.combine(_member(kept, i), static)
+                    snapshots[i].append(Snapshot(done, train_seconds / m_count, model_i))
+            while pending and done >= pending[0]:
+                pending.pop(0)
     out = []
     for i in range(m_count):
         ok = diverged[i] is None
@@ -225,6 +236,7 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
                 train_seconds=train_seconds / m_count,
                 compile_seconds=compile_seconds / m_count,
                 steps_done=done if ok else diverged[i],
+                snapshots=tuple(snapshots[i]),
             )
         )
     return out

@@ -35,6 +35,7 @@ from ._errors import one_line, storage_error
 from ._experiments import RunConfig
 from ._provenance import provenance
 
+TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends
 EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 per interval
 # Test states used for the symplectic error (a Jacobian per state: keep it small).
 _SYMPLECTIC_STATES = 64
@@ -129,6 +130,7 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
             "train_cached": False,
         }
         return model, meta
+    tcfg = train_config(config)
     pdir = Path(cache_root) / "params" / config.train_hash
     pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
     if pfile.exists() and meta_file.exists():
@@ -136,19 +138,45 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
             meta = json.loads(meta_file.read_text())
             if meta.get("sha256") == _sha256(pfile):
                 loaded = eqx.tree_deserialise_leaves(pfile, like=model)
+                meta["_snapshots"] = _load_snapshots(pdir, meta, tcfg, model, loaded)
                 meta["train_cached"] = True
                 return loaded, meta
-        except Exception:  # a corrupt cache entry: retrain below
+        except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
             pass
-    res = train(model, data, train_config(config), progress=progress)
+    res = train(model, data, tcfg, progress=progress)
     return res.model, store_trained(config, res, cache_root)
+
+
+def _load_snapshots(pdir: Path, meta: dict, tcfg, like, final) -> tuple:
+    """The cached snapshots of a training whose checkpoints were ``tcfg.checkpoints``
+    (ValueError, so that the run retrains, when they were others or their file is damaged)."""
+    import equinox as eqx
+
+    from ._train import Snapshot
+
+    if not tcfg.checkpoints:
+        return ()
+    if meta.get("checkpoints") != list(tcfg.checkpoints):
+        raise ValueError("the cached training kept other checkpoints")
+    kept = meta.get("snapshots") or []
+    inner = [s for s in kept if s[0] < meta["steps_done"] or meta["status"] != "ok"]
+    models = []
+    if inner:
+        sfile = pdir / "snapshots.eqx"
+        if meta.get("snapshots_sha256") != _sha256(sfile):
+            raise ValueError("the cached snapshots are damaged")
+        models = eqx.tree_deserialise_leaves(sfile, like=[like] * len(inner))
+    out = [Snapshot(int(a), float(b), m) for (a, b), m in zip(inner, models, strict=True)]
+    if len(kept) > len(inner):  # the last snapshot is the final model
+        out.append(Snapshot(int(kept[-1][0]), float(kept[-1][1]), final))
+    return tuple(out)
 
 
 def train_config(config: RunConfig):
     """The :class:`bench.TrainConfig` of a run."""
     import models
 
-    from ._train import TrainConfig
+    from ._train import TrainConfig, checkpoint_steps
 
     return TrainConfig(
         steps=config.steps,
@@ -158,6 +186,8 @@ def train_config(config: RunConfig):
         integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
         dtype=config.dtype,
         seed=config.seed,
+        steps_per_call=TRAIN_BLOCK,
+        checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, TRAIN_BLOCK),
     )
 
 
@@ -181,9 +211,19 @@ def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
     eqx.tree_serialise_leaves(tmp, res.model)
     os.replace(tmp, pdir / "model.eqx")
     meta["sha256"] = _sha256(pdir / "model.eqx")
+    snaps = tuple(getattr(res, "snapshots", ()))
+    meta["checkpoints"] = list(train_config(config).checkpoints)
+    meta["snapshots"] = [[s.step, float(s.train_seconds)] for s in snaps]
+    inner = [s for s in snaps if s.step < res.steps_done or res.status != "ok"]
+    if inner:  # the final model is model.eqx already
+        tmp = pdir / f".tmp-{os.getpid()}-snapshots.eqx"
+        eqx.tree_serialise_leaves(tmp, [s.model for s in inner])
+        os.replace(tmp, pdir / "snapshots.eqx")
+        meta["snapshots_sha256"] = _sha256(pdir / "snapshots.eqx")
     _write_json(pdir / "train.json", meta)
     np.save(pdir / "losses.npy", losses)
     meta["train_cached"] = False
+    meta["_snapshots"] = snaps
     return meta
 
 
@@ -264,33 +304,91 @@ def eval_integrator(config: RunConfig):
     )
 
 
-def _evaluate(config, system, data, model, cache_root, rolled=None):
-    """Metrics, curves and full curves of a trained model on the test set.
-
-    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
-    elsewhere (an ensemble's, vmapped over members: ``bench.core._ensemble``).
-    """
-    import equinox as eqx
-    import jax
+def _test_inputs(config: RunConfig, data):
+    """(initial states, times, args or None) of the test trajectories, in the run's dtype."""
     import jax.numpy as jnp
 
-    import models
-
-    # An adaptive evaluation of a stiff learned field can take millions of steps; a test
-    # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
-    # (non-finite states) instead of holding the sweep.
-    integ = eval_integrator(config)
     dtype = jnp.dtype(config.dtype)
     z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
     ts = jnp.asarray(data.ts_test, dtype=dtype)
     args = jnp.asarray(data.args_test, dtype=dtype) if config.random_args else None
+    return z0s, ts, args
+
+
+def _roller(config: RunConfig):
+    """``roll(model, z0s, ts, args) -> (predictions, stats)`` with the run's evaluation
+    integrator, jitted: one compile serves every model of one structure (checkpoints)."""
+    import equinox as eqx
+
+    import models
+
+    integ = eval_integrator(config)
 
     @eqx.filter_jit
     def roll(m, z0s, ts, args):
         return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
 
+    return roll
+
+
+def _score(config: RunConfig, system, data, zhat: np.ndarray):
+    """The metrics of test predictions ``zhat`` (N, T, 2d) that checkpoints also record
+    (:data:`CHECKPOINT_METRICS`), and the per-trajectory, per-time errors and energy
+    violations ``err_t``, ``ev_t`` (N, T)."""
+    z = data.z_test
+    angular = tuple(system.angular)
+    h_args = data.args_test if config.random_args else None
+    err_t = M.relative_error(zhat, z, angular)
+    h_true = M.energies(system, z, h_args, config.coordinates)
+    h_pred = M.energies(system, zhat, h_args, config.coordinates)
+    ev_t = M.energy_violation_curve(h_pred, h_true)
+    # Momentum-coordinate runs are also scored on (q, qdot), decoded with the TRUE velocity map
+    # (so models fed (q, p) and (q, qdot) can be compared on one footing).
+    err_velocity, mse_velocity = float("nan"), float("nan")
+    if config.coordinates == "momentum":
+        zv_hat, zv = to_velocity(system, zhat, h_args), to_velocity(system, z, h_args)
+        err_velocity = float(M.geometric_mean(M.relative_error(zv_hat, zv, angular)[..., 1:]))
+        mse_velocity = M.mse(zv_hat, zv, angular)
+    scores = {
+        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
+        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
+        "mse": M.mse(zhat, z, angular),
+        "valid_time": float(np.mean(M.valid_prediction_time(err_t, data.ts_test))),
+        "rollout_error_velocity": err_velocity,
+        "mse_velocity": mse_velocity,
+    }
+    return scores, err_t, ev_t, h_pred, h_true
+
+
+# The metrics recorded at every learning-curve checkpoint (row field "checkpoints").
+CHECKPOINT_METRICS = (
+    "rollout_error",
+    "energy_violation",
+    "mse",
+    "valid_time",
+    "rollout_error_velocity",
+    "mse_velocity",
+)
+
+
+def _evaluate(config, system, data, model, cache_root, rolled=None, roll=None):
+    """Metrics, curves and full curves of a trained model on the test set.
+
+    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
+    elsewhere (an ensemble's, vmapped over members: ``bench.core._ensemble``); ``roll``: the
+    jitted rollout to use (:func:`_roller`; made here when None).
+    """
+    import jax
+    import jax.numpy as jnp
+
+    # An adaptive evaluation of a stiff learned field can take millions of steps; a test
+    # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
+    # (non-finite states) instead of holding the sweep.
+    dtype = jnp.dtype(config.dtype)
+    z0s, ts, args = _test_inputs(config, data)
+
     if rolled is None:
-        predict = _predictor(model, system, roll)
+        predict = _predictor(model, system, roll or _roller(config))
         t0 = time.perf_counter()
         jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
         t1 = time.perf_counter()
@@ -304,20 +402,8 @@ def _evaluate(config, system, data, model, cache_root, rolled=None):
     z = data.z_test
     angular = tuple(system.angular)
     h_args = data.args_test if config.random_args else None
-
-    err_t = M.relative_error(zhat, z, angular)
-    h_true = M.energies(system, z, h_args, config.coordinates)
-    h_pred = M.energies(system, zhat, h_args, config.coordinates)
-    ev_t = M.energy_violation_curve(h_pred, h_true)
-    vpt = M.valid_prediction_time(err_t, data.ts_test)
+    scores, err_t, ev_t, h_pred, h_true = _score(config, system, data, zhat)
     finite = bool(np.all(np.isfinite(zhat)))
-    # Momentum-coordinate runs are also scored on (q, qdot), decoded with the TRUE velocity map
-    # (so models fed (q, p) and (q, qdot) can be compared on one footing).
-    err_velocity, mse_velocity = float("nan"), float("nan")
-    if config.coordinates == "momentum":
-        zv_hat, zv = to_velocity(system, zhat, h_args), to_velocity(system, z, h_args)
-        err_velocity = float(M.geometric_mean(M.relative_error(zv_hat, zv, angular)[..., 1:]))
-        mse_velocity = M.mse(zv_hat, zv, angular)
 
     states = z.reshape(-1, z.shape[-1])
     pick = np.linspace(0, len(states) - 1, min(_SYMPLECTIC_STATES, len(states))).astype(int)
@@ -329,17 +415,17 @@ def _evaluate(config, system, data, model, cache_root, rolled=None):
     except Exception:
         nfe = float("nan")
     metrics = {
-        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
-        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
-        "mse": M.mse(zhat, z, angular),
-        "valid_time": float(np.mean(vpt)),
+        "rollout_error": scores["rollout_error"],
+        "energy_violation": scores["energy_violation"],
+        "mse": scores["mse"],
+        "valid_time": scores["valid_time"],
         "rollout_error_ref": M.rollout_error(zhat, z, angular, reference_compatible=True),
         "energy_violation_ref": M.energy_violation(h_pred, h_true, reference_compatible=True),
         "energy_pct_max_pe": M.energy_pct_max_pe(
             h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
         ),
-        "rollout_error_velocity": err_velocity,
-        "mse_velocity": mse_velocity,
+        "rollout_error_velocity": scores["rollout_error_velocity"],
+        "mse_velocity": scores["mse_velocity"],
         "symplectic_error": M.symplectic_error(
             model, jnp.asarray(states[pick], dtype=dtype), s_args
         ),
@@ -362,6 +448,52 @@ def _evaluate(config, system, data, model, cache_root, rolled=None):
     return metrics, curves, full
 
 
+def _checkpoints(config, system, data, meta, final_metrics, final_curves, roll) -> dict | None:
+    """The learning curve of a run: :data:`CHECKPOINT_METRICS` at each of its training
+    checkpoints (``bench.core._train.checkpoint_steps``), on the whole test set with the
+    evaluation integrator, as columns (lists, one entry per checkpoint) plus the per-time
+    curves ``rel_error_t``, ``energy_violation_t`` (geometric mean over trajectories).
+
+    The checkpoint at the full budget of a run that trained to the end IS the final model: it
+    takes the final metrics (so the curve ends on the row's numbers exactly). A checkpoint at or
+    after a divergence is ``status`` ``diverged`` with the final (last finite) model's metrics,
+    as the row of a diverged run. None when the run has no checkpoints (or nothing trained).
+    """
+    import jax
+
+    targets = train_config(config).checkpoints
+    snaps = {s.step: s for s in meta.get("_snapshots") or ()}
+    if not targets or meta.get("steps_done") is None or "_snapshots" not in meta:
+        return None
+    z0s, ts, args = _test_inputs(config, data)
+    out: dict = {"step": [], "fraction": [], "train_seconds": [], "status": []}
+    for key in (*CHECKPOINT_METRICS, "rel_error_t", "energy_violation_t"):
+        out[key] = []
+    for target in targets:
+        snap = next((snaps[k] for k in sorted(snaps) if k >= target), None)
+        final = snap is None or (snap.step >= config.steps and meta["status"] == "ok")
+        if final:
+            scores = {k: final_metrics[k] for k in CHECKPOINT_METRICS}
+            rel, ev = final_curves["rel_error"], final_curves["energy_violation"]
+            status = meta["status"] if snap is None else "ok"
+            seconds = meta["train_seconds"] if snap is None else snap.train_seconds
+        else:
+            pred, _ = jax.block_until_ready(roll(snap.model, z0s, ts, args))
+            scores, err_t, ev_t, _, _ = _score(config, system, data, np.asarray(pred, np.float64))
+            rel = M.geometric_mean(err_t, axis=0).tolist()
+            ev = M.geometric_mean(ev_t, axis=0).tolist()
+            status, seconds = "ok", snap.train_seconds
+        out["step"].append(int(target))
+        out["fraction"].append(target / config.steps)
+        out["train_seconds"].append(float(seconds))
+        out["status"].append(status)
+        for k in CHECKPOINT_METRICS:
+            out[k].append(float(scores[k]))
+        out["rel_error_t"].append(list(rel))
+        out["energy_violation_t"].append(list(ev))
+    return out
+
+
 NAN_METRICS = (
     "rollout_error",
     "rollout_error_velocity",
@@ -382,8 +514,10 @@ def execute_run(
     """Run one configuration end to end and return its row (never raises).
 
     The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
-    ``diverged_step``, ``error``, the metrics, the costs, and ``curves`` (small per-time
-    curves, stored in the row file and expanded into curves.parquet).
+    ``diverged_step``, ``error``, the metrics, the costs, ``curves`` (small per-time
+    curves, stored in the row file and expanded into curves.parquet) and, for a trained run
+    with ``eval_checkpoints``, ``checkpoints`` (its learning curve, :func:`_checkpoints`,
+    expanded into checkpoints.parquet) with ``checkpoint_seconds``, the time they took.
 
     ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
     ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
@@ -413,12 +547,18 @@ def execute_run(
             flops_per_step=_nan_if_none(meta.get("flops_per_step")),
             train_cached=meta["train_cached"],
         )
-        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled)
+        roll = _roller(config)
+        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled, roll)
         if row["status"] == "diverged" and not metrics["rollout_finite"]:
             # A model that went non-finite in training has no meaningful prediction.
             metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))
         row.update(metrics)
         row["curves"] = curves
+        t_check = time.perf_counter()
+        checkpoints = _checkpoints(config, system, data, meta, metrics, curves, roll)
+        if checkpoints is not None:
+            row["checkpoints"] = checkpoints
+            row["checkpoint_seconds"] = time.perf_counter() - t_check
         np.savez_compressed(art / "curves.npz", **full)
     except Exception as e:  # one run never stops the sweep...
         if storage_error(e):  # ...but a full disk does (bench.core._errors), recording nothing
@@ -428,5 +568,7 @@ def execute_run(
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
     row.update(provenance())  # versions, device and commit: bench.core._provenance
-    _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
+    _write_json(
+        art / "metrics.json", {a: b for a, b in row.items() if a not in ("curves", "checkpoints")}
+    )
     return row

@@ -9,7 +9,8 @@ the list of runs of one profile. Precedence, lowest first::
 (an override whose key is an axis replaces that axis' values; ``"seeds"`` replaces the seeds).
 
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
-of every field, ``train_hash`` the same over every field except the ``eval_*`` ones, so runs
+of every field (a field added later, ``eval_checkpoints``, counts only when it is not 0),
+``train_hash`` the same over every field except the ``eval_*`` ones, so runs
 that differ only in how they are evaluated share one training. Experiment and profile names
 are not part of either hash: experiments that expand to the same run share it.
 """
@@ -67,6 +68,7 @@ class RunConfig:
     eval_integrator: str = "rk4_38"
     eval_substeps: int = 1
     eval_rtol: float = 1e-6
+    eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._train.checkpoint_steps)
     dtype: str = "float32"
     seed: int = 0
 
@@ -85,6 +87,9 @@ class RunConfig:
             object.__setattr__(self, name, _as_int(getattr(self, name), name))
         for name in ("test_chunks", "steps", "batch", "train_substeps", "eval_substeps", "seed"):
             object.__setattr__(self, name, _as_int(getattr(self, name), name))
+        object.__setattr__(
+            self, "eval_checkpoints", _as_int(self.eval_checkpoints, "eval_checkpoints")
+        )
 
     def validate(self) -> RunConfig:
         """Check values that need no registry; raise ValueError naming what is allowed."""
@@ -98,8 +103,9 @@ class RunConfig:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a finite number > 0; got {v}")
-        if self.seed < 0:
-            raise ValueError(f"seed must be an integer >= 0; got {self.seed}")
+        for name in ("seed", "eval_checkpoints"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be an integer >= 0; got {getattr(self, name)}")
         for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be an integer >= 1; got {getattr(self, name)}")
@@ -147,15 +153,25 @@ class RunConfig:
             kw["friction"] = self.friction
         return kw
 
+    def _identity(self) -> dict:
+        """The fields a hash covers: every one, except those of :data:`_NEW_FIELDS` left at
+        their default (fields added later, so that older runs keep their hashes)."""
+        return {a: b for a, b in self.to_dict().items() if _NEW_FIELDS.get(a, _NO) != b}
+
     @property
     def config_hash(self) -> str:
-        """sha256 (16 hex digits) of the canonical JSON of every field."""
-        return _hash(self.to_dict())
+        """sha256 (16 hex digits) of the canonical JSON of every field (see ``_identity``)."""
+        return _hash(self._identity())
 
     @property
     def train_hash(self) -> str:
         """sha256 (16 hex digits) of every field except the ``eval_*`` ones."""
-        return _hash({a: b for a, b in self.to_dict().items() if not a.startswith("eval_")})
+        return _hash({a: b for a, b in self._identity().items() if not a.startswith("eval_")})
+
+
+_NO = object()
+# Fields added after results were stored, with the default that leaves them out of the hashes.
+_NEW_FIELDS = {"eval_checkpoints": 0}
 
 
 def _is_missing(v) -> bool:
@@ -217,6 +233,7 @@ PROFILES: dict[str, dict[str, object]] = {
         "width": 16,
         "steps": 20,
         "batch": 8,
+        "eval_checkpoints": 2,
         "seeds": (0,),
     },
     "quick": {
@@ -227,6 +244,7 @@ PROFILES: dict[str, dict[str, object]] = {
         "width": 128,
         "steps": 1000,
         "batch": 100,
+        "eval_checkpoints": 4,
         "seeds": (0, 1, 2),
     },
     "paper": {
@@ -237,6 +255,7 @@ PROFILES: dict[str, dict[str, object]] = {
         "width": 256,
         "steps": 8000,
         "batch": 200,
+        "eval_checkpoints": 4,
         "seeds": (0, 1, 2, 3, 4),
     },
 }

@@ -5,6 +5,9 @@ Layout under ``results_dir``::
     .rows/<config_hash>.json   the truth: one finished run (row fields + small per-time curves)
     runs.parquet, runs.csv     one row per config_hash, rebuilt from .rows/
     curves.parquet             (config_hash, t, rel_error, energy_violation, z_true_i, z_pred_i)
+    checkpoints.parquet        learning curves: (config_hash, step, fraction, train_seconds,
+                               status, rollout_error, energy_violation, mse, ...) per checkpoint
+    checkpoint_curves.parquet  (config_hash, step, t, rel_error, energy_violation) per checkpoint
 
 A row file is written to a temporary name, fsynced and ``os.replace``d into place, and the
 tables are rebuilt the same way, so a process killed at any moment (or a full disk) leaves
@@ -36,6 +39,7 @@ DAMAGED = ".damaged"  # under .rows/: row files that did not read back, kept for
 CURVE_KEYS = ("t", "rel_error", "energy_violation", "z_true", "z_pred")
 STATUSES = ("ok", "diverged", "failed")
 CHECKSUM = "_row_sha256"
+NESTED = ("curves", "checkpoints")  # row fields kept out of the runs table (tables of their own)
 
 
 class DamagedRowWarning(UserWarning):
@@ -160,9 +164,9 @@ def _parse_row(path: Path) -> tuple[dict | None, str | None]:
     for key, kind in (("system", str), ("model", str), ("seed", int)):
         if not isinstance(row.get(key), kind) or isinstance(row.get(key), bool):
             return None, f"field {key!r} missing or not a {kind.__name__}"
-    curves = row.get("curves")
-    if curves is not None and not isinstance(curves, dict):
-        return None, "field 'curves' is not an object"
+    for key in NESTED:
+        if row.get(key) is not None and not isinstance(row.get(key), dict):
+            return None, f"field {key!r} is not an object"
     return row, None
 
 
@@ -245,7 +249,7 @@ def unread_rows(results_dir) -> list[Path]:
 def _flat(row: dict) -> dict:
     out = {}
     for a, b in row.items():
-        if a == "curves":
+        if a in NESTED:
             continue
         if isinstance(b, list | tuple | dict):
             b = json.dumps(b)
@@ -293,8 +297,53 @@ def curves_frame(rows: Iterable[dict]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
+CHECKPOINT_COLUMNS = ("step", "fraction", "train_seconds", "status")
+
+
+def checkpoints_frame(rows: Iterable[dict]) -> pd.DataFrame:
+    """Learning curves, one row per (run, checkpoint): config_hash, step, fraction,
+    train_seconds, status and the checkpoint metrics (``bench.core._execute.CHECKPOINT_METRICS``);
+    empty (with those first columns) when no row has checkpoints."""
+    parts = []
+    for r in rows:
+        c = r.get("checkpoints")
+        if not c or not c.get("step"):
+            continue
+        d = {"config_hash": r["config_hash"]}
+        d.update({k: v for k, v in c.items() if not k.endswith("_t")})
+        parts.append(pd.DataFrame(d))
+    if not parts:
+        return pd.DataFrame(columns=["config_hash", *CHECKPOINT_COLUMNS])
+    out = pd.concat(parts, ignore_index=True)
+    for col in out.columns:
+        if col not in ("config_hash", "status"):
+            out[col] = pd.to_numeric(out[col], errors="coerce").astype(float)
+    out["step"] = out["step"].astype(int)
+    return out
+
+
+def checkpoint_curves_frame(rows: Iterable[dict]) -> pd.DataFrame:
+    """Per-time curves at each checkpoint: config_hash, step, t, rel_error, energy_violation
+    (the columns of :func:`curves_frame`, so a claim rule reads them as it reads the final ones)."""
+    parts = []
+    for r in rows:
+        c, t = r.get("checkpoints"), (r.get("curves") or {}).get("t")
+        if not c or not c.get("step") or not t:
+            continue
+        for i, step in enumerate(c["step"]):
+            d = {"config_hash": r["config_hash"], "step": int(step), "t": np.asarray(t, float)}
+            for key in ("rel_error", "energy_violation"):
+                v = c.get(f"{key}_t", [None] * len(c["step"]))[i]
+                d[key] = np.asarray(v if v is not None else [np.nan] * len(t), dtype=float)
+            parts.append(pd.DataFrame(d))
+    if not parts:
+        return pd.DataFrame(columns=["config_hash", "step", "t", "rel_error", "energy_violation"])
+    return pd.concat(parts, ignore_index=True)
+
+
 def rebuild_tables(results_dir) -> pd.DataFrame:
-    """Rewrite runs.parquet, runs.csv and curves.parquet from ``.rows/`` (atomically)."""
+    """Rewrite runs.parquet, runs.csv, curves.parquet, checkpoints.parquet and
+    checkpoint_curves.parquet from ``.rows/`` (atomically)."""
     results_dir = Path(results_dir)
     rows = read_rows(results_dir)
     df = rows_frame(rows)
@@ -303,6 +352,11 @@ def rebuild_tables(results_dir) -> pd.DataFrame:
         ("runs.parquet", lambda p: df.to_parquet(p, index=False)),
         ("runs.csv", lambda p: df.to_csv(p, index=False)),
         ("curves.parquet", lambda p: curves_frame(rows).to_parquet(p, index=False)),
+        ("checkpoints.parquet", lambda p: checkpoints_frame(rows).to_parquet(p, index=False)),
+        (
+            "checkpoint_curves.parquet",
+            lambda p: checkpoint_curves_frame(rows).to_parquet(p, index=False),
+        ),
     ):
         fd, tmp = tempfile.mkstemp(dir=results_dir, prefix=".tmp-", suffix=name)
         os.close(fd)
@@ -332,6 +386,22 @@ def load_curves(results_dir="results") -> pd.DataFrame:
     if (results_dir / "curves.parquet").exists():
         return pd.read_parquet(results_dir / "curves.parquet")
     return curves_frame([])
+
+
+def load_checkpoints(results_dir="results") -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(checkpoints, checkpoint curves) tables (see :func:`checkpoints_frame`)."""
+    results_dir = Path(results_dir)
+    if (results_dir / ROWS).is_dir():
+        rows = read_rows(results_dir)
+        return checkpoints_frame(rows), checkpoint_curves_frame(rows)
+    out = []
+    for name, empty in (
+        ("checkpoints.parquet", checkpoints_frame),
+        ("checkpoint_curves.parquet", checkpoint_curves_frame),
+    ):
+        path = results_dir / name
+        out.append(pd.read_parquet(path) if path.exists() else empty([]))
+    return out[0], out[1]
 
 
 def runs_of(experiment, profile: str, results_dir="results") -> pd.DataFrame:

@@ -8,6 +8,12 @@ Loss on a batch of B chunks z (B, C, 2d) observed at ts (C,):
 with e(x) = x^2 ("l2") or |x| ("l1"). Optimiser: clip_by_global_norm(clip) then AdamW with a
 cosine decay of the learning rate from lr to lr * lr_floor over ``steps``.
 
+Checkpoints: ``TrainConfig.checkpoints`` names training steps at which a copy of the parameters
+is kept (:class:`Snapshot`, taken at the end of the first compiled block that reaches the step,
+so steps that are multiples of ``steps_per_call`` are exact: :func:`checkpoint_steps`). Taking
+a snapshot copies the parameters between blocks and changes nothing in the training: the final
+parameters are those of the same run without checkpoints, bit for bit (a test).
+
 Speed: the steps run ``steps_per_call`` at a time inside one compiled ``lax.scan`` (the data
 stay on the device, the batch indices of the whole block come in as one array), which removes
 the Python dispatch between steps. The compiled block is cached per configuration and shapes,
@@ -49,6 +55,7 @@ class TrainConfig:
     seed: int = 0
     log_every: int = 100  # progress-bar refresh, in steps (rounded up to whole blocks)
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
+    checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
 
     def __post_init__(self):
         for name in ("steps", "batch", "log_every", "steps_per_call"):
@@ -78,10 +85,43 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.loss {self.loss!r}: allowed {', '.join(LOSSES)}")
         if self.dtype not in DTYPES:
             raise ValueError(f"TrainConfig.dtype {self.dtype!r}: allowed {', '.join(DTYPES)}")
+        cps = self.checkpoints
+        if not isinstance(cps, tuple) or any(
+            isinstance(c, bool) or not isinstance(c, int) or not 1 <= c <= self.steps for c in cps
+        ):
+            raise ValueError(
+                f"TrainConfig.checkpoints must be a tuple of integer steps in [1, steps], "
+                f"got {cps!r}"
+            )
         if not isinstance(self.integrator, Integrator):
             raise ValueError(
                 f"TrainConfig.integrator must be a models.Integrator, got {self.integrator!r}"
             )
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The model after ``step`` updates, and the training wall time spent until then."""
+
+    step: int
+    train_seconds: float
+    model: Any
+
+
+def checkpoint_steps(steps: int, n: int, block: int = 100) -> tuple[int, ...]:
+    """``n`` checkpoints on the halving grid ``steps * 2**-(n-1), ..., steps / 2, steps``, each
+    rounded to the nearest multiple of ``block`` (at least one block; the last is ``steps``),
+    duplicates dropped: ``checkpoint_steps(8000, 4) == (1000, 2000, 4000, 8000)``,
+    ``checkpoint_steps(1000, 4) == (100, 300, 500, 1000)``. ``n = 0`` gives ``()``."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+        raise ValueError(f"the number of checkpoints must be an integer >= 0, got {n!r}")
+    block = max(1, min(block, steps))
+    out = []
+    for i in range(n):
+        target = steps * 2.0 ** (i - n + 1)
+        snapped = min(steps, max(block, int(np.floor(target / block + 0.5)) * block))
+        out.append(steps if i == n - 1 else snapped)
+    return tuple(sorted(set(out)))
 
 
 @dataclass(frozen=True)
@@ -91,6 +131,8 @@ class TrainResult:
     ``status`` is ``"diverged"`` when step ``diverged_step`` produced a non-finite loss or
     gradient; ``model`` is then the last model with finite loss (the one before that step's
     update) and ``losses`` stop before that step. ``flops_per_step``: see :func:`step_flops`.
+    ``snapshots``: one :class:`Snapshot` per ``config.checkpoints`` step reached before any
+    divergence (the last one, at ``steps``, holds the final model).
     """
 
     model: Any
@@ -101,6 +143,7 @@ class TrainResult:
     compile_seconds: float
     steps_done: int
     flops_per_step: float = float("nan")
+    snapshots: tuple = ()
 
 
 def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
@@ -200,7 +243,7 @@ def step_flops(compiled) -> float:
 def _compiled_block(params, static, opt_state, dead, good, data, idx, active, config):
     """The compiled block for this configuration and these shapes (compiled at most once);
     its ``flops`` attribute is :func:`step_flops` of the compiled program."""
-    cfg_key = dataclasses.replace(config, seed=0, log_every=1)
+    cfg_key = dataclasses.replace(config, seed=0, log_every=1, checkpoints=())
     leaves = jax.tree.leaves((params, opt_state, data, idx))
     key = (
         jax.tree.structure((params, static, opt_state)),
@@ -320,6 +363,8 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
 
         bar = tqdm(total=config.steps, desc="train", unit="step", mininterval=0.5)
     losses: list[np.ndarray] = []
+    snapshots: list[Snapshot] = []
+    pending = list(config.checkpoints)
     diverged_step = None
     train_seconds = 0.0
     last_log = 0
@@ -343,6 +388,11 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
             break
         losses.append(block_losses)
         done += len(block_losses)
+        if pending and done >= pending[0]:  # a copy: the next block donates these buffers
+            kept = params if done >= config.steps else jax.tree.map(jnp.copy, params)
+            snapshots.append(Snapshot(done, train_seconds, eqx.combine(kept, static)))
+            while pending and done >= pending[0]:
+                pending.pop(0)
         if bar is not None:
             bar.update(len(block_losses))
             if done - last_log >= config.log_every or done >= config.steps:
@@ -359,4 +409,5 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
         compile_seconds=compile_seconds,
         steps_done=done,
         flops_per_step=getattr(compiled, "flops", float("nan")),
+        snapshots=tuple(snapshots),
     )
