@@ -1,6 +1,7 @@
-"""The studies: each paper experiment with its verdict rule and figure, the trade-off and the
-stability study (registered here), and the performance benchmark (``perf``, an entry point of
-its own that pins threads at import, so it is imported only by ``python -m bench perf``).
+"""The studies: each paper experiment with its verdict rule and figure, the trade-off, the
+stability study and the learning curves (registered here), and the performance benchmark
+(``perf``, an entry point of its own that pins threads at import, so it is imported only by
+``python -m bench perf``).
 
 Importing this package registers every built-in study in :mod:`bench.core`'s registry
 (:func:`bench.core.studies`); the order of the imports is the report's order. A study imports
@@ -9,5 +10,6 @@ Importing this package registers every built-in study in :mod:`bench.core`'s reg
 
 from . import paper, tradeoff  # noqa: I001 - registration order
 from . import stability
+from . import learning
 
-__all__ = ["paper", "stability", "tradeoff"]
+__all__ = ["learning", "paper", "stability", "tradeoff"]

@@ -1,0 +1,483 @@
+"""Learning curves: every verdict as a function of the training budget (issue 16).
+
+Every trained run of the ``quick`` and ``paper`` profiles keeps ``eval_checkpoints = 4``
+snapshots of its parameters, on the halving grid 1/8, 1/4, 1/2, 1 of its steps (rounded to the
+100-step training blocks: 100, 300, 500, 1000 at quick; 1000, 2000, 4000, 8000 at paper), and
+evaluates each on the whole test set after training (``checkpoints.parquet``). The last
+checkpoint is the final model, so a curve ends on its run's row.
+
+What a checkpoint is, and is not. The checkpoint at step s of a run trained for S steps is that
+run's model after s updates of a cosine schedule that decays over S steps: the learning rate is
+still high at s < S. It is therefore NOT the run one would get with a budget of s steps (whose
+schedule would have annealed by then), which is usually better: the section below measures the
+difference on the chain pendulum (quick 1000-step runs against the 1000-step checkpoint of the
+4000-step runs). Verdicts along the curve answer "from which point of THIS training does the
+verdict stop changing", an upper bound on the budget a cheaper profile would need, not a
+replacement for running it.
+
+Verdicts along the curve (:func:`verdicts_along_curve`): the runs table at checkpoint i is the
+runs table with every trained run's scores (``bench.core._execute.CHECKPOINT_METRICS``), status
+and training seconds replaced by those of its i-th checkpoint, and its per-time curves by the
+checkpoint's; trivial predictors (nothing to train) keep theirs. Each claim's own rule
+(``bench.studies.paper``) judges each of these tables. A claim whose trained runs lack
+checkpoints (rows stored before them) is left out. The *settling budget* (:func:`settling`) of
+a verdict is the first checkpoint from which it no longer changes; a verdict that changes at the
+last checkpoint is marked not settled (a longer budget may change it again).
+
+The dedicated experiment at quick (``learning_curves``): NODE+SO and HNN+SO on the chain
+pendulum (k = 2, the Fig. 2/4 cell), 2 seeds, trained 4000 steps (4x quick), checkpoints at
+500, 1000, 2000, 4000. The two models are those whose ratio decides claims 3 and 4 and whose
+quick errors sit furthest from the paper budget's (HNN+SO 11x, NODE+SO 3x, issue 16); the chain
+alone, and 2 seeds, are what fit beside the other quick experiments in ``make bench``'s 30
+minutes. They replace the trade-off's 300- and 3000-step training variants at quick. At
+``paper`` the experiment is the Fig. 2 cells of the two models (the same runs, no new training).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+import models  # noqa: E402
+
+from ..core import _store  # noqa: E402
+from ..core._experiments import PROFILES, Experiment  # noqa: E402
+from ..core._query import load_tables, select  # noqa: E402
+from ..core._studies import Study, register_study  # noqa: E402
+from ._figure import save_figure  # noqa: E402
+from .paper._common import PAPER_MODELS, _paper_cell, _shared  # noqa: E402
+from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
+from .paper._rules import _restrict, claim_studies, evaluate_claims  # noqa: E402
+from .paper._stats import MODEL_LABELS  # noqa: E402
+
+# the scores a checkpoint replaces (bench.core._execute.CHECKPOINT_METRICS)
+SCORES = (
+    "rollout_error",
+    "energy_violation",
+    "mse",
+    "valid_time",
+    "rollout_error_velocity",
+    "mse_velocity",
+)
+LEARNING_MODELS = ("node_so", "hnn_so")
+PAPER_STEPS = PROFILES["paper"]["steps"]
+
+LEARNING = Experiment(
+    name="learning_curves",
+    title="Learning curves: NODE+SO and HNN+SO on the chain pendulum past the quick budget",
+    axes={"system": ("chain_pendulum",), "k": (2,), "model": LEARNING_MODELS},
+    profile_overrides=_shared({"smoke": {"steps": 40}, "quick": {"steps": 4000, "seeds": (0, 1)}}),
+    include=_paper_cell,
+)
+
+
+# ------------------------------------------------------------------- runs at a checkpoint
+def _trained(runs: pd.DataFrame) -> pd.Series:
+    known = set(models.available())
+    return runs["model"].map(lambda m: not (m in known and models.spec(m).trivial))
+
+
+def runs_at(
+    runs: pd.DataFrame, checkpoints: pd.DataFrame, position: int
+) -> tuple[pd.DataFrame, set]:
+    """(the runs table at checkpoint ``position`` counted from each run's first, the
+    config hashes of trained runs that have no such checkpoint and were dropped)."""
+    out = runs.copy()
+    trained = _trained(out)
+    cp = checkpoints[checkpoints["config_hash"].isin(out["config_hash"])]
+    cp = cp.sort_values(["config_hash", "step"])
+    at = cp.groupby("config_hash").nth(position) if len(cp) else cp
+    at = at.set_index("config_hash") if len(at) else at
+    has = out["config_hash"].isin(at.index) if len(at) else pd.Series(False, index=out.index)
+    missing = set(out.loc[trained & ~has, "config_hash"])
+    out = out[~trained | has].copy()
+    rows = out["config_hash"].isin(at.index) if len(at) else pd.Series(False, index=out.index)
+    if rows.any():
+        src = at.loc[out.loc[rows, "config_hash"]]
+        for col in (*SCORES, "status", "train_seconds"):
+            if col in src.columns:
+                out.loc[rows, col] = src[col].to_numpy()
+        out.loc[rows, "checkpoint_step"] = src["step"].to_numpy()
+    return out.reset_index(drop=True), missing
+
+
+def curves_at(curves: pd.DataFrame, cp_curves: pd.DataFrame, runs_i: pd.DataFrame) -> pd.DataFrame:
+    """Per-time curves of ``runs_i`` (a :func:`runs_at` table): a trained run's at its
+    checkpoint step, a trivial predictor's own."""
+    if "checkpoint_step" not in runs_i:
+        return curves
+    steps = runs_i.dropna(subset=["checkpoint_step"])[["config_hash", "checkpoint_step"]]
+    parts = []
+    if len(steps) and len(cp_curves):
+        keyed = cp_curves.merge(
+            steps.rename(columns={"checkpoint_step": "step"}).astype({"step": int}),
+            on=["config_hash", "step"],
+        )
+        parts.append(keyed.drop(columns=["step"]))
+    rest = runs_i.loc[runs_i["checkpoint_step"].isna(), "config_hash"]
+    if len(curves):
+        parts.append(curves[curves["config_hash"].isin(rest)])
+    return pd.concat(parts, ignore_index=True) if parts else curves.iloc[0:0]
+
+
+def settling(verdicts) -> int:
+    """The first index from which ``verdicts`` no longer change (``len - 1`` when the last one
+    differs from the one before; 0 when all agree)."""
+    verdicts = list(verdicts)
+    i = len(verdicts) - 1
+    while i > 0 and verdicts[i - 1] == verdicts[-1]:
+        i -= 1
+    return max(i, 0)
+
+
+def verdicts_along_curve(
+    runs: pd.DataFrame,
+    curves: pd.DataFrame,
+    checkpoints: pd.DataFrame,
+    cp_curves: pd.DataFrame,
+    profile: str | None,
+) -> pd.DataFrame:
+    """One row per (verdict, checkpoint): key, claim, position, fraction (nominal, of the
+    budget), step (median over the claim's trained runs), verdict, effect. Claims whose trained
+    runs lack checkpoints are left out. Empty when no run has checkpoints."""
+    cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
+    if not len(checkpoints) or not len(runs):
+        return pd.DataFrame(columns=cols)
+    cp = checkpoints[checkpoints["config_hash"].isin(runs["config_hash"])]
+    if not len(cp):
+        return pd.DataFrame(columns=cols)
+    n = int(cp.groupby("config_hash").size().max())
+    judged = {}
+    for study in claim_studies():
+        mine = _restrict(runs, study, profile)
+        if not len(mine):
+            continue
+        hashes = set(mine.loc[_trained(mine), "config_hash"])
+        per_run = cp[cp["config_hash"].isin(hashes)].groupby("config_hash").size()
+        if hashes and len(per_run) == len(hashes) and (per_run == n).all():
+            judged[study.claim] = hashes
+    out = []
+    for position in range(n):
+        runs_i, _ = runs_at(runs, cp, position)
+        curves_i = curves_at(curves, cp_curves, runs_i)
+        for v in evaluate_claims(runs_i, curves_i, profile):
+            if v.claim not in judged:
+                continue
+            steps = runs_i.loc[runs_i["config_hash"].isin(judged[v.claim]), "checkpoint_step"]
+            out.append(
+                {
+                    "key": v.key,
+                    "claim": v.claim,
+                    "position": position,
+                    "fraction": 2.0 ** (position - n + 1),
+                    "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
+                    "verdict": v.verdict,
+                    "effect": v.effect,
+                }
+            )
+    return pd.DataFrame(out, columns=cols)
+
+
+def settling_table(along: pd.DataFrame) -> pd.DataFrame:
+    """Per verdict key: the verdict at each checkpoint, the settling step and whether the
+    verdict changed at the last checkpoint (``settled`` False)."""
+    rows = []
+    for key, g in along.groupby("key", sort=False):
+        g = g.sort_values("position")
+        i = settling(g["verdict"])
+        rows.append(
+            {
+                "key": key,
+                "claim": int(g["claim"].iloc[0]),
+                "verdicts": list(g["verdict"]),
+                "steps": list(g["step"]),
+                "settles_at": float(g["step"].iloc[i]),
+                "settles_fraction": float(g["fraction"].iloc[i]),
+                "settled": bool(len(g) == 1 or i < len(g) - 1),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+# ------------------------------------------------------------------------ loading
+def _tables(results_dir: Path):
+    runs, curves, profile = load_tables(results_dir)
+    cp, cp_curves = _store.load_checkpoints(results_dir)
+    if len(cp) and len(runs):
+        cp = cp[cp["config_hash"].isin(runs["config_hash"])]
+        cp_curves = cp_curves[cp_curves["config_hash"].isin(cp["config_hash"])]
+    return runs, curves, cp, cp_curves, profile
+
+
+def _curve_runs(runs: pd.DataFrame, cp: pd.DataFrame) -> pd.DataFrame:
+    """Finished runs with checkpoints of the paper models in the Fig. 2 cells (k = 2, L2, plain
+    models, spring from the paper's initial state), whatever their budget."""
+    ok = select(runs, model=list(PAPER_MODELS), k=2, loss="l2", friction=0.0)
+    ok = ok[ok["config_hash"].isin(cp["config_hash"])]
+    if not len(ok):
+        return ok
+    plain = ok["model_options"].map(lambda o: o in ("[]", "()", "", None) or o != o)
+    spring = ok["system"] == "spring_pendulum"
+    params = ok["system_params"].astype(str)
+    paper_init = params.str.contains("paper") | ~spring
+    cells = ok.apply(lambda r: r["coordinates"] == "velocity", axis=1)
+    return ok[plain & paper_init & cells]
+
+
+def _paper_reference(results_dir: Path) -> pd.DataFrame:
+    """Final errors of the paper-budget runs stored beside (``<results>/paper*/``), if any."""
+    parts = []
+    for d in sorted(Path(results_dir).glob("paper*")):
+        if d.is_dir():
+            try:
+                r, _, _ = load_tables(d)
+            except Exception:  # noqa: BLE001 - a reference folder is optional
+                continue
+            if len(r):
+                parts.append(r.assign(_folder=d.name))
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+
+
+# ------------------------------------------------------------------------- the figure
+def _gmean(x) -> float:
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x) & (x > 0)]
+    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
+
+
+def fig_learning_curves(results_dir) -> list[Path]:
+    """Per system: rollout error against training steps and against training seconds, for the
+    paper models (geometric mean over seeds, min-max band), the paper budget marked."""
+    results_dir = Path(results_dir)
+    runs, _, cp, _, _ = _tables(results_dir)
+    sel = _curve_runs(runs, cp) if len(cp) else runs.iloc[0:0]
+    if not len(sel):
+        return []
+    ref = _paper_reference(results_dir)
+    data = cp.merge(sel[["config_hash", "system", "model", "seed", "steps"]], on="config_hash")
+    systems = [s for s in ("chain_pendulum", "spring_pendulum") if s in set(data["system"])]
+    fig, axes = plt.subplots(
+        len(systems), 2, figsize=(10, 3.6 * len(systems)), squeeze=False, sharey="row"
+    )
+    for row, system in enumerate(systems):
+        d = data[data["system"] == system]
+        for col, x in enumerate(("step", "train_seconds")):
+            ax = axes[row][col]
+            for (model, budget), g in d.groupby(["model", "steps"]):
+                s = g.groupby("step").agg(
+                    x=(x, "mean"),
+                    y=("rollout_error", _gmean),
+                    lo=("rollout_error", "min"),
+                    hi=("rollout_error", "max"),
+                    n=("seed", "nunique"),
+                )
+                style = "-" if budget == d["steps"].min() else "--"
+                label = f"{MODEL_LABELS.get(model, model)}, {int(budget)} steps (n={s.n.max()})"
+                ax.plot(s.x, s.y, style, marker="o", ms=3, color=COLORS.get(model), label=label)
+                ax.fill_between(s.x, s.lo, s.hi, color=COLORS.get(model), alpha=0.12)
+            if x == "step":
+                ax.axvline(PAPER_STEPS, color="gray", lw=0.8, ls=":")
+                ax.text(
+                    PAPER_STEPS,
+                    1.0,
+                    " paper budget",
+                    transform=ax.get_xaxis_transform(),
+                    va="top",
+                    ha="left",
+                    fontsize=7,
+                    color="gray",
+                    rotation=90,
+                )
+                if len(ref):
+                    r = select(ref, system=system, k=2, loss="l2", model=list(PAPER_MODELS))
+                    for model, g in r.groupby("model"):
+                        ax.plot(
+                            [g["steps"].median()],
+                            [_gmean(g["rollout_error"])],
+                            marker="*",
+                            ms=9,
+                            color=COLORS.get(model),
+                            ls="none",
+                        )
+                ax.set_xlabel("training steps")
+            else:
+                ax.set_xlabel("training seconds (this machine)")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.grid(True, which="both", alpha=0.25)
+            if col == 0:
+                ax.set_ylabel(f"{SYSTEM_LABELS.get(system, system)}\nrollout error (geo. mean)")
+        axes[row][0].legend(fontsize=7, loc="lower left")
+    note = "stars: final errors of the paper-budget runs stored beside" if len(ref) else ""
+    fig.suptitle(
+        "Learning curves: test rollout error at checkpoints of training "
+        + (f"({note})" if note else ""),
+        fontsize=9,
+    )
+    return save_figure(fig, results_dir / "figures", "fig_learning_curves")
+
+
+# -------------------------------------------------------------------------- the section
+def _fmt(x) -> str:
+    return "-" if x is None or not np.isfinite(x) else f"{x:.3g}"
+
+
+def _budget_label(fraction: float, step: float) -> str:
+    frac = "1" if fraction >= 1 else f"1/{round(1 / fraction)}"
+    return f"{frac} ({_fmt(step)} steps)"
+
+
+def _settling_lines(along: pd.DataFrame) -> list[str]:
+    if not len(along):
+        return ["No stored run has checkpoints: no verdicts along the curve.", ""]
+    table = settling_table(along)
+    positions = sorted(along["position"].unique())
+    heads = []
+    for p in positions:
+        g = along[along["position"] == p]
+        heads.append(_budget_label(float(g["fraction"].iloc[0]), float(g["step"].median())))
+    lines = [
+        "| claim | " + " | ".join(f"verdict at {h}" for h in heads) + " | settling budget |",
+        "|---" * (len(heads) + 2) + "|",
+    ]
+    for _, r in table.iterrows():
+        settle = f"{_fmt(r['settles_at'])} steps"
+        if not r["settled"]:
+            settle += " (changed at the last checkpoint: not settled)"
+        elif r["settles_fraction"] <= min(along["fraction"]):
+            settle += " (from the first checkpoint)"
+        lines.append(f"| {r['key']} | " + " | ".join(r["verdicts"]) + f" | {settle} |")
+    n_settled = int(table["settled"].sum())
+    lines += [
+        "",
+        f"{n_settled} of {len(table)} verdicts had settled before the last checkpoint; "
+        f"{len(table) - n_settled} changed at it, so this profile's budget cannot be trusted "
+        "to have converged for those.",
+        "",
+    ]
+    return lines
+
+
+def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, profile) -> list:
+    """The dedicated experiment: per model and checkpoint the error over seeds, the NODE+SO /
+    HNN+SO ratio, the profile's own full-schedule runs and the paper-budget reference."""
+    from ..core._query import experiment_rows
+
+    rows = experiment_rows(runs, LEARNING.name, profile)
+    rows = rows[rows["config_hash"].isin(cp["config_hash"])] if len(rows) else rows
+    if not len(rows):
+        return []
+    budget = int(rows["steps"].max())
+    d = cp.merge(rows[["config_hash", "model", "seed", "system"]], on="config_hash")
+    lines = [
+        f"Dedicated experiment `{LEARNING.name}` ({budget} training steps, seeds "
+        f"{sorted(rows['seed'].unique().tolist())}): rollout error at each checkpoint "
+        "(geometric mean over seeds, per-seed values in brackets).",
+        "",
+        "| model | " + " | ".join(f"step {s}" for s in sorted(d["step"].unique())) + " |",
+        "|---" * (1 + d["step"].nunique()) + "|",
+    ]
+    ratio = {}
+    for model, g in d.groupby("model"):
+        cells = []
+        for step, h in g.groupby("step"):
+            vals = h.sort_values("seed")["rollout_error"].to_numpy()
+            cells.append(f"{_fmt(_gmean(vals))} [{', '.join(_fmt(v) for v in vals)}]")
+            ratio.setdefault(step, {})[model] = h.set_index("seed")["rollout_error"]
+        lines.append(f"| {MODEL_LABELS.get(model, model)} | " + " | ".join(cells) + " |")
+    if all(set(LEARNING_MODELS) <= set(v) for v in ratio.values()):
+        cells = []
+        for step in sorted(ratio):
+            r = (ratio[step]["node_so"] / ratio[step]["hnn_so"]).dropna()
+            cells.append(f"{_fmt(_gmean(r))} [{', '.join(_fmt(v) for v in r)}]")
+        lines.append("| NODE+SO / HNN+SO | " + " | ".join(cells) + " |")
+    lines.append("")
+    # the profile's own (full-schedule) runs of the same cell at their own budget
+    base_steps = PROFILES.get(profile or "", {}).get("steps")
+    own = select(runs, system="chain_pendulum", k=2, loss="l2", model=list(LEARNING_MODELS))
+    own = own[(own["steps"] == base_steps) & (own["steps"] < budget)] if base_steps else own[0:0]
+    own = own[own["coordinates"] == "velocity"] if len(own) else own
+    if len(own):
+        seeds = set(rows["seed"])
+        own = own[own["seed"].isin(seeds)]
+        parts = []
+        for model, g in own.groupby("model"):
+            at = d[(d["model"] == model) & (d["step"] == base_steps)]
+            if len(at):
+                parts.append(
+                    f"{MODEL_LABELS.get(model, model)} {_fmt(_gmean(g['rollout_error']))} after a "
+                    f"full {base_steps}-step schedule against {_fmt(_gmean(at['rollout_error']))} "
+                    f"at step {base_steps} of the {budget}-step schedule"
+                )
+        if parts:
+            lines += [
+                "A checkpoint is not a shorter run (module docstring): on the same seeds, "
+                + "; ".join(parts)
+                + ".",
+                "",
+            ]
+    ref = _paper_reference(results_dir)
+    if len(ref):
+        r = select(ref, system="chain_pendulum", k=2, loss="l2", model=list(LEARNING_MODELS))
+        if len(r):
+            parts = [
+                f"{MODEL_LABELS.get(m, m)} {_fmt(_gmean(g['rollout_error']))} "
+                f"({int(g['steps'].median())} steps, {int(g['n_train'].median())} training "
+                f"trajectories, n={len(g)}, `{g['_folder'].iloc[0]}`)"
+                for m, g in r.groupby("model")
+            ]
+            lines += ["Paper budget on the same cell: " + "; ".join(parts) + ".", ""]
+    return lines
+
+
+def section(results_dir) -> str:
+    results_dir = Path(results_dir)
+    runs, curves, cp, cp_curves, profile = _tables(results_dir)
+    lines = [
+        "## Learning curves and settling budgets",
+        "",
+        "Every trained run keeps checkpoints at 1/8, 1/4, 1/2 and 1 of its training steps "
+        "(rounded to 100-step blocks), evaluated on the whole test set; the last is the final "
+        "model. Each claim's own rule is applied to the runs at each checkpoint (trivial "
+        "predictors unchanged). The settling budget is the first checkpoint from which the "
+        "verdict no longer changes. A checkpoint at step s of a longer cosine schedule is not "
+        "a run trained for s steps (`bench/studies/learning.py`), so these are statements "
+        "about this profile's training, not predictions for a shorter profile.",
+        "",
+    ]
+    along = verdicts_along_curve(runs, curves, cp, cp_curves, profile)
+    lines += _settling_lines(along)
+    lines += _learning_lines(runs, cp, results_dir, profile)
+    return "\n".join(lines)
+
+
+STUDY = register_study(
+    Study(
+        name="learning_curves",
+        experiments=(LEARNING,),
+        title="Learning curves and settling budgets",
+        results_figure=fig_learning_curves,
+        section=section,
+        section_title="Learning curves and settling budgets",
+        stem="fig_learning_curves",
+    )
+)
+
+__all__ = [
+    "LEARNING",
+    "curves_at",
+    "fig_learning_curves",
+    "runs_at",
+    "section",
+    "settling",
+    "settling_table",
+    "verdicts_along_curve",
+]

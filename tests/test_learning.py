@@ -1,0 +1,134 @@
+"""Verdicts along the learning curve (bench.studies.learning), pinned with synthetic tables whose
+checkpoints hold the "contradict" scenario's scores before the "reproduce" scenario's (and the
+reverse): the verdict at each checkpoint must be the one the claims' rules give on that table,
+and the settling budget the first checkpoint of the final verdict."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import models
+from bench.studies.learning import (
+    SCORES,
+    settling,
+    settling_table,
+    verdicts_along_curve,
+)
+from bench.studies.paper import evaluate_claims
+from tests._synthetic import synthetic_tables
+
+PROFILE = "smoke"
+
+
+def test_settling_index():
+    assert settling(["not reproduced", "reproduced", "reproduced"]) == 1
+    assert settling(["reproduced", "reproduced", "inconclusive"]) == 2
+    assert settling(["reproduced", "reproduced"]) == 0
+    assert settling(["reproduced"]) == 0
+    assert settling(["a", "b", "a", "a"]) == 2
+
+
+@pytest.fixture(scope="module")
+def scenarios():
+    return {s: synthetic_tables(PROFILE, scenario=s) for s in ("reproduce", "contradict")}
+
+
+def _trained(runs):
+    return ~runs["model"].map(lambda m: models.spec(m).trivial)
+
+
+def _checkpoints(scenarios, sequence, drop_experiment=None):
+    """Checkpoint tables whose position p holds the trained runs' scores of scenario
+    ``sequence[p]`` (steps 5, 10, 20, ...), and their per-time curves."""
+    cps, cpc = [], []
+    for p, name in enumerate(sequence):
+        runs, curves = scenarios[name]
+        t = runs[_trained(runs)]
+        if drop_experiment is not None:
+            t = t[t["experiment"] != drop_experiment]
+        step = 5 * 2**p
+        frame = t[["config_hash", *SCORES, "status", "train_seconds"]].copy()
+        frame["step"], frame["fraction"] = step, step / (5 * 2 ** (len(sequence) - 1))
+        cps.append(frame)
+        c = curves[curves["config_hash"].isin(t["config_hash"])].copy()
+        c["step"] = step
+        cpc.append(c[["config_hash", "step", "t", "rel_error", "energy_violation"]])
+    return pd.concat(cps, ignore_index=True), pd.concat(cpc, ignore_index=True)
+
+
+def _hybrid(scenarios, name):
+    """Scenario ``name``'s trained runs with the final table's trivial predictors: what the
+    runs table at a checkpoint holding scenario ``name`` must be (built here with pandas)."""
+    runs, curves = scenarios[name]
+    final_runs, final_curves = scenarios["reproduce"]
+    trivial = final_runs[~_trained(final_runs)]
+    runs = pd.concat([runs[_trained(runs)], trivial], ignore_index=True)
+    curves = pd.concat(
+        [
+            curves[curves["config_hash"].isin(runs.loc[_trained(runs), "config_hash"])],
+            final_curves[final_curves["config_hash"].isin(trivial["config_hash"])],
+        ],
+        ignore_index=True,
+    )
+    return runs, curves
+
+
+def _keyed(verdicts):
+    return {v.key: v.verdict for v in verdicts}
+
+
+def test_verdict_at_each_checkpoint_is_the_rules_verdict_on_that_table(scenarios):
+    runs, curves = scenarios["reproduce"]
+    sequence = ("contradict", "reproduce", "reproduce")
+    cp, cpc = _checkpoints(scenarios, sequence)
+    along = verdicts_along_curve(runs, curves, cp, cpc, PROFILE)
+    assert sorted(along["position"].unique()) == [0, 1, 2]
+    for p, name in enumerate(sequence):
+        want = _keyed(evaluate_claims(*_hybrid(scenarios, name), PROFILE))
+        got = dict(along[along["position"] == p][["key", "verdict"]].to_numpy())
+        assert got == {k: want[k] for k in got}, p
+    # the last checkpoint is the final table: the report's own verdicts
+    final = _keyed(evaluate_claims(runs, curves, PROFILE))
+    last = dict(along[along["position"] == 2][["key", "verdict"]].to_numpy())
+    assert last == {k: final[k] for k in last}
+    assert np.allclose(sorted(along["step"].unique()), [5, 10, 20])
+
+
+def test_settling_budget_finds_where_the_verdict_stops_changing(scenarios):
+    runs, curves = scenarios["reproduce"]
+    early = _keyed(evaluate_claims(*_hybrid(scenarios, "contradict"), PROFILE))
+    final = _keyed(evaluate_claims(runs, curves, PROFILE))
+    changed = {k for k in final if early.get(k) != final[k]}
+    assert changed, "the scenarios must disagree on some claim for this test to mean anything"
+    # contradict, then reproduce twice: the changed verdicts settle at the second checkpoint
+    table = settling_table(
+        verdicts_along_curve(
+            runs,
+            curves,
+            *_checkpoints(scenarios, ("contradict", "reproduce", "reproduce")),
+            PROFILE,
+        )
+    ).set_index("key")
+    for key in changed & set(table.index):
+        assert table.loc[key, "settles_at"] == 10 and table.loc[key, "settled"], key
+    for key in set(table.index) - changed:
+        assert table.loc[key, "settles_at"] == 5, key
+    # reproduce twice, then contradict: the changed verdicts change at the last checkpoint
+    runs_c, curves_c = _hybrid(scenarios, "contradict")
+    seq = ("reproduce", "reproduce", "contradict")
+    table = settling_table(
+        verdicts_along_curve(runs_c, curves_c, *_checkpoints(scenarios, seq), PROFILE)
+    ).set_index("key")
+    for key in changed & set(table.index):
+        assert table.loc[key, "settles_at"] == 20 and not table.loc[key, "settled"], key
+
+
+def test_claims_whose_runs_lack_checkpoints_are_left_out(scenarios):
+    runs, curves = scenarios["reproduce"]
+    cp, cpc = _checkpoints(scenarios, ("reproduce", "reproduce"), drop_experiment="relativistic")
+    along = verdicts_along_curve(runs, curves, cp, cpc, PROFILE)
+    assert 7 not in set(along["claim"]) and 3 in set(along["claim"])
+    empty = verdicts_along_curve(runs, curves, cp.iloc[0:0], cpc.iloc[0:0], PROFILE)
+    assert empty.empty
