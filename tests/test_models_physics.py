@@ -371,7 +371,8 @@ def _mass_net(m):
 
 @pytest.mark.parametrize(
     "name, damped",
-    [("hnn", True), ("hnn_so", True)]
+    [("hnn_so", True)]  # the other three cost ~17 s each: slow (the same mechanism)
+    + [pytest.param("hnn", True, marks=pytest.mark.slow)]
     + [pytest.param(n, False, marks=pytest.mark.slow) for n in ("hnn", "hnn_so")],
 )
 def test_canonical_rollout_is_the_velocity_flow(name, damped):

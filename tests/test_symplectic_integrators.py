@@ -47,7 +47,8 @@ def chain():
         ("implicit_midpoint", 1.9, 2.2, (0.05, 0.025, 0.0125)),
         ("leapfrog_explicit", 0.7, 1.3, (0.1, 0.05, 0.025)),
         ("rk4", 3.9, 4.8, (0.05, 0.025, 0.0125)),
-        ("rk4_38", 3.9, 4.8, (0.05, 0.025, 0.0125)),
+        # rk4_38 is rk4's sibling (same order, ~10 s): slow, to keep make test under 10 min
+        pytest.param("rk4_38", 3.9, 4.8, (0.05, 0.025, 0.0125), marks=pytest.mark.slow),
     ],
 )
 def test_convergence_order_on_chain_pendulum(chain, method, low, high, dts):

@@ -355,15 +355,21 @@ def _settling_lines(along: pd.DataFrame) -> list[str]:
         elif r["settles_fraction"] <= min(along["fraction"]):
             settle += " (from the first checkpoint)"
         lines.append(f"| {r['key']} | " + " | ".join(r["verdicts"]) + f" | {settle} |")
-    n_settled = int(table["settled"].sum())
-    lines += [
-        "",
-        f"{n_settled} of {len(table)} verdicts had settled before the last checkpoint; "
-        f"{len(table) - n_settled} changed at it, so this profile's budget cannot be trusted "
-        "to have converged for those.",
-        "",
-    ]
-    return lines
+    lines.append("")
+    if len(positions) < 2:
+        return lines + ["One checkpoint per run: nothing to say about settling.", ""]
+    moved = table.loc[~table["settled"], "key"].tolist()
+    lines.append(
+        f"{len(table) - len(moved)} of {len(table)} verdicts no longer change over the last "
+        "two checkpoints"
+        + (
+            f"; {len(moved)} changed at the last one ({', '.join(moved)}): at this budget they "
+            "have not settled and may change with longer training."
+            if moved
+            else "."
+        )
+    )
+    return lines + [""]
 
 
 def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, profile) -> list:
