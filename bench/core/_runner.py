@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -41,6 +42,7 @@ __all__ = [
 ]
 
 EXECUTORS = ("local", "ray")
+REBUILD_SECONDS = 20.0  # a sweep rebuilds the tables from the rows at most this often
 
 
 def _execute_dict(d: dict, cache_root: str | None = None) -> dict:
@@ -114,12 +116,19 @@ def sweep(
 
     bar = tqdm(total=len(todo), desc=f"{experiment} [{profile}]", unit="run", disable=not progress)
 
+    last_rebuild = [time.perf_counter()]
+
     def finish(row: dict) -> None:
         row.setdefault("ensemble_size", 1)
         row["experiment"] = experiment
         row["profile"] = profile
         _store.write_row(results_dir, row)
-        _store.rebuild_tables(results_dir)
+        # the rows are the truth; the tables are rebuilt from them at most every
+        # REBUILD_SECONDS while the sweep goes on (reading every row each time is quadratic),
+        # and once at its end
+        if time.perf_counter() - last_rebuild[0] > REBUILD_SECONDS:
+            _store.rebuild_tables(results_dir)
+            last_rebuild[0] = time.perf_counter()
         new_rows.append(row)
         bar.update(1)
         bar.set_postfix_str(f"last: {row['model']} {row['status']}")
@@ -148,6 +157,7 @@ def sweep(
                             finish(row)
             else:
                 _sweep_pool(groups, finish, cache_root, workers, cores)
+        _store.rebuild_tables(results_dir)
     except Exception as e:
         err = storage_error(e)
         if err is None:

@@ -325,20 +325,25 @@ def checkpoints_frame(rows: Iterable[dict]) -> pd.DataFrame:
 def checkpoint_curves_frame(rows: Iterable[dict]) -> pd.DataFrame:
     """Per-time curves at each checkpoint: config_hash, step, t, rel_error, energy_violation
     (the columns of :func:`curves_frame`, so a claim rule reads them as it reads the final ones)."""
-    parts = []
+    cols: dict[str, list] = {k: [] for k in ("config_hash", "step", "t", "rel_error")}
+    cols["energy_violation"] = []
     for r in rows:
         c, t = r.get("checkpoints"), (r.get("curves") or {}).get("t")
         if not c or not c.get("step") or not t:
             continue
-        for i, step in enumerate(c["step"]):
-            d = {"config_hash": r["config_hash"], "step": int(step), "t": np.asarray(t, float)}
-            for key in ("rel_error", "energy_violation"):
-                v = c.get(f"{key}_t", [None] * len(c["step"]))[i]
-                d[key] = np.asarray(v if v is not None else [np.nan] * len(t), dtype=float)
-            parts.append(pd.DataFrame(d))
-    if not parts:
-        return pd.DataFrame(columns=["config_hash", "step", "t", "rel_error", "energy_violation"])
-    return pd.concat(parts, ignore_index=True)
+        n, steps = len(t), c["step"]
+        for key in ("rel_error", "energy_violation"):
+            v = [
+                x if x is not None and len(x) == n else [np.nan] * n
+                for x in c.get(f"{key}_t") or [None] * len(steps)
+            ]
+            cols[key].append(np.asarray(v, dtype=float).reshape(-1))
+        cols["config_hash"].append(np.repeat(r["config_hash"], n * len(steps)))
+        cols["step"].append(np.repeat(np.asarray(steps, dtype=int), n))
+        cols["t"].append(np.tile(np.asarray(t, dtype=float), len(steps)))
+    if not cols["t"]:
+        return pd.DataFrame(columns=list(cols))
+    return pd.DataFrame({k: np.concatenate(v) for k, v in cols.items()})
 
 
 def rebuild_tables(results_dir) -> pd.DataFrame:
