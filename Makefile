@@ -70,7 +70,7 @@ bench: $(STAMP)
 	$(PY) -m bench bench --profile $(PROFILE) --workers $(WORKERS)
 
 stability: $(STAMP)
-	$(PY) -m bench stability --profile $(PROFILE)
+	$(PY) -m bench stability --profile $(PROFILE) --workers $(WORKERS)
 
 perf: $(STAMP)
 	$(PY) -m bench perf

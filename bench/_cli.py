@@ -105,6 +105,12 @@ def _parser() -> argparse.ArgumentParser:
     st = sub.add_parser("stability", help="numerical stability cases (results/stability.csv)")
     st.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
     st.add_argument("--case", action="append", default=None, help="run only these cases")
+    st.add_argument(
+        "--workers",
+        type=_int("workers"),
+        default=1,
+        help="processes (default 1: in-process; 0: one per core)",
+    )
 
     b = sub.add_parser(
         "bench", help="sweep every experiment, the stability cases, then figures and report"
@@ -333,7 +339,13 @@ def _cmd_stability(args) -> int:
         for c in args.case:
             check_choice("stability case", c, list(_stability.CASES))
     _usable_results(args)
-    df = _stability.run_stability(Path(args.results), args.profile, args.case)
+    from .core._env import cpu_count
+
+    workers = getattr(args, "workers", 1)
+    if workers < 0:
+        raise ValueError(f"workers must be an integer >= 0; got {workers}")
+    workers = cpu_count() if workers == 0 else workers
+    df = _stability.run_stability(Path(args.results), args.profile, args.case, workers=workers)
     counts = df["outcome"].value_counts().to_dict() if len(df) else {}
     print(f"stability: {len(df)} rows {counts} -> {Path(args.results) / 'stability.csv'}")
     return 0

@@ -159,6 +159,11 @@ def sweep(
                 _sweep_pool(groups, finish, cache_root, workers, cores)
         _store.rebuild_tables(results_dir)
     except Exception as e:
+        if new_rows:  # the tables show every stored row however the sweep ends (best effort)
+            try:
+                _store.rebuild_tables(results_dir)
+            except Exception:  # noqa: BLE001 - the rows are the truth; the next sweep rebuilds
+                pass
         err = storage_error(e)
         if err is None:
             raise
@@ -173,18 +178,23 @@ def sweep(
     return new_rows
 
 
-def _sweep_pool(groups, finish, cache_root, workers, cores):
+def worker_pool(workers: int):
+    """A pool of ``workers`` spawned processes, each pinned to its own share of the cores (an
+    affinity mask, which sizes XLA's thread pools) in its initializer, before it imports jax:
+    no oversubscription. The sweep's pool, and the stability study's."""
     import multiprocessing as mp
 
     ctx = mp.get_context("spawn")
-    # Each worker takes its own share of the cores (an affinity mask, which sizes XLA's thread
-    # pools) in its initializer, before it imports jax: no oversubscription.
     available = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
     share = max(1, len(available) // workers) if available else 1
     slots = ctx.Queue()
     for i in range(workers):
         slots.put(available[i * share : (i + 1) * share] or None)
-    pool = ctx.Pool(workers, initializer=_pin_worker, initargs=(slots,))
+    return ctx.Pool(workers, initializer=_pin_worker, initargs=(slots,))
+
+
+def _sweep_pool(groups, finish, cache_root, workers, cores):
+    pool = worker_pool(workers)
     with pool:
         jobs = [([c.to_dict() for c in g], str(cache_root)) for g in groups]
         for rows in pool.imap_unordered(_star_execute, jobs):

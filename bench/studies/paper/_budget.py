@@ -150,7 +150,12 @@ def estimate_seconds(
 
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
-    """Predicted wall time of ``make bench``: ``(paper experiments + trade-off) * SWEEP_RATIO +
-    stability study``, from :func:`estimate_seconds` and the measured shares of the others."""
-    paper = estimate_seconds(profile, workers=workers)["seconds"]
-    return (paper + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S
+    """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
+    trade-off) * SWEEP_RATIO + stability study``, from :func:`estimate_seconds` and the
+    measured shares of the others (the learning-curve experiment is read from the registry:
+    ``bench.studies.learning`` imports this package, not the reverse)."""
+    from ...core._experiments import available, get
+
+    extra = tuple(get(n) for n in ("learning_curves",) if n in available())
+    paper = estimate_seconds(profile, workers=workers, experiments=PAPER_EXPERIMENTS + extra)
+    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S

@@ -47,26 +47,58 @@ CASES: dict[str, Callable[[StabilitySize], list[Row]]] = {
 }
 
 
-def run_cases(profile="quick", cases=None, progress: bool = True) -> list[Row]:
-    """Every case (or the named ones) at ``profile``'s size, each inside :func:`guard`."""
+# Cases that share trained models (``_learned``'s cache) run in one process.
+LEARNED = ("long_horizon", "high_energy_models", "model_precision")
+
+
+def _run_job(job) -> list[tuple[str, list[Row], float]]:
+    """A pool task: some cases at one size, each inside :func:`guard`, with their seconds."""
+    from ...core._env import configure_compilation_cache
+
+    names, size = job
+    configure_compilation_cache()
+    out = []
+    for name in names:
+        start = time.perf_counter()
+        out.append((name, guard(name, lambda name=name: CASES[name](size)), 0.0))
+        out[-1] = (name, out[-1][1], time.perf_counter() - start)
+    return out
+
+
+def run_cases(profile="quick", cases=None, progress: bool = True, workers: int = 1) -> list[Row]:
+    """Every case (or the named ones) at ``profile``'s size, each inside :func:`guard`, in case
+    order. ``workers`` > 1: in that many processes (``bench.core._runner.worker_pool``), the
+    cases that share trained models (:data:`LEARNED`) in one of them."""
     size = _size(profile)
     names = list(CASES) if cases is None else list(cases)
     unknown = [c for c in names if c not in CASES]
     if unknown:
         raise ValueError(f"unknown stability case(s) {unknown}; allowed: {', '.join(CASES)}")
-    rows = []
-    for name in names:
-        start = time.perf_counter()
-        got = guard(name, lambda name=name: CASES[name](size))
-        if progress:
-            outcomes = {o: sum(r.outcome == o for r in got) for o in OUTCOMES}
-            print(
-                f"[stability] {name}: {len(got)} rows {outcomes} "
-                f"in {time.perf_counter() - start:.1f}s",
-                flush=True,
-            )
-        rows += got
-    return rows
+    learned = [n for n in names if n in LEARNED]
+    jobs = ([learned] if learned else []) + [[n] for n in names if n not in LEARNED]
+    got: dict[str, list[Row]] = {}
+
+    def report(done):
+        for name, rows, seconds in done:
+            got[name] = rows
+            if progress:
+                outcomes = {o: sum(r.outcome == o for r in rows) for o in OUTCOMES}
+                print(
+                    f"[stability] {name}: {len(rows)} rows {outcomes} in {seconds:.1f}s",
+                    flush=True,
+                )
+
+    workers = max(1, min(int(workers), len(jobs)))
+    if workers == 1:
+        for job in jobs:
+            report(_run_job((job, size)))
+    else:
+        from ...core._runner import worker_pool
+
+        with worker_pool(workers) as pool:
+            for done in pool.imap_unordered(_run_job, [(job, size) for job in jobs]):
+                report(done)
+    return [row for name in names for row in got[name]]
 
 
 def to_frame(rows):
@@ -75,11 +107,12 @@ def to_frame(rows):
     return pd.DataFrame([asdict(r) for r in rows], columns=list(COLUMNS))
 
 
-def run_stability(results_dir="results", profile: str = "quick", cases=None):
-    """Run the cases; write ``stability.csv``/``.parquet`` and the figure; return the frame."""
+def run_stability(results_dir="results", profile: str = "quick", cases=None, workers: int = 1):
+    """Run the cases (in ``workers`` processes); write ``stability.csv``/``.parquet`` and the
+    figure; return the frame."""
     results_dir = Path(results_dir)
     results_dir.mkdir(parents=True, exist_ok=True)
-    df = to_frame(run_cases(profile, cases))
+    df = to_frame(run_cases(profile, cases, workers=workers))
     df.insert(0, "profile", profile)
     for name, value in provenance().items():  # versions, backend, device, commit (issue 14)
         df[name] = value
