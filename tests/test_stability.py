@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import jax
 import numpy as np
+import pandas as pd
 import pytest
 
 from bench.studies import stability as S
@@ -160,9 +161,18 @@ def test_dt_sweep_convergence_orders():
     assert 3.5 < order["rk4"] < 4.6
 
 
+def test_cases_in_worker_processes_give_the_rows_of_one_process():
+    cases = ["high_energy_truth", "precision"]
+    one = S.to_frame(S.run_cases("smoke", cases, progress=False))
+    two = S.to_frame(S.run_cases("smoke", cases, progress=False, workers=2))
+    assert list(one["case"]) == list(two["case"]) and len(one) > 4
+    timed = one["metric"].str.contains("seconds")  # wall-clock rows may differ, nothing else
+    pd.testing.assert_frame_equal(one[~timed], two[~timed])
+
+
 @pytest.mark.slow
 def test_run_stability_smoke_writes_everything(tmp_path):
-    df = S.run_stability(tmp_path, "smoke")
+    df = S.run_stability(tmp_path, "smoke", workers=2)
     assert (tmp_path / "stability.csv").exists()
     assert (tmp_path / "figures" / "stability.png").exists()
     assert set(df["outcome"]) <= set(S.OUTCOMES)

@@ -226,18 +226,17 @@ def _tables(results_dir: Path):
 
 
 def _curve_runs(runs: pd.DataFrame, cp: pd.DataFrame) -> pd.DataFrame:
-    """Finished runs with checkpoints of the paper models in the Fig. 2 cells (k = 2, L2, plain
-    models, spring from the paper's initial state), whatever their budget."""
+    """Finished runs with checkpoints of the paper models in the k = 2 cells of Figs. 2, 4 and 5
+    (L2, plain models, (q, qdot)), whatever their budget, with their ``cell`` label."""
     ok = select(runs, model=list(PAPER_MODELS), k=2, loss="l2", friction=0.0)
     ok = ok[ok["config_hash"].isin(cp["config_hash"])]
     if not len(ok):
-        return ok
+        return ok.assign(cell=pd.Series(dtype=str))
     plain = ok["model_options"].map(lambda o: o in ("[]", "()", "", None) or o != o)
-    spring = ok["system"] == "spring_pendulum"
-    params = ok["system_params"].astype(str)
-    paper_init = params.str.contains("paper") | ~spring
-    cells = ok.apply(lambda r: r["coordinates"] == "velocity", axis=1)
-    return ok[plain & paper_init & cells]
+    ok = ok[plain & (ok["coordinates"] == "velocity")]
+    return ok.assign(
+        cell=[_cell_name(a, b) for a, b in zip(ok["system"], ok["system_params"], strict=True)]
+    )
 
 
 def _paper_reference(results_dir: Path) -> pd.DataFrame:
@@ -262,21 +261,32 @@ def _gmean(x) -> float:
 
 
 def fig_learning_curves(results_dir) -> list[Path]:
-    """Per system: rollout error against training steps and against training seconds, for the
-    paper models (geometric mean over seeds, min-max band), the paper budget marked."""
+    """Per cell (system and initial state): rollout error against training steps and against
+    training seconds, for the paper models (geometric mean over seeds, min-max band; solid:
+    the profile's runs, dashed: the longer runs of the learning-curve experiment), the paper
+    budget marked, and the final errors of paper-budget runs stored beside as stars."""
     results_dir = Path(results_dir)
     runs, _, cp, _, _ = _tables(results_dir)
     sel = _curve_runs(runs, cp) if len(cp) else runs.iloc[0:0]
     if not len(sel):
         return []
     ref = _paper_reference(results_dir)
-    data = cp.merge(sel[["config_hash", "system", "model", "seed", "steps"]], on="config_hash")
-    systems = [s for s in ("chain_pendulum", "spring_pendulum") if s in set(data["system"])]
+    if len(ref):
+        ref = select(ref, k=2, loss="l2", model=list(PAPER_MODELS))
+        ref = ref.assign(
+            cell=[
+                _cell_name(a, b) for a, b in zip(ref["system"], ref["system_params"], strict=True)
+            ]
+        )
+    cols = ["config_hash", "cell", "model", "seed", "steps"]
+    data = cp.merge(sel[cols], on="config_hash")
+    cells = sorted(data["cell"].unique())
     fig, axes = plt.subplots(
-        len(systems), 2, figsize=(10, 3.6 * len(systems)), squeeze=False, sharey="row"
+        len(cells), 2, figsize=(10, 3.4 * len(cells)), squeeze=False, layout="constrained"
     )
-    for row, system in enumerate(systems):
-        d = data[data["system"] == system]
+    shortest = data["steps"].min()
+    for row, cell in enumerate(cells):
+        d = data[data["cell"] == cell]
         for col, x in enumerate(("step", "train_seconds")):
             ax = axes[row][col]
             for (model, budget), g in d.groupby(["model", "steps"]):
@@ -287,7 +297,7 @@ def fig_learning_curves(results_dir) -> list[Path]:
                     hi=("rollout_error", "max"),
                     n=("seed", "nunique"),
                 )
-                style = "-" if budget == d["steps"].min() else "--"
+                style = "-" if budget == shortest else "--"
                 label = f"{MODEL_LABELS.get(model, model)}, {int(budget)} steps (n={s.n.max()})"
                 ax.plot(s.x, s.y, style, marker="o", ms=3, color=COLORS.get(model), label=label)
                 ax.fill_between(s.x, s.lo, s.hi, color=COLORS.get(model), alpha=0.12)
@@ -295,39 +305,38 @@ def fig_learning_curves(results_dir) -> list[Path]:
                 ax.axvline(PAPER_STEPS, color="gray", lw=0.8, ls=":")
                 ax.text(
                     PAPER_STEPS,
-                    1.0,
-                    " paper budget",
+                    0.98,
+                    "paper budget ",
                     transform=ax.get_xaxis_transform(),
                     va="top",
-                    ha="left",
+                    ha="right",
                     fontsize=7,
                     color="gray",
-                    rotation=90,
                 )
-                if len(ref):
-                    r = select(ref, system=system, k=2, loss="l2", model=list(PAPER_MODELS))
-                    for model, g in r.groupby("model"):
-                        ax.plot(
-                            [g["steps"].median()],
-                            [_gmean(g["rollout_error"])],
-                            marker="*",
-                            ms=9,
-                            color=COLORS.get(model),
-                            ls="none",
-                        )
+                r = ref[ref["cell"] == cell] if len(ref) else ref
+                for model, g in r.groupby("model") if len(r) else []:
+                    ax.plot(
+                        [g["steps"].median()],
+                        [_gmean(g["rollout_error"])],
+                        marker="*",
+                        ms=10,
+                        color=COLORS.get(model),
+                        ls="none",
+                    )
                 ax.set_xlabel("training steps")
             else:
                 ax.set_xlabel("training seconds (this machine)")
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.grid(True, which="both", alpha=0.25)
+            ax.set_title(cell, fontsize=9)
             if col == 0:
-                ax.set_ylabel(f"{SYSTEM_LABELS.get(system, system)}\nrollout error (geo. mean)")
-        axes[row][0].legend(fontsize=7, loc="lower left")
-    note = "stars: final errors of the paper-budget runs stored beside" if len(ref) else ""
+                ax.set_ylabel("test rollout error\n(geometric mean)")
+        axes[row][0].legend(fontsize=6, loc="lower left")
+    stars = "\nstars: final errors of the paper-budget runs stored beside (n_train 800)"
     fig.suptitle(
-        "Learning curves: test rollout error at checkpoints of training "
-        + (f"({note})" if note else ""),
+        "Learning curves: rollout error at training checkpoints (band: min-max over seeds)"
+        + (stars if len(ref) else ""),
         fontsize=9,
     )
     return save_figure(fig, results_dir / "figures", "fig_learning_curves")
@@ -462,8 +471,8 @@ def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, pro
             r = r[r["system_params"].astype(str) == params] if len(r) else r
             parts = [
                 f"{MODEL_LABELS.get(m, m)} {_fmt(_gmean(g['rollout_error']))} "
-                f"({int(g['steps'].median())} steps, {int(g['n_train'].median())} training "
-                f"chunks, n={len(g)}, `{g['_folder'].iloc[0]}`)"
+                f"({int(g['steps'].median())} steps, n_train {int(g['n_train'].median())}, "
+                f"n={len(g)}, `{g['_folder'].iloc[0]}`)"
                 for m, g in r.groupby("model")
             ]
             if parts:
