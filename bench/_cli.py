@@ -256,10 +256,13 @@ def _do_sweep(args, names) -> int:
         print("no experiments yet")
         return 0
     _usable_results(args)
+    from .studies.paper._budget import run_seconds
+
     res = _runner.run_experiments(
         names,
         args.profile,
         args.results,
+        order=run_seconds,  # longest runs first: the workers finish together
         executor=args.executor,
         workers=None if args.workers == 0 else args.workers,
         address=args.address,

@@ -161,8 +161,24 @@ def test_dt_sweep_convergence_orders():
     assert 3.5 < order["rk4"] < 4.6
 
 
+def test_parallel_plan_splits_the_long_horizon_by_model_and_keeps_shared_models_together():
+    size = S.SIZES["quick"]
+    jobs = S._run._jobs(list(S.CASES), size)
+    flat = [(name, part) for job in jobs for name, part, _ in job]
+    assert sorted(flat) == sorted(
+        [(n, 0) for n in S.CASES if n != "long_horizon"]
+        + [("long_horizon", i) for i in range(len(size.models))]
+    )
+    assert [sz.models for job in jobs for n, _, sz in job if n == "long_horizon"] == [
+        (m,) for m in size.models
+    ]
+    assert [n for n, _, _ in jobs[-1]] == list(S._run.LEARNED)  # one process: shared models
+    assert jobs[0][0][0] == "long_horizon"  # the longest first
+
+
+@pytest.mark.slow
 def test_cases_in_worker_processes_give_the_rows_of_one_process():
-    cases = ["high_energy_truth", "precision"]
+    cases = ["high_energy_truth", "long_horizon", "precision"]
     one = S.to_frame(S.run_cases("smoke", cases, progress=False))
     two = S.to_frame(S.run_cases("smoke", cases, progress=False, workers=2))
     assert list(one["case"]) == list(two["case"]) and len(one) > 4

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import systems
@@ -60,7 +60,7 @@ def sweep(
     configs: Sequence[RunConfig],
     results_dir="results",
     *,
-    experiment: str = "adhoc",
+    experiment: str | Mapping[str, str] = "adhoc",
     profile: str = "custom",
     executor: str = "local",
     workers: int | None = 1,
@@ -69,6 +69,7 @@ def sweep(
     cache_root=None,
     ensemble: str = "auto",
     ensemble_max: int = 20,
+    order: Callable[[RunConfig], float] | None = None,
 ) -> list[dict]:
     """Execute the runs of ``configs`` not yet in ``results_dir``; return the new rows.
 
@@ -85,9 +86,18 @@ def sweep(
     ``ensemble`` (``auto``, ``on``, ``off``; ``auto``: on when jax's default backend is an
     accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
     ``ensemble_max`` members, one per task (see ``bench.core._ensemble``).
+
+    ``experiment``: the name every new row is tagged with, or a mapping config_hash -> name
+    (several experiments swept as one, :func:`run_experiments`). ``order``: an estimate of a
+    run's seconds; the runs then start longest first, so that the workers finish together.
     """
     from ._experiments import check_choice
     from ._runnable import check_runnable
+
+    if isinstance(experiment, Mapping):
+        tags, label = dict(experiment), "sweep"
+    else:
+        tags, label = {}, experiment
 
     check_choice("executor", executor, EXECUTORS)
     results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
@@ -98,6 +108,8 @@ def sweep(
         if c.config_hash not in done and c.config_hash not in seen:
             seen.add(c.config_hash)
             todo.append(c)
+    if order is not None:
+        todo.sort(key=order, reverse=True)  # stable: equal estimates keep their order
     if todo:
         _store.check_results_dir(cache_root, what="cache folder ($DECON_CACHE)")
     for c in todo:
@@ -108,19 +120,19 @@ def sweep(
     new_rows: list[dict] = []
     if not todo:
         if progress:
-            print(f"{experiment}: all {len(configs)} runs already stored", file=sys.stderr)
+            print(f"{label}: all {len(configs)} runs already stored", file=sys.stderr)
         _store.rebuild_tables(results_dir)
         return new_rows
 
     from tqdm.auto import tqdm
 
-    bar = tqdm(total=len(todo), desc=f"{experiment} [{profile}]", unit="run", disable=not progress)
+    bar = tqdm(total=len(todo), desc=f"{label} [{profile}]", unit="run", disable=not progress)
 
     last_rebuild = [time.perf_counter()]
 
     def finish(row: dict) -> None:
         row.setdefault("ensemble_size", 1)
-        row["experiment"] = experiment
+        row["experiment"] = tags.get(row["config_hash"], label)
         row["profile"] = profile
         _store.write_row(results_dir, row)
         # the rows are the truth; the tables are rebuilt from them at most every
@@ -170,7 +182,7 @@ def sweep(
         where = f" {err.filename}" if err.filename else ""
         raise StorageError(
             f"could not write{where}: {err.strerror or err} (disk full or a file-size limit?); "
-            f"{experiment} stopped after {len(new_rows)} new of {len(todo)} runs; the rows "
+            f"{label} stopped after {len(new_rows)} new of {len(todo)} runs; the rows "
             f"stored in {results_dir} are whole: run it again to resume"
         ) from e
     finally:
@@ -280,10 +292,16 @@ def run_experiments(
     results_dir="results",
     **kw,
 ) -> dict[str, list[dict]]:
-    """Sweep each named experiment under ``profile``; returns the new rows per experiment."""
+    """Sweep the named experiments under ``profile`` as ONE sweep (one pool of workers, runs
+    of every experiment interleaved, longest first with ``order``); a run that several
+    experiments declare is tagged with the first of them. Returns the new rows per experiment."""
     from ._experiments import expand
 
-    return {
-        n: sweep(expand(n, profile), results_dir, experiment=n, profile=profile, **kw)
-        for n in names
-    }
+    configs, tags = [], {}
+    for n in names:
+        for c in expand(n, profile):
+            if c.config_hash not in tags:
+                tags[c.config_hash] = n
+                configs.append(c)
+    rows = sweep(configs, results_dir, experiment=tags, profile=profile, **kw)
+    return {n: [r for r in rows if r["experiment"] == n] for n in names}

@@ -33,30 +33,31 @@ PAPER_EXPERIMENTS: tuple[Experiment, ...] = (
 )
 
 
-# Seconds of run time (``wall_seconds``: dataset, compile, training, test rollouts) of one run
-# at the quick profile, split as (training, everything else), measured in the quick sweep of
-# 2026-11-22 (results/runs.csv, means over seeds; 2-core machine, 2 workers). Keys are (model,
-# system); (model, None) applies to any system. Entries marked "guess" have not been measured.
+# Seconds of run time (``wall_seconds``: dataset, compile, training, test rollouts and the
+# learning-curve checkpoints) of one run at the quick profile, split as (training, everything
+# else), measured in the quick ``make bench`` of 2026-11-22 with checkpoints (commit bb0a68e,
+# results/runs.parquet: means over the 1000-step runs; 2-core machine, 2 workers). Keys are
+# (model, system); (model, None) applies to any system.
 WALL_S: dict[tuple[str, str | None], tuple[float, float]] = {
-    ("node", None): (3.0, 6.5),
-    ("node_so", None): (3.4, 6.2),
-    ("hnn", None): (7.2, 11.2),
-    # float64 since the claim-7 test set changed: measured 20 s / 70 s of training for hnn (q, p)
-    # / pure lnn at load ~4 on 2 cores (about half speed), so halved here
-    ("hnn", "relativistic_particle"): (10.0, 12.0),
-    ("lnn", "relativistic_particle"): (35.0, 14.0),
-    ("hnn_so", "chain_pendulum"): (16.0, 15.7),
-    ("hnn_so", "spring_pendulum"): (18.1, 17.0),
-    ("hnn_so", None): (17.0, 16.0),
-    ("lnn", "chain_pendulum"): (35.5, 18.8),
-    ("lnn", None): (25.2, 14.3),
-    ("node_symreg", None): (9.5, 3.4),
-    ("resnet", None): (0.8, 1.8),
-    ("vin", None): (2.9, 6.4),
-    ("node_so_symreg", None): (10.5, 4.0),  # guess: node_symreg (q, qdot) + the mass matrix
-    ("mixture_hnn", None): (19.0, 17.0),  # guess: hnn_so plus an MLP field
-    ("constant_velocity", None): (0.0, 4.0),  # guess: dataset + one rollout compile
-    ("at_rest", None): (0.0, 4.0),  # guess
+    ("node", "chain_pendulum"): (3.1, 6.2),
+    ("node", None): (2.9, 3.4),
+    ("node_so", "chain_pendulum"): (3.3, 11.4),
+    ("node_so", None): (3.3, 8.8),
+    ("hnn", "relativistic_particle"): (11.4, 6.5),  # float64 (claim 7's test set)
+    ("hnn", None): (7.3, 10.2),
+    ("hnn_so", "chain_pendulum"): (15.6, 16.4),
+    ("hnn_so", "spring_pendulum"): (18.0, 13.6),
+    ("hnn_so", None): (17.0, 15.0),
+    ("lnn", "relativistic_particle"): (31.1, 9.2),
+    ("lnn", None): (30.6, 27.8),
+    ("node_symreg", None): (9.5, 3.4),  # measured before (not at quick any more)
+    ("node_so_symreg", None): (16.9, 8.7),
+    ("mixture_hnn", "spring_pendulum"): (22.1, 11.0),
+    ("mixture_hnn", None): (18.4, 10.9),
+    ("resnet", None): (0.2, 1.1),
+    ("vin", None): (0.5, 4.7),
+    ("constant_velocity", None): (0.0, 0.2),
+    ("at_rest", None): (0.0, 0.1),
 }
 
 
@@ -74,16 +75,17 @@ MS_PER_STEP = {
 }
 
 
-# The stability study at quick, measured 2026-11-22 on the quiet 2-core machine after the
-# integrator rework (`python -m bench stability --profile quick`: 6 min 22 s), and the trade-off
-# experiment's share of the run time: the measured 1248 s of run time less the LNN's 821 s (now
-# paper only), plus about 80 s for the new implicit evaluations, at 2 workers.
-STABILITY_S = 382.0
-TRADEOFF_S = (1248.0 - 821.0 + 80.0) / 2
+# The stability study at quick in 2 processes (`make bench` of bb0a68e: 243 s, the long-horizon
+# case alone 210 s; since split by model over the processes), and the trade-off experiment's
+# run time at 2 workers (the same run: 336 s of run time, its 300/3000-step training variants
+# gone to the learning-curve experiment).
+STABILITY_S = 243.0
+TRADEOFF_S = 336.0 / 2
 
 
-# Measured sweep time / sum of per-run wall_seconds at 2 workers (25.8 / 27.0 min).
-SWEEP_RATIO = 25.8 / 27.0
+# Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
+# of bb0a68e, one pool per experiment (since then one pool for all, longest runs first).
+SWEEP_RATIO = 25.2 / 23.4
 
 
 def _dof_scaled(model: str) -> bool:
@@ -103,6 +105,21 @@ def _dof(c: RunConfig) -> int:
 
 def _wall(c: RunConfig) -> tuple[float, float]:
     return WALL_S.get((c.model, c.system)) or WALL_S.get((c.model, None)) or (20.0, 12.0)
+
+
+def run_seconds(c: RunConfig) -> float:
+    """Estimated run time of one run (see :func:`estimate_seconds`); the sweep starts the
+    longest runs first with it (``bench.core._runner.sweep(order=...)``)."""
+    train, other = _wall(c)
+    # the dof at which WALL_S was measured: chain-2 / spring-2 (6), k = 1, the particle
+    dof_quick = {"spring_pendulum": 6, "chain_pendulum": min(2, _dof(c))}.get(c.system, 1)
+    g = (
+        1.0
+        if not _dof_scaled(c.model)
+        else (_dof(c) / dof_quick) ** (math.log(60 / 35) / math.log(3))
+    )
+    s = (c.steps / 1000) * (c.batch / 100) * (c.width / 128) * g
+    return train * s + other
 
 
 def estimate_seconds(
@@ -129,18 +146,7 @@ def estimate_seconds(
         per[exp.name] = len(cfgs)
         for c in cfgs:
             seen.setdefault(c.config_hash, c)
-    total = 0.0
-    for c in seen.values():
-        train, other = _wall(c)
-        # the dof at which WALL_S was measured: chain-2 / spring-2 (6), k = 1, the particle
-        dof_quick = {"spring_pendulum": 6, "chain_pendulum": min(2, _dof(c))}.get(c.system, 1)
-        g = (
-            1.0
-            if not _dof_scaled(c.model)
-            else (_dof(c) / dof_quick) ** (math.log(60 / 35) / math.log(3))
-        )
-        s = (c.steps / 1000) * (c.batch / 100) * (c.width / 128) * g
-        total += train * s + other
+    total = sum(run_seconds(c) for c in seen.values())
     return {
         "runs": len(seen),
         "trivial_runs": sum(c.model in TRIVIAL_MODELS for c in seen.values()),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -47,58 +47,76 @@ CASES: dict[str, Callable[[StabilitySize], list[Row]]] = {
 }
 
 
-# Cases that share trained models (``_learned``'s cache) run in one process.
-LEARNED = ("long_horizon", "high_energy_models", "model_precision")
+# Cases that share trained models (``_learned``'s cache) run in one process; the long-horizon
+# case, most of the study's time, is split by model (its rows are in model order).
+LEARNED = ("high_energy_models", "model_precision")
+SPLIT_BY_MODEL = ("long_horizon",)
+# Longest first (measured at quick), so that the processes finish together.
+_ORDER = ("long_horizon", "stiffness", "dt_sweep", "precision", "lnn_singular", "relativistic")
 
 
-def _run_job(job) -> list[tuple[str, list[Row], float]]:
-    """A pool task: some cases at one size, each inside :func:`guard`, with their seconds."""
+def _run_job(job) -> list[tuple[str, int, list[Row], float]]:
+    """A pool task: ``(case, part, size)`` triples run in order, each inside :func:`guard`."""
     from ...core._env import configure_compilation_cache
 
-    names, size = job
     configure_compilation_cache()
     out = []
-    for name in names:
+    for name, part, size in job:
         start = time.perf_counter()
-        out.append((name, guard(name, lambda name=name: CASES[name](size)), 0.0))
-        out[-1] = (name, out[-1][1], time.perf_counter() - start)
+        rows = guard(name, lambda name=name, size=size: CASES[name](size))
+        out.append((name, part, rows, time.perf_counter() - start))
     return out
+
+
+def _jobs(names, size: StabilitySize) -> list[list]:
+    jobs = []
+    for name in sorted(names, key=lambda n: _ORDER.index(n) if n in _ORDER else len(_ORDER)):
+        if name in LEARNED:
+            continue
+        if name in SPLIT_BY_MODEL and len(size.models) > 1:
+            jobs += [[(name, i, replace(size, models=(m,)))] for i, m in enumerate(size.models)]
+        else:
+            jobs.append([(name, 0, size)])
+    learned = [(n, 0, size) for n in names if n in LEARNED]
+    return jobs + ([learned] if learned else [])
 
 
 def run_cases(profile="quick", cases=None, progress: bool = True, workers: int = 1) -> list[Row]:
     """Every case (or the named ones) at ``profile``'s size, each inside :func:`guard`, in case
     order. ``workers`` > 1: in that many processes (``bench.core._runner.worker_pool``), the
-    cases that share trained models (:data:`LEARNED`) in one of them."""
+    cases that share trained models (:data:`LEARNED`) in one of them, the long-horizon case
+    split by model; the rows are those of one process (a test)."""
     size = _size(profile)
     names = list(CASES) if cases is None else list(cases)
     unknown = [c for c in names if c not in CASES]
     if unknown:
         raise ValueError(f"unknown stability case(s) {unknown}; allowed: {', '.join(CASES)}")
-    learned = [n for n in names if n in LEARNED]
-    jobs = ([learned] if learned else []) + [[n] for n in names if n not in LEARNED]
-    got: dict[str, list[Row]] = {}
+    split = workers > 1
+    jobs = _jobs(names, size) if split else [[(n, 0, size)] for n in names]
+    got: dict[str, dict[int, list[Row]]] = {}
 
     def report(done):
-        for name, rows, seconds in done:
-            got[name] = rows
+        for name, part, rows, seconds in done:
+            got.setdefault(name, {})[part] = rows
             if progress:
                 outcomes = {o: sum(r.outcome == o for r in rows) for o in OUTCOMES}
+                what = f"{name} (model {part + 1})" if split and name in SPLIT_BY_MODEL else name
                 print(
-                    f"[stability] {name}: {len(rows)} rows {outcomes} in {seconds:.1f}s",
+                    f"[stability] {what}: {len(rows)} rows {outcomes} in {seconds:.1f}s",
                     flush=True,
                 )
 
     workers = max(1, min(int(workers), len(jobs)))
     if workers == 1:
         for job in jobs:
-            report(_run_job((job, size)))
+            report(_run_job(job))
     else:
         from ...core._runner import worker_pool
 
         with worker_pool(workers) as pool:
-            for done in pool.imap_unordered(_run_job, [(job, size) for job in jobs]):
+            for done in pool.imap_unordered(_run_job, jobs):
                 report(done)
-    return [row for name in names for row in got[name]]
+    return [row for n in names for part in sorted(got[n]) for row in got[n][part]]
 
 
 def to_frame(rows):
