@@ -71,6 +71,9 @@ SCORES = (
     "mse_velocity",
 )
 LEARNING_MODELS = ("node_so", "hnn_so")
+# Claims whose rule compares only LEARNING_MODELS (claim 4: the chain and spring edges of
+# NODE+SO over HNN+SO): judged again on the learning-curve experiment's longer runs.
+LEARNING_CLAIMS = (4,)
 PAPER_STEPS = PROFILES["paper"]["steps"]
 
 
@@ -192,6 +195,66 @@ def verdicts_along_curve(
                     "effect": v.effect,
                 }
             )
+    return pd.DataFrame(out, columns=cols)
+
+
+def verdicts_along_learning(
+    runs: pd.DataFrame,
+    curves: pd.DataFrame,
+    checkpoints: pd.DataFrame,
+    cp_curves: pd.DataFrame,
+    profile: str | None,
+) -> pd.DataFrame:
+    """:func:`verdicts_along_curve` on the longer runs of the learning-curve experiment: each
+    claim of :data:`LEARNING_CLAIMS` (whose rule compares only the learning models) judged by
+    its own rule on those runs and the trivial predictors of the same cells, at each of their
+    checkpoints. Verdicts with fewer than 2 seeds (a cell the experiment does not have) are left
+    out. Same columns as :func:`verdicts_along_curve`."""
+    from ..core._query import experiment_rows
+
+    cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
+    learn = experiment_rows(runs, LEARNING.name, profile) if len(runs) else runs
+    learn = learn[learn["config_hash"].isin(checkpoints["config_hash"])] if len(learn) else learn
+    if not len(learn):
+        return pd.DataFrame(columns=cols)
+    cells = set(zip(learn["system"], learn["system_params"].astype(str), strict=True))
+    n = int(
+        checkpoints[checkpoints["config_hash"].isin(learn["config_hash"])]
+        .groupby("config_hash")
+        .size()
+        .max()
+    )
+    out = []
+    for study in claim_studies():
+        mine = _restrict(runs, study, profile)
+        if not len(mine):
+            continue
+        if study.claim not in LEARNING_CLAIMS:
+            continue
+        trivial = mine[~_trained(mine)]
+        same = [
+            (a, b) in cells
+            for a, b in zip(trivial["system"], trivial["system_params"].astype(str), strict=True)
+        ]
+        sub = pd.concat([learn, trivial[same]], ignore_index=True)
+        for position in range(n):
+            runs_i, _ = runs_at(sub, checkpoints, position)
+            got = study.rule(runs_i, curves_at(curves, cp_curves, runs_i))
+            for v in got if isinstance(got, list) else [got]:
+                if v.n_seeds < 2:
+                    continue
+                steps = runs_i["checkpoint_step"].dropna()
+                out.append(
+                    {
+                        "key": v.key,
+                        "claim": v.claim,
+                        "position": position,
+                        "fraction": 2.0 ** (position - n + 1),
+                        "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
+                        "verdict": v.verdict,
+                        "effect": v.effect,
+                    }
+                )
     return pd.DataFrame(out, columns=cols)
 
 
@@ -512,6 +575,19 @@ def section(results_dir) -> str:
     along = verdicts_along_curve(runs, curves, cp, cp_curves, profile)
     lines += _settling_lines(along)
     lines += _learning_lines(runs, cp, results_dir, profile)
+    longer = verdicts_along_learning(runs, curves, cp, cp_curves, profile)
+    if len(longer):
+        lines += [
+            "The same rules on the longer runs of the learning-curve experiment (claims whose "
+            "models it trains; its cells only, with the trivial predictors of those cells; "
+            f"{len(set(longer['key']))} verdicts):",
+            "",
+            *_settling_lines(longer),
+            "A verdict that settles within this profile's own training can still change with a "
+            "longer one: compare the two tables, and the paper-budget verdicts above "
+            '("Verdicts at both budgets").',
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -536,4 +612,5 @@ __all__ = [
     "settling",
     "settling_table",
     "verdicts_along_curve",
+    "verdicts_along_learning",
 ]
