@@ -28,7 +28,8 @@ def _config(model: str = "node_so") -> RunConfig:
 
 def _numbers(row: dict) -> dict:
     """Everything but wall-clock timings, as canonical JSON values (NaN compared equal)."""
-    keep = {k: v for k, v in row.items() if "seconds" not in k}
+    # the row file's checksum covers its timings too: not a number of the run
+    keep = {k: v for k, v in row.items() if "seconds" not in k and k != "_row_sha256"}
     if isinstance(keep.get("checkpoints"), dict):  # a learning curve's own timings
         keep["checkpoints"] = {k: v for k, v in keep["checkpoints"].items() if "seconds" not in k}
     return json.loads(json.dumps(keep, default=str).replace("NaN", "null"))
