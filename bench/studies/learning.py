@@ -52,6 +52,7 @@ import pandas as pd  # noqa: E402
 import models  # noqa: E402
 
 from ..core import _store  # noqa: E402
+from ..core._execute import CHECKPOINT_METRICS as SCORES  # noqa: E402 - what a checkpoint replaces
 from ..core._experiments import PROFILES, Experiment  # noqa: E402
 from ..core._query import load_tables, select  # noqa: E402
 from ..core._studies import Study, register_study  # noqa: E402
@@ -61,15 +62,6 @@ from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
 from .paper._rules import _restrict, claim_studies, evaluate_claims  # noqa: E402
 from .paper._stats import MODEL_LABELS  # noqa: E402
 
-# the scores a checkpoint replaces (bench.core._execute.CHECKPOINT_METRICS)
-SCORES = (
-    "rollout_error",
-    "energy_violation",
-    "mse",
-    "valid_time",
-    "rollout_error_velocity",
-    "mse_velocity",
-)
 LEARNING_MODELS = ("node_so", "hnn_so")
 # Claims whose rule compares only LEARNING_MODELS (claim 4: the chain and spring edges of
 # NODE+SO over HNN+SO): judged again on the learning-curve experiment's longer runs.
@@ -150,6 +142,20 @@ def settling(verdicts) -> int:
     return max(i, 0)
 
 
+def _along_row(v, position: int, n: int, steps: pd.Series) -> dict:
+    """One row of a verdicts-along-the-curve table: verdict ``v`` at checkpoint ``position``
+    of ``n`` (nominal fraction 2^(position - n + 1)), at the median of ``steps``."""
+    return {
+        "key": v.key,
+        "claim": v.claim,
+        "position": position,
+        "fraction": 2.0 ** (position - n + 1),
+        "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
+        "verdict": v.verdict,
+        "effect": v.effect,
+    }
+
+
 def verdicts_along_curve(
     runs: pd.DataFrame,
     curves: pd.DataFrame,
@@ -184,17 +190,7 @@ def verdicts_along_curve(
             if v.claim not in judged:
                 continue
             steps = runs_i.loc[runs_i["config_hash"].isin(judged[v.claim]), "checkpoint_step"]
-            out.append(
-                {
-                    "key": v.key,
-                    "claim": v.claim,
-                    "position": position,
-                    "fraction": 2.0 ** (position - n + 1),
-                    "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
-                    "verdict": v.verdict,
-                    "effect": v.effect,
-                }
-            )
+            out.append(_along_row(v, position, n, steps))
     return pd.DataFrame(out, columns=cols)
 
 
@@ -243,18 +239,7 @@ def verdicts_along_learning(
             for v in got if isinstance(got, list) else [got]:
                 if v.n_seeds < 2:
                     continue
-                steps = runs_i["checkpoint_step"].dropna()
-                out.append(
-                    {
-                        "key": v.key,
-                        "claim": v.claim,
-                        "position": position,
-                        "fraction": 2.0 ** (position - n + 1),
-                        "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
-                        "verdict": v.verdict,
-                        "effect": v.effect,
-                    }
-                )
+                out.append(_along_row(v, position, n, runs_i["checkpoint_step"].dropna()))
     return pd.DataFrame(out, columns=cols)
 
 
