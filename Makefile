@@ -20,7 +20,8 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench stability perf figures report clean
+.PHONY: install lock upgrade test test-slow lint format bench stability perf figures report clean \
+	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-stop paper-core-report
 
 install: $(STAMP)
 
@@ -80,6 +81,46 @@ figures: $(STAMP)
 
 report: $(STAMP)
 	$(PY) -m bench report
+
+# The paper-core campaign (issue 24): the paper's budget on the cells each verdict needs, niced in
+# the background, resumable at any moment (runs are content-addressed). Its process group is
+# the campaign: pause/resume/stop act on all its workers at once.
+CAMPAIGN_DIR ?= results/paper
+CAMPAIGN_PID := .cache/paper-core.pid
+CAMPAIGN_LOG := .cache/paper-core.log
+CAMPAIGN_WORKERS ?= 2
+campaign_pid = $$(cat $(CAMPAIGN_PID) 2>/dev/null)
+campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
+
+paper-core: $(STAMP)
+	@mkdir -p .cache
+	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
+	else setsid nohup nice -n 19 $(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
+		--profile paper-core --workers $(CAMPAIGN_WORKERS) > $(CAMPAIGN_LOG) 2>&1 & \
+		echo $$! > $(CAMPAIGN_PID); \
+		echo "paper-core: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
+
+paper-core-status: $(STAMP)
+	@if $(campaign_alive); then state=$$(ps -o stat= -p $(campaign_pid) | cut -c1); \
+		if [ "$$state" = T ]; then echo "paper-core: paused (process group $(campaign_pid))"; \
+		else echo "paper-core: running (process group $(campaign_pid))"; fi; \
+	else echo "paper-core: not running"; fi
+	@$(PY) -m bench --results $(CAMPAIGN_DIR) estimate --profile paper-core --workers $(CAMPAIGN_WORKERS)
+
+paper-core-pause:
+	@$(campaign_alive) && kill -STOP -- -$(campaign_pid) && echo "paper-core: paused" || echo "paper-core: not running"
+
+paper-core-resume:
+	@$(campaign_alive) && kill -CONT -- -$(campaign_pid) && echo "paper-core: resumed" || echo "paper-core: not running"
+
+paper-core-stop:
+	@$(campaign_alive) && kill -CONT -- -$(campaign_pid) && kill -TERM -- -$(campaign_pid) && \
+		echo "paper-core: stopped (make paper-core resumes)" || echo "paper-core: not running"
+
+# Tables, figures and report of the campaign's stored rows (before committing them).
+paper-core-report: $(STAMP)
+	$(PY) -m bench --results $(CAMPAIGN_DIR) figures
+	$(PY) -m bench --results $(CAMPAIGN_DIR) report
 
 clean:
 	rm -rf $(VENV) .cache .pytest_cache

@@ -1,11 +1,12 @@
 """Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
 
-Verbs: list, run, sweep, figures, report, perf, bench. A bad name or value, a run that can
-never run (e.g. leapfrog on a first-order model) or a results folder that cannot be used
-prints one line ``error: ...`` on stderr and exits with code 2, without a traceback. A write
-that fails during a sweep (full disk) stops it with one line and exit code 1 (run it again to
-resume); ``report`` and ``figures`` on a folder without runs say so and exit with code 1. A
-damaged row file is named in a one-line ``warning: ...`` and set aside (see bench.core._store).
+Verbs: list, run, sweep, figures, report, perf, stability, bench, estimate, campaign. A bad
+name or value, a run that can never run (e.g. leapfrog on a first-order model) or a results
+folder that cannot be used prints one line ``error: ...`` on stderr and exits with code 2,
+without a traceback. A write that fails during a sweep (full disk) stops it with one line and
+exit code 1 (run it again to resume); ``report`` and ``figures`` on a folder without runs say
+so and exit with code 1. A damaged row file is named in a one-line ``warning: ...`` and set
+aside (see bench.core._store).
 """
 
 from __future__ import annotations
@@ -111,6 +112,19 @@ def _parser() -> argparse.ArgumentParser:
         default=1,
         help="processes (default 1: in-process; 0: one per core)",
     )
+
+    es = sub.add_parser(
+        "estimate", help="runs and hours per claim of a profile's campaign (stored, left)"
+    )
+    es.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
+    es.add_argument("--workers", type=_int("workers"), default=2, help="for the wall hours")
+
+    cp = sub.add_parser(
+        "campaign",
+        help="sweep a profile's claim experiments claim by claim (make paper-core runs it niced "
+        "in the background)",
+    )
+    _sweep_opts(cp, default_profile="paper-core")
 
     b = sub.add_parser(
         "bench", help="sweep every experiment, the stability cases, then figures and report"
@@ -274,6 +288,44 @@ def _do_sweep(args, names) -> int:
         for r in rows:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
         print(f"{name}: {len(rows)} new runs {counts}")
+    return 0
+
+
+def _cmd_estimate(args) -> int:
+    from .studies.paper._campaign import format_plan, plan
+
+    check_choice("profile", args.profile, list(PROFILES))
+    if args.workers < 1:
+        raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
+    df = plan(args.profile, args.results, workers=args.workers)
+    print(f"results: {args.results}")
+    print(format_plan(df, args.profile, args.workers))
+    return 0
+
+
+def _cmd_campaign(args) -> int:
+    from .core import _runner
+    from .studies.paper._campaign import campaign_experiments, priority
+
+    _check_sweep_args(args)
+    names = campaign_experiments(args.profile)
+    if not names:
+        raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
+    _usable_results(args)
+    print(f"campaign {args.profile} -> {args.results}: {', '.join(names)}", flush=True)
+    res = _runner.run_experiments(
+        names,
+        args.profile,
+        args.results,
+        order=priority(args.profile),  # claim by claim, longest runs first within a claim
+        executor=args.executor,
+        workers=None if args.workers == 0 else args.workers,
+        address=args.address,
+        progress=not args.no_progress,
+        ensemble=args.ensemble,
+    )
+    for name, rows in res.items():
+        print(f"{name}: {len(rows)} new runs", flush=True)
     return 0
 
 
@@ -449,4 +501,6 @@ def _main(argv) -> int:
         "perf": _cmd_perf,
         "stability": _cmd_stability,
         "bench": _cmd_bench,
+        "estimate": _cmd_estimate,
+        "campaign": _cmd_campaign,
     }[args.verb](args)

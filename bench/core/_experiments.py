@@ -8,6 +8,11 @@ the list of runs of one profile. Precedence, lowest first::
 
 (an override whose key is an axis replaces that axis' values; ``"seeds"`` replaces the seeds).
 
+A *selection* (:data:`SELECTIONS`, e.g. ``paper-core``) is a profile that picks some cells of
+another profile: it has its base profile's defaults, so its runs hash exactly as the base's
+runs do, and an experiment takes part in it only where its ``profile_overrides`` name it (the
+base's overrides apply first, then the selection's, which usually narrow an axis).
+
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
 of every field (a field added later, ``eval_checkpoints``, counts only when it is not 0),
 ``train_hash`` the same over every field except the ``eval_*`` ones, so runs
@@ -259,6 +264,12 @@ PROFILES: dict[str, dict[str, object]] = {
         "seeds": (0, 1, 2, 3, 4),
     },
 }
+# Selections: name -> the profile whose runs they select from (see the module docstring).
+# paper-core: the paper's per-run budget and seeds on the cells each verdict needs at k = 2,
+# what a 2-core CPU can finish in a background campaign (issue 24; `make paper-core`).
+SELECTIONS: dict[str, str] = {"paper-core": "paper"}
+for _sel, _base in SELECTIONS.items():
+    PROFILES[_sel] = dict(PROFILES[_base])
 
 
 # ----------------------------------------------------------------------------- experiments
@@ -358,12 +369,18 @@ def expand(exp: Experiment | str, profile: str = "quick") -> list[RunConfig]:
 
     Combinations rejected by ``exp.include`` or by :func:`valid` (e.g. leapfrog on a
     first-order model) are dropped; runs are unique by ``config_hash``, in expansion order.
+    Under a selection (:data:`SELECTIONS`) an experiment that does not declare it has no runs.
     """
     exp = get(exp) if isinstance(exp, str) else exp
     base, seeds = profile_defaults(profile)
     base.update(exp.fixed)
     axes = dict(exp.axes)
-    for key, value in exp.profile_overrides.get(profile, {}).items():
+    overrides = dict(exp.profile_overrides.get(profile, {}))
+    if profile in SELECTIONS:  # a selection: only the experiments that declare it
+        if profile not in exp.profile_overrides:
+            return []
+        overrides = {**exp.profile_overrides.get(SELECTIONS[profile], {}), **overrides}
+    for key, value in overrides.items():
         if key == "seeds":
             seeds = tuple(value)
         elif key in axes:

@@ -35,7 +35,12 @@ RELATIVISTIC_TEST_PARAMS = (("g_max", 0.3), ("g_min", 0.05), ("v0_max", 0.3))
 # Overrides of the profile defaults that every shared cell carries. Empty: the profile
 # defaults (quick: 200 chunks, width 128, 1000 steps, batch 100) are used as they are. Any entry
 # here is applied to every experiment that shares cells, so the hashes stay equal.
-SHARED_OVERRIDES: dict[str, dict[str, object]] = {"smoke": {}, "quick": {}, "paper": {}}
+SHARED_OVERRIDES: dict[str, dict[str, object]] = {
+    "smoke": {},
+    "quick": {},
+    "paper": {},
+    "paper-core": {},  # the selection (bench.core._experiments.SELECTIONS): the paper's cells
+}
 
 
 def _shared(extra: Mapping[str, Mapping[str, object]] | None = None) -> dict:

@@ -57,7 +57,7 @@ COORDINATES = Experiment(
         "model": ("node_so", "hnn_so", "constant_velocity"),
         "system_params": (SPRING_EQUILIBRIUM, SPRING_PAPER),
     },
-    profile_overrides=_shared({"paper": {"k": (1, 2, 3, 4)}}),
+    profile_overrides=_shared({"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}}),
     include=_coordinates_include,
     claim=4,
 )

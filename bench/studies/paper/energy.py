@@ -67,7 +67,9 @@ ENERGY = Experiment(
         "model": (*PAPER_MODELS, "constant_velocity"),
         "system_params": ((), SPRING_PAPER),
     },
-    profile_overrides=_shared({"smoke": {"k": (2,)}, "quick": {"k": (2,)}}),
+    profile_overrides=_shared(
+        {"smoke": {"k": (2,)}, "quick": {"k": (2,)}, "paper-core": {"k": (2,)}}
+    ),
     include=_paper_cell,
     claim=1,
 )

@@ -75,6 +75,13 @@ SYMPLECTIC = Experiment(
             "model": ("node_so_symreg", "node_symreg", "constant_velocity"),
             "model_options": ((), *((("weight", w),) for w in SYMREG_WEIGHTS)),
         },
+        # paper-core: quick's cells (the chain, NODE+SO in (q, p), weights 0, 1e-6, 1e-3, 1,
+        # 1e3 spanning the paper's grid) at the paper budget: 3.8 of the paper's 26 CPU hours
+        "paper-core": {
+            "system": ("chain_pendulum",),
+            "model": ("node_so_symreg", "constant_velocity"),
+            "model_options": ((), *((("weight", w),) for w in SYMREG_WEIGHTS_QUICK)),
+        },
     },
     include=_symplectic_include,
     claim=2,

@@ -74,6 +74,7 @@ VIN = Experiment(
             "model": ("vin", "resnet", "constant_velocity"),
         },
         "quick": {"model": ("vin", "resnet", "constant_velocity"), "n_train": (8, 32)},
+        "paper-core": {},  # every paper cell: 0.7 CPU hours
     },
     include=_vin_include,
     claim=8,

@@ -1,0 +1,179 @@
+"""A campaign: the runs of a profile (usually the ``paper-core`` selection) swept claim by claim,
+in an order that settles first what the quick profile does not, resumable at any moment.
+
+``paper-core`` (issue 24) is the paper's per-run budget (800 trajectories, 8000 steps, width
+256, batch 200) at 5 seeds on the cells each verdict uses, at k = 2: claims 1, 3, 4 and 6 on the
+shared chain/spring cells (claim 4 with both spring starts), claim 2 on NODE+SO with the
+symplectic penalty in (q, p) on the chain at quick's five weights, claim 5 on the verdict's
+damped cells, claim 7 on the LNN seed's three models, claim 8 on every VIN cell. Extras that no
+verdict reads (the Rayleigh HNN, the learned-map HNN, the LNN with a kinetic prior, the plain
+NODE on damped data, k = 1, 3, 4) stay in the full ``paper`` profile, for a GPU or a cluster.
+
+Order (:data:`CAMPAIGN_CLAIMS`): the claims that the learning-curve study found unsettled at
+quick first (6, 4, 1, 3), then 2, 5, 9, 7, 8; within a claim, the longest runs first. A run that
+several claims share is counted, and run, with the first of them. Runs are content-addressed,
+so a campaign killed at any moment loses only the runs in flight; run it again to resume.
+
+Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
+costs scaled to the profile's steps, batch and width; once some of a campaign's runs are stored,
+:func:`plan` rescales the estimate of every model by the ratio measured / estimated on its
+stored runs (all stored runs where the model has none yet), so the hours left improve as the
+campaign goes.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ...core import _store
+from ...core._experiments import available, expand, get
+from ._budget import run_seconds
+
+# The order in which a campaign settles the claims (issue 24).
+CAMPAIGN_CLAIMS = (6, 4, 1, 3, 2, 5, 9, 7, 8)
+
+
+def campaign_experiments(profile: str = "paper-core") -> list[str]:
+    """The registered experiments with a claim and runs under ``profile``, in claim order."""
+    names = [n for n in available() if get(n).claim is not None and expand(n, profile)]
+
+    def rank(n):
+        c = get(n).claim
+        return (CAMPAIGN_CLAIMS.index(c) if c in CAMPAIGN_CLAIMS else len(CAMPAIGN_CLAIMS), c, n)
+
+    return sorted(names, key=rank)
+
+
+def campaign_runs(profile: str = "paper-core") -> list[tuple[str, object]]:
+    """``(experiment, RunConfig)`` of every unique run of the campaign, in the order they start:
+    by claim (:data:`CAMPAIGN_CLAIMS`), then longest first (the estimate)."""
+    out, seen = [], set()
+    for name in campaign_experiments(profile):
+        cfgs = [c for c in expand(name, profile) if c.config_hash not in seen]
+        seen.update(c.config_hash for c in cfgs)
+        cfgs.sort(key=run_seconds, reverse=True)
+        out += [(name, c) for c in cfgs]
+    return out
+
+
+def priority(profile: str = "paper-core"):
+    """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
+    first): earlier claims first, longest runs first within a claim."""
+    rank = {}
+    for i, name in enumerate(campaign_experiments(profile)):
+        for c in expand(name, profile):
+            rank.setdefault(c.config_hash, i)
+
+    def key(c):
+        return (-rank.get(c.config_hash, len(rank)), run_seconds(c))
+
+    return key
+
+
+def _calibration(stored: pd.DataFrame, cfgs: dict) -> tuple[dict, float]:
+    """Per-model and overall ratios of measured ``wall_seconds`` to the estimate, over the
+    stored runs of the campaign."""
+    if not len(stored) or "wall_seconds" not in stored:
+        return {}, 1.0
+    ratios = []
+    for h, model, wall in zip(
+        stored["config_hash"], stored["model"], stored["wall_seconds"], strict=True
+    ):
+        est = run_seconds(cfgs[h]) if h in cfgs else 0.0
+        if est > 1.0 and math.isfinite(float(wall)):
+            ratios.append((model, float(wall) / est))
+    if not ratios:
+        return {}, 1.0
+    df = pd.DataFrame(ratios, columns=["model", "ratio"])
+    per = df.groupby("model")["ratio"].median().to_dict()
+    return per, float(df["ratio"].median())
+
+
+def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.DataFrame:
+    """One row per claim of the campaign: ``claim, experiments, runs`` (every run its verdict
+    reads), ``stored`` (of those), ``new_runs`` (those no earlier claim brings),
+    ``cpu_hours`` (estimated, its new runs), ``cpu_hours_left`` (its new runs not stored,
+    calibrated on the stored ones), ``wall_hours_left`` (at ``workers`` processes) and
+    ``cpu_hours_done`` (the stored runs' measured ``wall_seconds``: data, compilation,
+    training and evaluation); a last row ``total``."""
+    runs = campaign_runs(profile)
+    cfgs = {c.config_hash: c for _, c in runs}
+    stored = pd.DataFrame()
+    if results_dir is not None and Path(results_dir).exists():
+        done = _store.done_hashes(Path(results_dir))
+        rows = [r for r in _store.read_rows(Path(results_dir)) if r["config_hash"] in cfgs]
+        stored = pd.DataFrame(rows)
+    else:
+        done = set()
+    per, overall = _calibration(stored, cfgs)
+    walls = (
+        dict(zip(stored["config_hash"], stored["wall_seconds"], strict=True))
+        if len(stored) and "wall_seconds" in stored
+        else {}
+    )
+    table = []
+    for name in campaign_experiments(profile):
+        cells = expand(name, profile)  # every run the claim reads, shared ones included
+        mine = [c for n, c in runs if n == name]  # the runs it brings first
+        left = [c for c in mine if c.config_hash not in done]
+        table.append(
+            {
+                "claim": get(name).claim,
+                "experiments": name,
+                "runs": len(cells),
+                "stored": sum(c.config_hash in done for c in cells),
+                "new_runs": len(mine),
+                "cpu_hours": sum(run_seconds(c) for c in mine) / 3600,
+                "cpu_hours_done": float(np.nansum([walls.get(c.config_hash, np.nan) for c in mine]))
+                / 3600,
+                "cpu_hours_left": sum(run_seconds(c) * per.get(c.model, overall) for c in left)
+                / 3600,
+            }
+        )
+    df = pd.DataFrame(table)
+    if len(df):
+        df = df.groupby("claim", sort=False, as_index=False).agg(
+            {
+                "experiments": ", ".join,
+                "runs": "sum",
+                "stored": "sum",
+                "new_runs": "sum",
+                "cpu_hours": "sum",
+                "cpu_hours_done": "sum",
+                "cpu_hours_left": "sum",
+            }
+        )
+        total = df.sum(numeric_only=True).to_dict()
+        total.update(
+            claim="total",
+            experiments="(unique runs)",
+            runs=len(runs),
+            stored=sum(h in done for h in cfgs),
+        )
+        df = pd.concat([df, pd.DataFrame([total])], ignore_index=True)
+        df["wall_hours_left"] = df["cpu_hours_left"] / max(1, workers)
+    return df
+
+
+def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
+    """The plan as a fixed-width text table (``python -m bench estimate``)."""
+    if not len(df):
+        return f"{profile}: no runs"
+    lines = [
+        f"{profile}: runs and hours per claim, in campaign order (hours left calibrated on the "
+        f"stored runs; wall hours at {workers} workers)",
+        f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "
+        f"{'left h':>6} {'wall h':>6}  experiments",
+    ]
+    for r in df.to_dict("records"):
+        lines.append(
+            f"{r['claim']!s:>6} {int(r['runs']):>5} {int(r['stored']):>6} {int(r['new_runs']):>5} "
+            f"{r['cpu_hours']:>6.2f} "
+            f"{r['cpu_hours_done']:>6.2f} {r['cpu_hours_left']:>6.2f} "
+            f"{r['wall_hours_left']:>6.2f}  {r['experiments']}"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,110 @@
+"""The paper-core selection and its campaign (issue 24): the selection's runs are paper runs
+(same hashes), every claim has cells, the order settles the unsettled claims first, and the
+plan counts what is stored."""
+
+import pytest
+
+from bench.core import _experiments as E
+from bench.core import _store
+from bench.studies import paper as P
+from bench.studies.paper import _campaign as C
+from bench.studies.paper._common import SYMREG_WEIGHTS_QUICK
+
+NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
+
+
+def test_selection_has_its_base_profiles_defaults():
+    assert E.profile_defaults("paper-core") == E.profile_defaults("paper")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_paper_core_runs_are_paper_runs_at_k2_with_5_seeds(name):
+    core = E.expand(name, "paper-core")
+    paper = {c.config_hash for c in E.expand(name, "paper")}
+    assert {c.config_hash for c in core} <= paper  # a subset, hash for hash
+    assert all(c.k in (None, 1, 2) for c in core)  # k = 2 (vin: the k = 1 pendulum)
+    if core:
+        assert {c.seed for c in core} == {0, 1, 2, 3, 4}
+
+
+def test_paper_core_covers_every_claim_and_drops_the_extras():
+    claims = {E.get(n).claim for n in C.campaign_experiments("paper-core")}
+    assert claims >= set(range(1, 9))
+    sym = E.expand("symplectic", "paper-core")
+    assert {c.system for c in sym} == {"chain_pendulum"}
+    assert {c.model for c in sym} == {"node_so_symreg", "constant_velocity"}
+    weights = {dict(c.model_options).get("weight") for c in sym} - {None}
+    assert sorted(weights) == sorted(SYMREG_WEIGHTS_QUICK)
+    damped = E.expand("damped", "paper-core")
+    assert not any(c.dissipation is True or c.model == "node" for c in damped)
+    rel = {
+        (c.model, c.coordinates, c.model_options) for c in E.expand("relativistic", "paper-core")
+    }
+    assert rel == set(P.RELATIVISTIC_CELLS)
+    coords = E.expand("coordinates", "paper-core")
+    assert {c.system_params for c in coords if c.system == "spring_pendulum"} == {
+        P.SPRING_PAPER,
+        P.SPRING_EQUILIBRIUM,
+    }
+
+
+def test_experiments_outside_a_selection_have_no_runs():
+    for name in E.available():
+        if "paper-core" not in E.get(name).profile_overrides:
+            assert E.expand(name, "paper-core") == []
+
+
+def test_campaign_order_settles_claims_6_4_1_3_first():
+    names = C.campaign_experiments("paper-core")
+    claims = [E.get(n).claim for n in names]
+    assert claims[:4] == [6, 4, 1, 3]
+    assert claims == sorted(claims, key=C.CAMPAIGN_CLAIMS.index)
+    runs = C.campaign_runs("paper-core")
+    assert len({c.config_hash for _, c in runs}) == len(runs)
+    # the runner starts the largest keys first: sorting by the key gives the claim order
+    key = C.priority("paper-core")
+    ordered = sorted((c for _, c in runs), key=key, reverse=True)
+    first = {c.config_hash for c in E.expand("loss", "paper-core")}
+    assert all(c.config_hash in first for c in ordered[: len(first)])
+    assert ordered[0].model == "hnn_so"  # longest first within the claim
+
+
+def test_plan_counts_stored_runs_and_calibrates(tmp_path):
+    runs = C.campaign_runs("paper-core")
+    empty = C.plan("paper-core", tmp_path, workers=2)
+    total = empty[empty["claim"] == "total"].iloc[0]
+    assert total["runs"] == len(runs) and total["stored"] == 0
+    assert total["wall_hours_left"] == pytest.approx(total["cpu_hours_left"] / 2)
+    # store the first claim's hnn_so runs as if they had taken twice the estimate
+    from bench.studies.paper._budget import run_seconds
+
+    done = [c for n, c in runs if n == "loss" and c.model == "hnn_so"]
+    for c in done:
+        _store.write_row(
+            tmp_path,
+            {
+                **c.to_dict(),
+                "config_hash": c.config_hash,
+                "status": "ok",
+                "wall_seconds": 2 * run_seconds(c),
+            },
+        )
+    df = C.plan("paper-core", tmp_path, workers=2).set_index("claim")
+    assert df.loc[6, "stored"] == len(done)
+    assert df.loc[1, "stored"] == len([c for c in done if c.loss == "l2"])  # shared cells
+    hnn_left = [
+        c
+        for n, c in runs
+        if c.model == "hnn_so" and c.config_hash not in {d.config_hash for d in done}
+    ]
+    assert df.loc["total", "cpu_hours_done"] == pytest.approx(
+        sum(2 * run_seconds(c) for c in done) / 3600
+    )
+    assert (
+        df.loc["total", "cpu_hours_left"]
+        > empty.set_index("claim").loc["total", "cpu_hours_left"]
+        - sum(run_seconds(c) for c in done) / 3600
+    )  # the rest is rescaled upwards
+    assert hnn_left
+    text = C.format_plan(df.reset_index(), "paper-core", 2)
+    assert "total" in text and "loss" in text
