@@ -125,6 +125,11 @@ def _parser() -> argparse.ArgumentParser:
         "in the background)",
     )
     _sweep_opts(cp, default_profile="paper-core")
+    cp.add_argument(
+        "--replication",
+        action="store_true",
+        help="on the profile's replication seeds instead of its own (quick: 5-9; issue 20)",
+    )
 
     b = sub.add_parser(
         "bench", help="sweep every experiment, the stability cases, then figures and report"
@@ -305,18 +310,26 @@ def _cmd_estimate(args) -> int:
 
 def _cmd_campaign(args) -> int:
     from .core import _runner
+    from .core._experiments import REPLICATION_SEEDS
     from .studies.paper._campaign import campaign_experiments, priority
 
     _check_sweep_args(args)
     names = campaign_experiments(args.profile)
     if not names:
         raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
+    seeds = None
+    if args.replication:
+        if args.profile not in REPLICATION_SEEDS:
+            check_choice("profile with replication seeds", args.profile, list(REPLICATION_SEEDS))
+        seeds = REPLICATION_SEEDS[args.profile]
     _usable_results(args)
-    print(f"campaign {args.profile} -> {args.results}: {', '.join(names)}", flush=True)
+    which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
+    print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
     res = _runner.run_experiments(
         names,
         args.profile,
         args.results,
+        seeds=seeds,
         order=priority(args.profile),  # claim by claim, longest runs first within a claim
         executor=args.executor,
         workers=None if args.workers == 0 else args.workers,

@@ -6,6 +6,12 @@ Every run row (and ``bench_meta.json``) carries :data:`PROVENANCE_COLUMNS`:
   distribution's version, from its metadata);
 - ``backend`` (``jax.default_backend()``: ``cpu``, ``gpu``, ``tpu``) and ``device`` (the GPU's
   ``device_kind``, e.g. ``NVIDIA H100 80GB HBM3``, or on CPU the processor's model name);
+- the arithmetic: ``cpu_vendor`` (e.g. ``AuthenticAMD``), ``cpu_family_model`` (``family/model``
+  from ``/proc/cpuinfo``, e.g. ``25/1``), ``cpu_simd`` (the SIMD extensions of the CPU that XLA's
+  CPU code generator may use, from :data:`SIMD_FLAGS`, space-separated) and ``xla_flags`` (the
+  ``XLA_FLAGS`` environment variable, empty when unset): float32 round-off differs between CPU
+  types (another vector width, another fused reduction), so rows from two CPUs agree to
+  round-off only, while rows from one CPU type with one lock file are bit-identical;
 - ``git_commit`` (the full hash of this checkout's ``HEAD``) and ``git_dirty`` (whether the
   working tree differs from it outside ``results/``; ``None`` when not known).
 
@@ -37,8 +43,30 @@ import numpy as np
 PACKAGES = ("jax", "jaxlib", "equinox", "diffrax", "optax", "optimistix", "numpy")
 VERSION_COLUMNS = ("python_version", *(f"{p}_version" for p in PACKAGES))
 DEVICE_COLUMNS = ("backend", "device")
+CPU_COLUMNS = ("cpu_vendor", "cpu_family_model", "cpu_simd", "xla_flags")
 GIT_COLUMNS = ("git_commit", "git_dirty")
-PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *GIT_COLUMNS)
+PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *CPU_COLUMNS, *GIT_COLUMNS)
+# x86 and Arm vector extensions LLVM can target from XLA's CPU backend (``/proc/cpuinfo`` names)
+SIMD_FLAGS = (
+    "sse4_1",
+    "sse4_2",
+    "avx",
+    "avx2",
+    "fma",
+    "f16c",
+    "avx512f",
+    "avx512dq",
+    "avx512bw",
+    "avx512vl",
+    "avx512_vnni",
+    "avx512_bf16",
+    "avx512_fp16",
+    "amx_tile",
+    "amx_bf16",
+    "asimd",
+    "sve",
+    "sve2",
+)
 UNKNOWN = "unknown"
 _REPO = Path(__file__).resolve().parents[2]
 
@@ -61,6 +89,35 @@ def _cpu_name() -> str:
     except OSError:
         pass
     return platform.processor() or platform.machine() or UNKNOWN
+
+
+def _cpu() -> dict[str, str]:
+    """``cpu_vendor``, ``cpu_family_model``, ``cpu_simd`` (see :data:`SIMD_FLAGS`) and
+    ``xla_flags`` of this machine and process."""
+    import os
+
+    info: dict[str, str] = {}
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            key = key.strip()
+            if key in ("vendor_id", "cpu family", "model", "flags", "Features", "CPU implementer"):
+                info.setdefault(key, value.strip())
+            if not line.strip() and info:  # the first processor is enough
+                break
+    except OSError:
+        pass
+    flags = set((info.get("flags") or info.get("Features") or "").split())
+    vendor = info.get("vendor_id") or info.get("CPU implementer") or platform.machine()
+    family_model = (
+        f"{info['cpu family']}/{info['model']}" if "cpu family" in info and "model" in info else ""
+    )
+    return {
+        "cpu_vendor": vendor or UNKNOWN,
+        "cpu_family_model": family_model or UNKNOWN,
+        "cpu_simd": " ".join(f for f in SIMD_FLAGS if f in flags) if flags else UNKNOWN,
+        "xla_flags": os.environ.get("XLA_FLAGS", ""),
+    }
 
 
 def _device() -> tuple[str, str]:
@@ -110,6 +167,7 @@ def provenance() -> dict[str, str | bool | None]:
     out: dict[str, str | bool | None] = {"python_version": platform.python_version()}
     out.update({f"{p}_version": _version(p) for p in PACKAGES})
     out["backend"], out["device"] = _device()
+    out.update(_cpu())
     out["git_commit"], out["git_dirty"] = _git_state()
     return out
 

@@ -290,16 +290,18 @@ def run_experiments(
     names: Sequence[str],
     profile: str,
     results_dir="results",
+    seeds: Sequence[int] | None = None,
     **kw,
 ) -> dict[str, list[dict]]:
     """Sweep the named experiments under ``profile`` as ONE sweep (one pool of workers, runs
     of every experiment interleaved, longest first with ``order``); a run that several
-    experiments declare is tagged with the first of them. Returns the new rows per experiment."""
+    experiments declare is tagged with the first of them. ``seeds`` replaces the profile's
+    seeds (a replication). Returns the new rows per experiment."""
     from ._experiments import expand
 
     configs, tags = [], {}
     for n in names:
-        for c in expand(n, profile):
+        for c in expand(n, profile, seeds=seeds):
             if c.config_hash not in tags:
                 tags[c.config_hash] = n
                 configs.append(c)
