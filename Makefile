@@ -84,7 +84,9 @@ report: $(STAMP)
 
 # The paper-core campaign (issue 24): the paper's budget on the cells each verdict needs, niced in
 # the background, resumable at any moment (runs are content-addressed). Its process group is
-# the campaign: pause/resume/stop act on all its workers at once.
+# the campaign: pause/resume/stop act on all its workers at once. setsid gives it its own
+# scheduler autogroup, where Linux (sched_autogroup_enabled = 1) ignores the nice level against
+# other sessions: the autogroup itself is niced too, or the campaign takes half the machine.
 CAMPAIGN_DIR ?= results/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
@@ -98,6 +100,7 @@ paper-core: $(STAMP)
 	else setsid nohup nice -n 19 $(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
 		--profile paper-core --workers $(CAMPAIGN_WORKERS) > $(CAMPAIGN_LOG) 2>&1 & \
 		echo $$! > $(CAMPAIGN_PID); \
+		echo 19 > /proc/$$(cat $(CAMPAIGN_PID))/autogroup 2>/dev/null || true; \
 		echo "paper-core: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
 
 paper-core-status: $(STAMP)

@@ -43,8 +43,8 @@ from .core._studies import studies
 from .studies.paper import (
     TRIVIAL_FACTOR,
     TRIVIAL_MODELS,
-    evaluate_claims,
 )
+from .studies.paper._replication import judge
 
 __all__ = ["write_report"]
 
@@ -117,21 +117,78 @@ def _disc_mark(v) -> str:
     return {True: "yes", False: "**no**", None: "unknown"}[v.discriminating]
 
 
-def _claims_table(verdicts) -> list[str]:
+def _ci(lo, hi) -> str:
+    return f"[{_fmt(lo)}, {_fmt(hi)}]" if np.isfinite(lo) and np.isfinite(hi) else "-"
+
+
+def _loso_text(j, key: str) -> str:
+    runs = j.loso.get(key, [])
+    if not runs:
+        return "-"
+    changes = j.loso_changes(key)
+    if not changes:
+        return f"stable (each of {len(runs)} seeds dropped)"
+    return "changes: " + "; ".join(f"without seed {s}: {v.verdict}" for s, v in changes)
+
+
+def _claims_table(j) -> list[str]:
+    """One row per claim (claim 4: per metric and spring start): the final verdict, the
+    verdicts on the primary and replication seeds, whether it replicates, and what dropping
+    one seed does."""
+    from .studies.paper._replication import _span
+
+    ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
     out = [
-        "| claim | statement | verdict | effect | 95% CI | seeds | profile | failed runs "
-        "| discriminating | detail |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        f"| claim | statement | verdict | seeds {ps} | seeds {rs or '(none)'} | replicates "
+        "| leave one seed out | effect | 90% CI | discriminating | failed runs |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
-    for v in verdicts:
-        ci = f"[{_fmt(v.ci_low)}, {_fmt(v.ci_high)}]" if np.isfinite(v.ci_low) else "-"
-        effect = f"{_fmt(v.effect)} ({v.effect_name})" if v.effect_name else _fmt(v.effect)
+    for v in j.final:
+        p = j.primary[v.key]
+        r = j.replication.get(v.key)
+        rep = {True: "yes", False: "**no**", None: "not run"}[j.replicates(v.key)]
+        effect = f"{_fmt(p.effect)} ({p.effect_name})" if p.effect_name else _fmt(p.effect)
         out.append(
-            f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | "
-            f"{_md_escape(effect)} | {ci} | {v.n_seeds} | {v.profile or '-'} | {v.n_failed} | "
-            f"{_disc_mark(v)} | "
-            f"{_md_escape(v.detail)} |"
+            f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | {p.verdict} "
+            f"({p.n_seeds}) | {r.verdict + f' ({r.n_seeds})' if r else '-'} | {rep} | "
+            f"{_md_escape(_loso_text(j, v.key))} | {_md_escape(effect)} | "
+            f"{_ci(p.ci_low, p.ci_high)} | {_disc_mark(p)} | {p.n_failed} |"
         )
+    return out
+
+
+def _parts_table(j) -> list[str]:
+    """Every tested part: its effect, margin, test and level, its status on the primary and
+    replication seeds, and whether dropping one seed changes it."""
+    from .studies.paper._replication import _span
+
+    ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
+    out = [
+        f"| claim | part | kind | margin | test (level) | effect, seeds {ps} [90% CI] | "
+        f"seeds {ps} | seeds {rs or '(none)'} | leave one seed out |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for v in j.final:
+        p = j.primary[v.key]
+        rep = {q.name: q for q in j.replication[v.key].parts} if v.key in j.replication else {}
+        loso = [(s, {q.name: q for q in w.parts}) for s, w in j.loso.get(v.key, [])]
+        for part in p.parts:
+            r = rep.get(part.name)
+            moved = [s for s, d in loso if d.get(part.name) and d[part.name].status != part.status]
+            lo_text = (
+                "-"
+                if not loso
+                else (
+                    "stable" if not moved else "changes without seed " + ", ".join(map(str, moved))
+                )
+            )
+            test = f"{part.test} ({part.alpha:g})" if part.test else "-"
+            out.append(
+                f"| {_md_escape(v.key)} | {_md_escape(part.name)} | {part.kind or '-'} | "
+                f"{_md_escape(part.margin) or '-'} | {_md_escape(test)} | {_fmt(part.point)} "
+                f"{_ci(part.lo, part.hi)} | {part.status} | {r.status if r else '-'} | "
+                f"{lo_text} |"
+            )
     return out
 
 
@@ -273,7 +330,7 @@ def _provenance_section(results_dir: Path, runs: pd.DataFrame, others) -> list[s
 
 def _load_other(d: Path):
     runs, curves, profile = load_tables(d)
-    return d, profile, evaluate_claims(runs, curves, profile)
+    return d, profile, judge(runs, curves, profile, loso=False).final
 
 
 def figure_studies() -> list:
@@ -330,7 +387,8 @@ def write_report(results_dir: Path, compare=None) -> Path:
     results_dir = Path(results_dir)
     results_dir.mkdir(parents=True, exist_ok=True)
     runs, curves, profile = load_tables(results_dir)
-    verdicts = evaluate_claims(runs, curves, profile)
+    j = judge(runs, curves, profile)
+    verdicts = j.final
     others, other_errors = [], []
     for d in compare_folders(results_dir) if compare is None else [Path(c) for c in compare]:
         try:
@@ -357,18 +415,34 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "",
         "## Claims",
         "",
-        "Verdict rules are in the docstrings of `bench/studies/paper/`: effects are per-seed log "
-        "ratios of geometric-mean rollout errors (paired by seed) with a 95% percentile "
-        "bootstrap over seeds. A claim is *reproduced* when every part holds, *partly "
-        "reproduced* when some parts hold and others are contradicted, *not reproduced* when "
-        "parts are contradicted and none holds, *inconclusive* otherwise, with fewer than 2 "
-        "seeds, or when the experiment is not discriminating: its best model must beat the best "
-        f"trivial predictor (constant velocity; at rest in damped scenes) by {TRIVIAL_FACTOR:g}x "
-        "on every seed (*unknown* where no trivial-predictor runs are stored). Failed and "
-        "diverged runs score the worst error, 1, and are counted. With 3 seeds the bootstrap "
-        "interval is about [min, max] over seeds.",
+        "Verdict rules are in the docstrings of `bench/studies/paper/` (conventions: "
+        "`bench/studies/paper/_stats.py`). Each claim is split into parts; each part is a "
+        "one-sided t test at level 0.05 on paired per-seed values (log ratios of "
+        "geometric-mean rollout errors, energy violations or training times; slopes; shares), "
+        "against a stated margin, the smallest ratio that matters (1.25x for errors, 2x for "
+        'energy, "matches" and "slightly"). An ordering holds only beyond the margin; '
+        '"no gain", "no better" and "matches" hold only when the data rule out the '
+        "margin; a difference inside the margin is a tie, never an ordering, and no part holds "
+        "by default. Intervals are the two-sided 90% t intervals whose ends are the one-sided "
+        "95% bounds. A claim is *reproduced* when every part holds, *partly reproduced* when "
+        "some parts hold and others are contradicted, *not reproduced* when parts are "
+        "contradicted and none holds, *inconclusive* otherwise, with fewer than 5 seeds, or "
+        "when the experiment is not discriminating: its best model must beat the best trivial "
+        f"predictor (constant velocity; at rest in damped scenes) by {TRIVIAL_FACTOR:g}x on "
+        "every seed (*unknown* where no trivial-predictor runs are stored). Failed and diverged "
+        "runs score the worst error, 1, and are counted.",
         "",
-        *_claims_table(verdicts),
+        "Replication: every claim is judged on the profile's seeds and again on a disjoint set "
+        "(stored by `make replicate`); a verdict that differs between them is *inconclusive "
+        "(does not replicate)*, with both readings shown. *Leave one seed out* judges the "
+        "profile's seeds without each one in turn (one seed fewer required) and names the "
+        "seeds without which the verdict changes.",
+        "",
+        *_claims_table(j),
+        "",
+        "### Every part: effect, margin, test, level, and its status on each seed set",
+        "",
+        *_parts_table(j),
         "",
         f"Failed or diverged runs scored as error 1 in the verdicts: {n_failed}.",
         "",

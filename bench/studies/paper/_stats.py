@@ -5,7 +5,7 @@ verdict per metric and spring initial state). The runs table is the store's
 ``results/runs.parquet`` (one row per run: every ``RunConfig`` field and the metrics); the curves
 table is ``results/curves.parquet`` (``config_hash, t, rel_error, energy_violation``).
 
-Rules shared by all claims:
+Rules shared by all claims (issue 20: statistics a referee can sign):
 
 * Failed and diverged runs are never dropped: a run whose ``status`` is not ``"ok"`` or whose
   metric is not finite scores the worst error, 1 (the relative error of predicting nothing; for
@@ -13,35 +13,47 @@ Rules shared by all claims:
   counts them (``n_failed``) and the report lists them.
 * Comparisons are paired by seed: for two cells A and B (same system, k, ..., different model),
   the per-seed effect is ``d_s = log(err_A,s / err_B,s)``, and the seeds that have both cells are
-  the sample. The effect is ``mean_s d_s`` and its 95% interval is a percentile bootstrap over
-  seeds (``scipy.stats.bootstrap``, 2000 resamples, fixed generator). With 3 seeds that interval
-  is about ``[min_s d_s, max_s d_s]``: "significant" then means every seed agrees.
-* A *positive* part ("A is worse than B", an effect expected to be > 0) holds when
-  ``ci_low > 0``, contradicts when ``ci_high < delta`` (any effect there is below the smallest
-  ratio that matters, ``exp(delta)``), and is undecided otherwise.
-* A *null* part ("no real gain") holds when ``ci_high < delta`` (a meaningful gain is ruled out),
-  contradicts when ``ci_low > 0`` and the mean exceeds ``delta`` (a significant, meaningful gain),
-  and is undecided otherwise.
+  the sample (at least :data:`MIN_SEEDS` = 5 for a verdict).
+* The test: a one-sided t test on the per-seed values at level :data:`ALPHA` = 0.05, in each
+  direction that the part needs; equivalently, the part compares the one-sided 95% bounds
+  ``mean -/+ t(0.95, n - 1) * sd / sqrt(n)`` (together: the two-sided 90% interval the report
+  prints) with its *margin*, the smallest ratio that matters, ``delta = log(margin)``. A
+  difference inside the margin is a tie, never an ordering, and no part holds by default:
+  every status is the outcome of a test.
+* Part kinds (``_Part.kind``):
+  - *greater* ("A is worse than B", an ordering): holds when ``lo > delta`` (A is worse by more
+    than the margin, p < alpha), contradicts when ``hi < delta`` (a difference of the margin is
+    ruled out: a tie or the reverse), else undecided;
+  - *at most* ("no gain", "no better", "matches or beats": the upper of the two one-sided tests
+    of an equivalence test, because the other side also satisfies the claim: a regulariser that
+    hurts gives "no gain"): holds when ``hi < delta``, contradicts when ``lo > delta``;
+  - *equivalent* ("slightly", two one-sided tests, TOST): holds when ``-delta < lo`` and
+    ``hi < delta``, contradicts when ``lo > delta`` or ``hi < -delta``;
+  - *band* / *threshold* (slopes of energy growth, shares of a gap): the same bounds against a
+    stated interval or threshold.
+  Margins come from the paper's effect sizes (its headline ratios are 2x to 10x): 1.25x for
+  errors (:data:`DELTA`), 2x for energy violations, "matches" and "slightly" (:data:`DELTA_2`).
 * Trivial predictors (issue 10). Every experiment runs ``constant_velocity`` (and ``at_rest`` in
   damped scenes) on the same test trajectories; only finished trivial runs count. A model
   *succeeds* when it beats the best trivial predictor by :data:`TRIVIAL_FACTOR` (2x) on every
   seed. An experiment whose best model does not is *not discriminating*: the test set cannot
   tell a model that works from one that does not, and the verdict is "inconclusive" whatever
-  its parts say. Factor 2: the paper's effects are factors of 1.25 to 10; a model within 2x of
-  holding the velocity fixed has learned little that the test window can show. Without
-  finished trivial-predictor runs (results older than issue 10) discrimination is "unknown"
-  and the verdict stands, flagged.
+  its parts say. Without finished trivial-predictor runs discrimination is "unknown" and the
+  verdict stands, flagged.
 * The verdict is one of :data:`VERDICTS`: "reproduced" when every part holds; "partly
   reproduced" when some parts hold and others are contradicted; "not reproduced" when parts are
-  contradicted and none holds; "inconclusive" otherwise (undecided parts), with fewer than two
-  seeds, or when the experiment is not discriminating. Each carries its effect, interval, seeds,
-  profile and the count of failed runs.
+  contradicted and none holds; "inconclusive" otherwise (undecided parts), with fewer than
+  :data:`MIN_SEEDS` seeds, or when the experiment is not discriminating. Each carries its
+  parts, effect, interval, seeds, profile and the count of failed runs. The report judges each
+  claim again on a disjoint seed set and without each seed (``bench._report``).
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,6 +79,28 @@ VERDICTS = (REPRODUCED, PARTLY, NOT_REPRODUCED, INCONCLUSIVE)
 # Smallest error ratio that "matters": log(1.25). Chosen before looking at results; the paper's
 # headline effects (Figs. 4-6) are factors of 2 to 10.
 DELTA = math.log(1.25)
+# The level of every one-sided test, and the fewest paired seeds that give a verdict.
+ALPHA = 0.05
+MIN_SEEDS = 5
+T_TEST = "one-sided t test on paired per-seed log ratios"
+_MIN_SEEDS = contextvars.ContextVar("min_seeds", default=MIN_SEEDS)
+
+
+@contextlib.contextmanager
+def min_seeds(n: int):
+    """Within the block, a verdict needs ``n`` paired seeds (the leave-one-seed-out check
+    judges 4 of 5 seeds with the same rules)."""
+    token = _MIN_SEEDS.set(int(n))
+    try:
+        yield
+    finally:
+        _MIN_SEEDS.reset(token)
+
+
+def required_seeds() -> int:
+    return _MIN_SEEDS.get()
+
+
 # Energy violations and "matching" are judged at a factor of 2.
 DELTA_2 = math.log(2.0)
 # A model succeeds when it beats the best trivial predictor by this factor on every seed.
@@ -112,6 +146,7 @@ class Verdict:
     profile: str | None = None
     n_failed: int = 0
     discriminating: bool | None = None
+    parts: tuple = ()  # the tested parts (``_Part``), for the report's parts table
 
     @property
     def key(self) -> str:
@@ -242,6 +277,12 @@ def _paired(runs: pd.DataFrame, a: Mapping, b: Mapping, metric: str = "rollout_e
 
 @dataclass
 class _Part:
+    """One tested part of a claim: ``point`` (the effect, a mean of per-seed values, on the log
+    scale for ratios), ``lo``/``hi`` (its one-sided (1 - alpha) bounds, together the two-sided
+    90% interval at alpha = 0.05), ``n`` seeds, the ``status`` its test gives, and what the
+    test was: ``kind`` (see the module docstring), ``margin`` (the ratio, or the threshold or
+    band on the effect's own scale when ``log_scale`` is False), ``test`` and ``alpha``."""
+
     name: str
     status: str  # "holds" | "contradicts" | "undecided"
     point: float
@@ -250,51 +291,199 @@ class _Part:
     n: int
     note: str = ""
     extra: dict = field(default_factory=dict)
+    kind: str = ""
+    margin: str = ""
+    test: str = ""
+    alpha: float = ALPHA
 
     def text(self) -> str:
         ci = f"[{self.lo:.3g}, {self.hi:.3g}]" if np.isfinite(self.lo) else "[n/a]"
         s = f"{self.name}: {self.point:.3g} {ci}, n={self.n} -> {self.status}"
         return s + (f" ({self.note})" if self.note else "")
 
+    def as_row(self) -> dict:
+        return {
+            "part": self.name,
+            "status": self.status,
+            "effect": self.point,
+            "lo": self.lo,
+            "hi": self.hi,
+            "n": self.n,
+            "kind": self.kind,
+            "margin": self.margin,
+            "test": self.test,
+            "alpha": self.alpha,
+            "note": self.note,
+        }
 
-def _positive(name: str, d: Iterable[float] | tuple, delta: float = DELTA, note="") -> _Part:
-    point, lo, hi = d if isinstance(d, tuple) else _boot(np.asarray(list(d), dtype=float))
-    n = -1 if isinstance(d, tuple) else len(list(d))
-    if not np.isfinite(point) or not np.isfinite(lo):
+
+def t_bounds(values, alpha: float = ALPHA) -> tuple[float, float, float]:
+    """(mean, lower, upper): the one-sided (1 - alpha) t bounds of the mean of ``values``
+    (``scipy.stats.t``); NaN bounds with fewer than two values; the mean itself when they do
+    not vary."""
+    v = np.asarray(list(values), dtype=float)
+    v = v[np.isfinite(v)]
+    n = len(v)
+    point = float(np.mean(v)) if n else math.nan
+    if n < 2:
+        return point, math.nan, math.nan
+    sd = float(np.std(v, ddof=1))
+    half = float(stats.t.ppf(1 - alpha, n - 1)) * sd / math.sqrt(n)
+    return point, point - half, point + half
+
+
+def t_bounds_jackknife(stat: Callable, n: int, alpha: float = ALPHA):
+    """(point, lower, upper) of a statistic of ``n`` seeds (``stat(index array)``) with the
+    leave-one-seed-out jackknife standard error and ``t(1 - alpha, n - 1)``: the bounds of a
+    pooled estimate, e.g. a regression over every seed's runs."""
+    idx = np.arange(n)
+    point = float(stat(idx))
+    if n < 2:
+        return point, math.nan, math.nan
+    loo = np.array([stat(np.delete(idx, i)) for i in range(n)], dtype=float)
+    se = math.sqrt((n - 1) / n * float(np.sum((loo - loo.mean()) ** 2)))
+    half = float(stats.t.ppf(1 - alpha, n - 1)) * se
+    return point, point - half, point + half
+
+
+def _bounds(d) -> tuple[float, float, float, int]:
+    if isinstance(d, tuple):
+        return (*d[:3], d[3] if len(d) > 3 else -1)
+    values = np.asarray(list(d), dtype=float)
+    return (*t_bounds(values), int(np.isfinite(values).sum()))
+
+
+def _fmt_margin(delta: float) -> str:
+    return f"{math.exp(delta):.3g}x"
+
+
+def _greater(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
+    """An ordering: the effect (a log ratio) exceeds the margin ``exp(delta)``."""
+    point, lo, hi, n = _bounds(d)
+    if not np.isfinite(lo):
         status = "undecided"
-    elif lo > 0:
+    elif lo > delta:
         status = "holds"
     elif hi < delta:
         status = "contradicts"
     else:
         status = "undecided"
-    return _Part(name, status, point, lo, hi, n, note)
+    return _Part(
+        name,
+        status,
+        point,
+        lo,
+        hi,
+        n,
+        note,
+        kind="greater",
+        margin=_fmt_margin(delta),
+        test="one-sided t, H1: effect > margin",
+    )
 
 
-def _null(name: str, d, delta: float = DELTA, note="") -> _Part:
-    point, lo, hi = d if isinstance(d, tuple) else _boot(np.asarray(list(d), dtype=float))
-    n = -1 if isinstance(d, tuple) else len(list(d))
-    if not np.isfinite(point) or not np.isfinite(lo):
+def _at_most(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
+    """ "No gain" / "no better" / "matches or beats": the effect stays below the margin."""
+    point, lo, hi, n = _bounds(d)
+    if not np.isfinite(lo):
         status = "undecided"
-    elif lo > 0 and point > delta:
-        status = "contradicts"
     elif hi < delta:
         status = "holds"
-    else:
-        status = "undecided"
-    return _Part(name, status, point, lo, hi, n, note)
-
-
-def _threshold(name: str, values, threshold: float, note: str = "") -> _Part:
-    """Holds when the CI lies above ``threshold``, contradicts when below, else undecided."""
-    values = np.asarray(list(values), dtype=float)
-    point, lo, hi = _boot(values)
-    if len(values) < 2 or not np.isfinite(lo):
-        status = "undecided"
-    elif lo > threshold:
-        status = "holds"
-    elif hi < threshold:
+    elif lo > delta:
         status = "contradicts"
     else:
         status = "undecided"
-    return _Part(name, status, point, lo, hi, len(values), note)
+    return _Part(
+        name,
+        status,
+        point,
+        lo,
+        hi,
+        n,
+        note,
+        kind="at most",
+        margin=_fmt_margin(delta),
+        test="one-sided t, H1: effect < margin",
+    )
+
+
+def _equivalent(name: str, d, delta: float = DELTA_2, note: str = "") -> _Part:
+    """Equivalence (TOST): the effect lies within ``+-delta``."""
+    point, lo, hi, n = _bounds(d)
+    if not np.isfinite(lo):
+        status = "undecided"
+    elif -delta < lo and hi < delta:
+        status = "holds"
+    elif lo > delta or hi < -delta:
+        status = "contradicts"
+    else:
+        status = "undecided"
+    return _Part(
+        name,
+        status,
+        point,
+        lo,
+        hi,
+        n,
+        note,
+        kind="equivalent",
+        margin=f"1/{_fmt_margin(delta)} to {_fmt_margin(delta)}",
+        test="TOST: two one-sided t",
+    )
+
+
+def _band(name: str, values, low: float, high: float, note: str = "") -> _Part:
+    """The mean of ``values`` lies inside ``[low, high]`` (both one-sided tests), outside it
+    (one of them the other way), or undecided."""
+    point, lo, hi, n = _bounds(values)
+    if not np.isfinite(lo):
+        status = "undecided"
+    elif lo > low and hi < high:
+        status = "holds"
+    elif hi < low or lo > high:
+        status = "contradicts"
+    else:
+        status = "undecided"
+    return _Part(
+        name,
+        status,
+        point,
+        lo,
+        hi,
+        n,
+        note,
+        kind="band",
+        margin=f"[{low:g}, {high:g}]",
+        test="one-sided t at both ends",
+    )
+
+
+def _threshold(name: str, values, threshold: float, note: str = "", above: bool = True) -> _Part:
+    """The mean of ``values`` lies above ``threshold`` (``above``; below otherwise): holds when
+    its one-sided bound is past the threshold, contradicts when the other bound is short of it."""
+    point, lo, hi, n = _bounds(values)
+    if not np.isfinite(lo):
+        status = "undecided"
+    elif (lo > threshold) if above else (hi < threshold):
+        status = "holds"
+    elif (hi < threshold) if above else (lo > threshold):
+        status = "contradicts"
+    else:
+        status = "undecided"
+    return _Part(
+        name,
+        status,
+        point,
+        lo,
+        hi,
+        n,
+        note,
+        kind="above" if above else "below",
+        margin=f"{threshold:g}",
+        test=f"one-sided t test on per-seed values, H1 mean {'>' if above else '<'} {threshold:g}",
+    )
+
+
+def _positive(name: str, d, delta: float = DELTA, note="") -> _Part:
+    """An ordering (kept name): see :func:`_greater`."""
+    return _greater(name, d, delta, note)

@@ -1,0 +1,124 @@
+"""Verdicts that replicate (issue 20): every claim judged on the profile's seeds, again on a
+disjoint seed set, and without each of its seeds.
+
+- *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4).
+- *Replication*: :data:`bench.core._experiments.REPLICATION_SEEDS` (``quick``: 5-9), stored
+  beside the primary runs by ``make replicate`` (``python -m bench campaign --profile quick
+  --replication``). Where both exist and the verdicts differ, the claim's verdict is
+  *inconclusive (does not replicate)*, and both readings are shown.
+- *Leave one seed out*: the primary seeds without each one in turn, judged by the same rules
+  with one seed fewer required (:func:`bench.studies.paper._stats.min_seeds`); a verdict that
+  changes when one seed is dropped rests on that seed, and the report says which.
+
+A claim counts as settled only when its verdict replicates; the leave-one-seed-out column is
+reported beside it, not folded into the verdict (with 4 seeds the tests lose power, and a
+verdict that turns *inconclusive* without a seed is fragile, not wrong).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from ...core._experiments import REPLICATION_SEEDS, SELECTIONS, profile_defaults
+from ._rules import evaluate_claims
+from ._stats import INCONCLUSIVE, Verdict, min_seeds, required_seeds
+
+DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
+
+
+@dataclass
+class Judgement:
+    """Every claim's verdicts: ``final`` (what the report states), ``primary`` (the profile's
+    seeds), ``replication`` (the replication seeds; empty when none are stored) and ``loso``
+    (key -> [(dropped seed, verdict)]), with the seed sets used."""
+
+    final: list[Verdict]
+    primary: dict[str, Verdict]
+    replication: dict[str, Verdict] = field(default_factory=dict)
+    loso: dict[str, list[tuple[int, Verdict]]] = field(default_factory=dict)
+    primary_seeds: tuple[int, ...] = ()
+    replication_seeds: tuple[int, ...] = ()
+
+    def replicates(self, key: str) -> bool | None:
+        r = self.replication.get(key)
+        if r is None or r.n_seeds == 0:
+            return None
+        return r.verdict == self.primary[key].verdict
+
+    def loso_changes(self, key: str) -> list[tuple[int, Verdict]]:
+        base = self.primary[key].verdict
+        return [(s, v) for s, v in self.loso.get(key, []) if v.verdict != base]
+
+
+def seed_sets(profile: str | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """(primary seeds, replication seeds) of a profile (a selection: its base profile's)."""
+    if profile is None:
+        return (), ()
+    base = SELECTIONS.get(profile, profile)
+    try:
+        primary = profile_defaults(base)[1]
+    except ValueError:
+        return (), ()
+    return tuple(primary), tuple(REPLICATION_SEEDS.get(base, ()))
+
+
+def _on(runs: pd.DataFrame, seeds) -> pd.DataFrame:
+    if not len(runs) or "seed" not in runs:
+        return runs
+    return runs[runs["seed"].isin(list(seeds))].reset_index(drop=True)
+
+
+def judge(
+    runs: pd.DataFrame,
+    curves: pd.DataFrame | None = None,
+    profile: str | None = None,
+    *,
+    loso: bool = True,
+) -> Judgement:
+    """Judge every claim on the primary seeds, the replication seeds (where stored) and
+    without each primary seed (``loso``). Runs of other seeds are ignored; a folder whose
+    profile is unknown is judged on all its seeds, without replication."""
+    primary_seeds, rep_seeds = seed_sets(profile)
+    if not primary_seeds and len(runs) and "seed" in runs:
+        primary_seeds = tuple(sorted(int(s) for s in runs["seed"].unique()))
+    prim = evaluate_claims(_on(runs, primary_seeds), curves, profile)
+    primary = {v.key: v for v in prim}
+    replication = {}
+    if rep_seeds and len(_on(runs, rep_seeds)):
+        replication = {v.key: v for v in evaluate_claims(_on(runs, rep_seeds), curves, profile)}
+    out_loso: dict[str, list[tuple[int, Verdict]]] = {}
+    present = sorted(set(_on(runs, primary_seeds)["seed"])) if len(runs) else []
+    if loso and len(present) > 1:
+        with min_seeds(max(2, required_seeds() - 1)):
+            for s in present:
+                for v in evaluate_claims(
+                    _on(runs, [x for x in present if x != s]), curves, profile
+                ):
+                    out_loso.setdefault(v.key, []).append((int(s), v))
+    final = []
+    for v in prim:
+        r = replication.get(v.key)
+        if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
+            v = dataclasses.replace(
+                v,
+                verdict=DOES_NOT_REPLICATE,
+                detail=f"seeds {_span(primary_seeds)}: {v.verdict}; seeds {_span(rep_seeds)}: "
+                f"{r.verdict}. {v.detail}",
+            )
+        final.append(v)
+    return Judgement(final, primary, replication, out_loso, primary_seeds, rep_seeds)
+
+
+def _span(seeds) -> str:
+    seeds = sorted(seeds)
+    if seeds and seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
+        return f"{seeds[0]}-{seeds[-1]}"
+    return ", ".join(map(str, seeds))
+
+
+def settled(verdict: str) -> bool:
+    """Whether a final verdict is a finding (not inconclusive of either kind)."""
+    return verdict not in (INCONCLUSIVE, DOES_NOT_REPLICATE)
