@@ -20,7 +20,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench stability perf figures report clean \
+.PHONY: install lock upgrade test test-slow lint format bench replicate stability perf figures report clean \
 	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-stop paper-core-report
 
 install: $(STAMP)
@@ -69,6 +69,13 @@ format: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m bench bench --profile $(PROFILE) --workers $(WORKERS)
+
+# The replication of issue 20: the claim experiments again on the profile's replication seeds
+# (quick: 5-9), stored beside the runs of `make bench`; the report judges every claim on both.
+replicate: $(STAMP)
+	$(PY) -m bench campaign --profile $(PROFILE) --replication --workers $(WORKERS)
+	$(PY) -m bench figures
+	$(PY) -m bench report
 
 stability: $(STAMP)
 	$(PY) -m bench stability --profile $(PROFILE) --workers $(WORKERS)

@@ -203,13 +203,16 @@ def compare_folders(results_dir: Path) -> list[Path]:
 
 
 def _no_runs(v) -> bool:
-    """No comparable verdict: no runs at all, or a cell the claim needs is missing."""
-    return v is None or v.n_seeds == 0
+    """No comparable verdict: no runs at all, a cell the claim needs is missing, or the
+    claim's runs are still being computed (``pending``)."""
+    return v is None or v.n_seeds == 0 or v.verdict.startswith("pending")
 
 
 def _cell_text(v) -> str:
     if v is None or v.detail == "no runs":
         return "no runs"
+    if v.verdict.startswith("pending"):
+        return v.verdict
     if v.n_seeds == 0:
         return f"**{v.verdict}** (cells missing)"
     return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
@@ -328,9 +331,35 @@ def _provenance_section(results_dir: Path, runs: pd.DataFrame, others) -> list[s
     return lines
 
 
+def _pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list:
+    """The verdicts of a folder of a selection's runs (``paper-core``), each replaced by
+    ``pending (n of m runs)`` where fewer of its claim's runs are stored than the selection
+    declares (a campaign under way)."""
+    import dataclasses
+
+    from .core._experiments import SELECTIONS, expand
+    from .studies.paper._rules import claim_studies
+
+    if profile not in SELECTIONS or not len(runs):  # only a campaign's selection is pending
+        return verdicts
+    done = set(runs["config_hash"])
+    want = {}
+    for study in claim_studies():
+        hashes = {c.config_hash for e in study.experiments for c in expand(e, profile)}
+        want[study.claim] = (len(hashes & done), len(hashes))
+    out = []
+    for v in verdicts:
+        n, m = want.get(v.claim, (0, 0))
+        if m and n < m:
+            v = dataclasses.replace(v, verdict=f"pending ({n} of {m} runs)")
+        out.append(v)
+    return out
+
+
 def _load_other(d: Path):
     runs, curves, profile = load_tables(d)
-    return d, profile, judge(runs, curves, profile, loso=False).final
+    verdicts = judge(runs, curves, profile, loso=False).final
+    return d, profile, _pending(d, runs, profile, verdicts)
 
 
 def figure_studies() -> list:

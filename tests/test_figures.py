@@ -21,10 +21,10 @@ def _store(d, runs, curves):
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     d = tmp_path_factory.mktemp("results")
-    runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2), noise=0.05)
+    runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2, 3, 4), noise=0.05)
     _store(d, runs[runs["system"] != "relativistic_particle"], curves)  # one without runs
     # a second folder, "paper" runs of another profile's budget, built to contradict
-    other, other_curves = synthetic_tables("smoke", seeds=(0, 1, 2), scenario="contradict")
+    other, other_curves = synthetic_tables("smoke", seeds=(0, 1, 2, 3, 4), scenario="contradict")
     _store(d / "paper", other.assign(profile="paper"), other_curves)
     written = make_figures(d)
     report = write_report(d)

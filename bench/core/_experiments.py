@@ -287,6 +287,8 @@ class Experiment:
     profile_overrides: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
     include: Callable[[RunConfig], bool] | None = None
     claim: int | None = None
+    # The profiles it runs at (None: every profile); elsewhere it expands to no runs.
+    profiles: tuple[str, ...] | None = None
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -299,6 +301,8 @@ class Experiment:
         for axis, values in self.axes.items():
             if isinstance(values, str) or len(list(values)) == 0:
                 raise ValueError(f"{self.name}.axes[{axis!r}] must be a non-empty sequence")
+        for prof in self.profiles or ():
+            check_choice(f"profile in {self.name}.profiles", prof, list(PROFILES))
         for prof, over in self.profile_overrides.items():
             check_choice(f"profile in {self.name}.profile_overrides", prof, list(PROFILES))
             for key in over:
@@ -374,11 +378,14 @@ def expand(
 
     Combinations rejected by ``exp.include`` or by :func:`valid` (e.g. leapfrog on a
     first-order model) are dropped; runs are unique by ``config_hash``, in expansion order.
-    Under a selection (:data:`SELECTIONS`) an experiment that does not declare it has no runs.
+    Under a selection (:data:`SELECTIONS`) an experiment that does not declare it has no runs,
+    and so has an experiment under a profile outside its ``profiles``.
     ``seeds`` replaces whatever seeds the profile and the experiment give (a replication on
     another seed set, :data:`REPLICATION_SEEDS`).
     """
     exp = get(exp) if isinstance(exp, str) else exp
+    if exp.profiles is not None and profile not in exp.profiles:
+        return []
     replace_seeds = seeds
     base, seeds = profile_defaults(profile)
     base.update(exp.fixed)

@@ -77,10 +77,10 @@ MS_PER_STEP = {
 
 # The stability study at quick in 2 processes (`make bench` of bb0a68e: 243 s, the long-horizon
 # case alone 210 s; since split by model over the processes), and the trade-off experiment's
-# run time at 2 workers (the same run: 336 s of run time, its 300/3000-step training variants
-# gone to the learning-curve experiment).
+# run time at 2 workers (the quick rows of 5df3845: 274 s of run time, of which issue 20
+# removed HNN+SO's training variants, 106 s, and the spring's evaluations, 78 s).
 STABILITY_S = 243.0
-TRADEOFF_S = 336.0 / 2
+TRADEOFF_S = (274.0 - 106.0 - 78.0) / 2
 
 
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
