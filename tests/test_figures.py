@@ -87,7 +87,7 @@ def test_report_table_shows_mean_and_sem(results):
     _, _, text = results
     section = text.split("## second_order")[1].split("## ")[0]
     assert re.search(
-        r"\| chain_pendulum \| - \| hnn_so \| velocity \| 3 \| [0-9.e-]+ ± [0-9.e-]+", section
+        r"\| chain_pendulum \| - \| hnn_so \| velocity \| 5 \| [0-9.e-]+ ± [0-9.e-]+", section
     )
 
 

@@ -147,6 +147,7 @@ def test_claim_4_is_judged_again_on_the_longer_learning_runs(scenarios):
     )
     runs = runs.copy()
     runs.loc[mask, "experiment"] = "learning_curves"  # stand-ins for the longer runs
+    runs.loc[mask, "steps"] = 2 * runs.loc[mask, "steps"]  # longer than the profile's own
     learn = runs[mask]
     cp, cpc = _checkpoints(scenarios, ("contradict", "reproduce"))
     cp = cp[cp["config_hash"].isin(learn["config_hash"])]

@@ -13,8 +13,10 @@ NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 @pytest.mark.parametrize("name", NAMES)
 def test_every_experiment_expands_and_validates(name, profile):
     runs = E.expand(name, profile)
-    if profile in E.SELECTIONS and profile not in E.get(name).profile_overrides:
-        assert runs == [], (name, profile)  # not in the selection
+    exp = E.get(name)
+    outside = exp.profiles is not None and profile not in exp.profiles
+    if outside or (profile in E.SELECTIONS and profile not in exp.profile_overrides):
+        assert runs == [], (name, profile)  # not at this profile, or not in the selection
         return
     assert runs, (name, profile)
     for c in runs:
@@ -117,11 +119,13 @@ def test_vin_has_noisy_cells_at_every_profile():
         assert noisy == {(m, n) for m in ("vin", "resnet") for n in (0.01, 0.05)}, profile
 
 
-def test_smoke_is_small_and_quick_fits_the_budget():
+def test_smoke_is_small_and_quick_budget_does_not_grow():
     smoke = P.estimate_seconds("smoke")
     assert smoke["runs"] <= 60
     quick = P.estimate_seconds("quick")
-    assert len(E.profile_defaults("quick")[1]) >= 3
-    # `make bench` promises about 30 minutes on 2 cores: the paper experiments, the trade-off
-    # experiment and the stability study (module docstring), with 5% slack for the estimate.
-    assert P.make_bench_seconds("quick") <= 1.05 * 30 * 60, quick
+    assert len(E.profile_defaults("quick")[1]) >= 5  # issue 20: five seeds per verdict
+    # `make bench` promises about 30 minutes on 2 cores. With five seeds it does not keep it:
+    # the estimator (calibrated on an older CPU, where it over-predicted by 15%) says 34.6 min,
+    # and this machine measured 50.6 min under load (README, "Known limits"). This guard keeps
+    # the estimate from growing further while the budget is open.
+    assert P.make_bench_seconds("quick") <= 35 * 60, quick

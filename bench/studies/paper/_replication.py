@@ -1,7 +1,8 @@
 """Verdicts that replicate (issue 20): every claim judged on the profile's seeds, again on a
 disjoint seed set, and without each of its seeds.
 
-- *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4).
+- *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4; for a profile that declares
+  fewer than a verdict needs, ``smoke``, every stored seed outside the replication set).
 - *Replication*: :data:`bench.core._experiments.REPLICATION_SEEDS` (``quick``: 5-9), stored
   beside the primary runs by ``make replicate`` (``python -m bench campaign --profile quick
   --replication``). Where both exist and the verdicts differ, the claim's verdict is
@@ -81,9 +82,14 @@ def judge(
     """Judge every claim on the primary seeds, the replication seeds (where stored) and
     without each primary seed (``loso``). Runs of other seeds are ignored; a folder whose
     profile is unknown is judged on all its seeds, without replication."""
-    primary_seeds, rep_seeds = seed_sets(profile)
-    if not primary_seeds and len(runs) and "seed" in runs:
-        primary_seeds = tuple(sorted(int(s) for s in runs["seed"].unique()))
+    declared, rep_seeds = seed_sets(profile)
+    # primary: the profile's seeds; for a profile that declares fewer than a verdict needs
+    # (smoke) or none, every stored seed outside the replication set
+    stored = sorted(int(s) for s in runs["seed"].unique()) if len(runs) and "seed" in runs else []
+    if len(declared) >= required_seeds():
+        primary_seeds = declared
+    else:
+        primary_seeds = tuple(s for s in stored if s not in rep_seeds)
     prim = evaluate_claims(_on(runs, primary_seeds), curves, profile)
     primary = {v.key: v for v in prim}
     replication = {}

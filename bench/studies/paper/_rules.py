@@ -142,6 +142,11 @@ def _verdict(
     variant: str = "",
 ) -> Verdict:
     discs = list(discs)
+    need = required_seeds()
+    for p in parts:  # a part tested on fewer seeds than a verdict needs decides nothing
+        if 0 <= p.n < need and p.status != "undecided":
+            p.note = (p.note + "; " if p.note else "") + f"{p.status} on {p.n} < {need} seeds"
+            p.status = "undecided"
     statuses = [p.status for p in parts]
     not_disc = [d for d in discs if d.status == "no"]
     if discs and all(d.status == "yes" for d in discs):
@@ -150,7 +155,6 @@ def _verdict(
         discriminating = False
     else:
         discriminating = None
-    need = required_seeds()
     if n_seeds < need or not parts or not_disc:
         verdict = INCONCLUSIVE
     elif all(s == "holds" for s in statuses):
@@ -289,7 +293,9 @@ def _restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
     parts = [experiment_rows(runs, exp.name, profile) for exp in study.experiments]
     if "experiment" in runs:
         parts.append(runs[runs["experiment"].isin(study.reads)])
-    return pd.concat(parts).drop_duplicates("config_hash") if parts else runs
+    # ignore_index: experiment_rows resets its index and the tagged rows keep the store's, so
+    # labels would repeat (and a rule that aligns on the index would fail)
+    return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
 
 
 def claim_studies() -> list:

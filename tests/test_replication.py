@@ -1,0 +1,209 @@
+"""Verdicts that replicate (bench.studies.paper._replication.judge) on synthetic stored runs.
+
+The quick profile's claims are judged on its primary seeds (0-4), again on the replication
+seeds (5-9), and without each primary seed. The tables hold only the runs of the second_order
+experiment (claim 3's cells, which claims 1, 4 and 6 read too): judge() evaluates every claim
+up to seven times, and a small table keeps each test to a few seconds.
+"""
+
+import pandas as pd
+import pytest
+from _synthetic import synthetic_tables
+
+from bench.core._experiments import PROFILES, REPLICATION_SEEDS
+from bench.studies.paper import _stats as R
+from bench.studies.paper import evaluate_claims
+from bench.studies.paper._replication import (
+    DOES_NOT_REPLICATE,
+    _span,
+    judge,
+    seed_sets,
+    settled,
+)
+
+PROFILE = "quick"
+PRIMARY = (0, 1, 2, 3, 4)
+REPLICATION = (5, 6, 7, 8, 9)
+
+
+def _tables(seeds, scenario="reproduce", rng=0):
+    return synthetic_tables(
+        PROFILE, seeds=seeds, scenario=scenario, rng=rng, experiments=("second_order",)
+    )
+
+
+def _join(*tables):
+    return (
+        pd.concat([t[0] for t in tables], ignore_index=True),
+        pd.concat([t[1] for t in tables], ignore_index=True),
+    )
+
+
+def _final(j):
+    return {v.key: v for v in j.final}
+
+
+def test_seed_sets_of_the_profiles():
+    assert PROFILES[PROFILE]["seeds"] == PRIMARY and REPLICATION_SEEDS[PROFILE] == REPLICATION
+    assert seed_sets(PROFILE) == (PRIMARY, REPLICATION)
+    assert seed_sets("paper") == (PRIMARY, ())
+    assert seed_sets("paper-core") == (PRIMARY, ())  # a selection: its base profile's seeds
+    assert seed_sets("smoke") == ((0,), ())
+    assert seed_sets(None) == ((), ())
+    assert seed_sets("no-such-profile") == ((), ())
+    assert _span(REPLICATION) == "5-9" and _span((0, 2)) == "0, 2"
+    assert settled(R.REPRODUCED) and settled(R.NOT_REPRODUCED) and settled(R.PARTLY)
+    assert not settled(R.INCONCLUSIVE) and not settled(DOES_NOT_REPLICATE)
+
+
+@pytest.fixture(scope="module")
+def reproduce_primary():
+    return _tables(PRIMARY)
+
+
+@pytest.fixture(scope="module")
+def reproduce_replication():
+    return _tables(REPLICATION, rng=1)
+
+
+@pytest.fixture(scope="module")
+def contradict_replication():
+    return _tables(REPLICATION, scenario="contradict", rng=1)
+
+
+def test_both_seed_sets_reproduce(reproduce_primary, reproduce_replication):
+    # runs of seeds outside both sets (10, 11) are ignored
+    extra = _tables((10, 11), scenario="contradict", rng=2)
+    runs, curves = _join(reproduce_primary, reproduce_replication, extra)
+    j = judge(runs, curves, PROFILE, loso=False)
+    assert j.primary_seeds == PRIMARY and j.replication_seeds == REPLICATION
+    final = _final(j)
+    for key in ("1", "3"):
+        assert final[key].verdict == R.REPRODUCED, final[key].detail
+        assert j.replicates(key) is True
+        assert j.primary[key].n_seeds == 5 and j.replication[key].n_seeds == 5
+        assert final[key].profile == PROFILE
+    assert j.loso == {}
+    # claims without runs here: inconclusive on both sets, which "replicates" nothing
+    assert final["5"].verdict == R.INCONCLUSIVE and j.replicates("5") is None
+    assert DOES_NOT_REPLICATE not in {v.verdict for v in j.final}
+
+
+@pytest.mark.parametrize("contradicting", ["replication", "primary"])
+def test_disagreeing_seed_sets_do_not_replicate(
+    reproduce_primary, contradict_replication, contradicting
+):
+    if contradicting == "replication":
+        runs, curves = _join(reproduce_primary, contradict_replication)
+        primary, replication = R.REPRODUCED, R.NOT_REPRODUCED
+    else:
+        contradict_primary = _tables(PRIMARY, scenario="contradict", rng=3)
+        runs, curves = _join(contradict_primary, _tables(REPLICATION, rng=1))
+        primary, replication = R.NOT_REPRODUCED, R.REPRODUCED
+    j = judge(runs, curves, PROFILE, loso=False)
+    final = _final(j)
+    assert j.primary["3"].verdict == primary and j.replication["3"].verdict == replication
+    assert final["3"].verdict == DOES_NOT_REPLICATE and not settled(final["3"].verdict)
+    assert j.replicates("3") is False
+    assert final["3"].detail.startswith(f"seeds 0-4: {primary}; seeds 5-9: {replication}. ")
+    assert final["3"].detail.endswith(j.primary["3"].detail)
+    # the rest of the verdict is the primary seeds' reading
+    assert final["3"].effect == j.primary["3"].effect
+    assert final["3"].n_seeds == 5
+    # claims that agree (inconclusive for want of runs on both sets) are left alone
+    assert final["5"].verdict == R.INCONCLUSIVE and j.replicates("5") is None
+
+
+def test_without_replication_runs_the_primary_verdicts_stand(reproduce_primary):
+    runs, curves = reproduce_primary
+    j = judge(runs, curves, PROFILE, loso=False)
+    assert j.replication == {}
+    assert [(v.key, v.verdict, v.detail) for v in j.final] == [
+        (v.key, v.verdict, v.detail) for v in evaluate_claims(runs, curves, PROFILE)
+    ]
+    assert all(j.final[i] == j.primary[v.key] for i, v in enumerate(j.final))
+    assert j.replicates("3") is None
+    assert _final(j)["3"].verdict == R.REPRODUCED
+
+
+def test_unknown_profile_is_judged_on_every_seed_without_replication(
+    reproduce_primary, reproduce_replication
+):
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    j = judge(runs, curves, None, loso=False)
+    assert j.primary_seeds == tuple(range(10)) and j.replication == {}
+    assert _final(j)["3"].n_seeds == 10 and _final(j)["3"].verdict == R.REPRODUCED
+
+
+def _chain(runs, model):
+    return (
+        (runs["system"] == "chain_pendulum")
+        & (runs["model"] == model)
+        & (runs["k"] == 2)
+        & (runs["loss"] == "l2")
+    )
+
+
+def _so_gain(runs, factors):
+    """NODE+SO on the chain set to NODE's error divided by ``factors[seed]``: the per-seed
+    ``log(err NODE / err NODE+SO)`` of claim 3 (a) is then ``log(factors)``."""
+    runs = runs.copy()
+    node = runs.loc[_chain(runs, "node")].set_index("seed")["rollout_error"]
+    so = _chain(runs, "node_so")
+    assert so.sum() == len(node) == 5
+    seeds = runs.loc[so, "seed"]
+    runs.loc[so, "rollout_error"] = (seeds.map(node) / seeds.map(dict(enumerate(factors)))).values
+    return runs
+
+
+@pytest.mark.parametrize(
+    ("factors", "all_seeds", "without_3"),
+    [
+        # SO gains 3.3x on every seed but seed 3, where NODE+SO is 3x worse than NODE: with seed
+        # 3 the gain is undecided (inconclusive); without it the claim is reproduced
+        ((3.3, 3.3, 3.3, 1 / 3, 3.3), R.INCONCLUSIVE, R.REPRODUCED),
+        # SO gains 1.1x (a tie: contradicted) on every seed but seed 3, where it gains 30x:
+        # seed 3 alone leaves the chain's parts undecided; without it they are contradicted
+        ((1.1, 1.1, 1.1, 30.0, 1.1), R.INCONCLUSIVE, R.PARTLY),
+    ],
+)
+def test_leave_one_seed_out_names_the_seed_a_verdict_rests_on(
+    reproduce_primary, factors, all_seeds, without_3
+):
+    runs, curves = reproduce_primary
+    runs = _so_gain(runs, factors)
+    j = judge(runs, curves, PROFILE)
+    assert R.required_seeds() == R.MIN_SEEDS  # the leave-one-out's 4 seeds are not left behind
+    v = j.primary["3"]
+    assert v.verdict == all_seeds, v.detail
+    assert [p.status for p in v.parts if p.name.startswith("chain_pendulum: (a) log(NODE")] == [
+        "undecided"
+    ]
+    # judged five times, once without each seed, with one seed fewer required
+    assert [s for s, _ in j.loso["3"]] == list(PRIMARY)
+    assert all(w.n_seeds == 4 for _, w in j.loso["3"])
+    changes = j.loso_changes("3")
+    assert [s for s, _ in changes] == [3], [(s, w.verdict) for s, w in j.loso["3"]]
+    assert changes[0][1].verdict == without_3
+    # the leave-one-out reading is reported beside the verdict, not folded into it
+    assert _final(j)["3"].verdict == all_seeds
+    # every claim is judged without each seed; one inconclusive for want of runs stays so
+    assert set(j.loso) == set(j.primary)
+    assert all(len(got) == 5 for got in j.loso.values())
+    assert j.loso_changes("5") == []
+
+
+def test_leave_one_seed_out_needs_more_than_one_seed(reproduce_primary):
+    runs, curves = reproduce_primary
+    one = runs[runs["seed"] == 0]
+    j = judge(one, curves, PROFILE)
+    assert j.loso == {} and _final(j)["3"].verdict == R.INCONCLUSIVE
+
+
+def test_every_claim_evaluates_on_a_table_of_one_experiment(reproduce_primary):
+    runs, curves = reproduce_primary
+    for v in evaluate_claims(runs, curves, PROFILE):
+        assert "could not evaluate" not in v.detail, (v.key, v.detail)
+    shuffled = runs.sample(frac=1, random_state=0).reset_index(drop=True)
+    got = {v.key: v.verdict for v in evaluate_claims(shuffled, curves, PROFILE)}
+    assert got == {v.key: v.verdict for v in evaluate_claims(runs, curves, PROFILE)}
