@@ -94,6 +94,7 @@ report: $(STAMP)
 # the campaign: pause/resume/stop act on all its workers at once. setsid gives it its own
 # scheduler autogroup, where Linux (sched_autogroup_enabled = 1) ignores the nice level against
 # other sessions: the autogroup itself is niced too, or the campaign takes half the machine.
+# `env kill`: the shell's builtin kill (dash) does not signal a process group.
 CAMPAIGN_DIR ?= results/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
@@ -118,13 +119,13 @@ paper-core-status: $(STAMP)
 	@$(PY) -m bench --results $(CAMPAIGN_DIR) estimate --profile paper-core --workers $(CAMPAIGN_WORKERS)
 
 paper-core-pause:
-	@$(campaign_alive) && kill -STOP -- -$(campaign_pid) && echo "paper-core: paused" || echo "paper-core: not running"
+	@$(campaign_alive) && env kill -s STOP -- -$(campaign_pid) && echo "paper-core: paused" || echo "paper-core: not running"
 
 paper-core-resume:
-	@$(campaign_alive) && kill -CONT -- -$(campaign_pid) && echo "paper-core: resumed" || echo "paper-core: not running"
+	@$(campaign_alive) && env kill -s CONT -- -$(campaign_pid) && echo "paper-core: resumed" || echo "paper-core: not running"
 
 paper-core-stop:
-	@$(campaign_alive) && kill -CONT -- -$(campaign_pid) && kill -TERM -- -$(campaign_pid) && \
+	@$(campaign_alive) && env kill -s CONT -- -$(campaign_pid) && env kill -s TERM -- -$(campaign_pid) && \
 		echo "paper-core: stopped (make paper-core resumes)" || echo "paper-core: not running"
 
 # Tables, figures and report of the campaign's stored rows (before committing them).
