@@ -101,6 +101,7 @@ def _run(**kw):
 STEADY = ("rollout_error", "energy_violation", "mse", "valid_time", "symplectic_error")
 
 
+@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
 def test_run_with_checkpoints_has_the_final_metrics_of_the_run_without(tmp_path, monkeypatch):
     # 2-step blocks, so that an 8-step run has checkpoints (2, 4, 8) inside it
     monkeypatch.setattr(_execute, "TRAIN_BLOCK", 2)

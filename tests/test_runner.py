@@ -233,6 +233,7 @@ def test_failed_run_recorded_with_traceback(tmp_path):
 
 
 # --------------------------------------------------------------------------------- ray
+@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
 @pytest.mark.ray
 def test_ray_two_run_sweep(tmp_path):
     pytest.importorskip("ray")

@@ -199,6 +199,7 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     assert "## Numerical stability" in text and "stiffness" in text
 
 
+@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
 def test_simulate_takes_tolerance_and_solver():
     # the stability study's ground truth and solver variants go through systems' simulate
     import systems
