@@ -15,15 +15,13 @@ several claims share is counted, and run, with the first of them. Runs are conte
 so a campaign killed at any moment loses only the runs in flight; run it again to resume.
 
 Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
-costs scaled to the profile's steps, batch and width; once some of a campaign's runs are stored,
-:func:`plan` rescales the estimate of every model by the ratio measured / estimated on its
-stored runs (all stored runs where the model has none yet), so the hours left improve as the
-campaign goes.
+costs scaled to the profile's steps, batch and width. The stored runs' own seconds are shown
+beside it but not used to rescale the estimate: a run at nice 19 measures the time it waited for
+the CPU as well (the first runs of 2026-11-23 took 13x their estimate while quick sweeps ran).
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -74,32 +72,13 @@ def priority(profile: str = "paper-core"):
     return key
 
 
-def _calibration(stored: pd.DataFrame, cfgs: dict) -> tuple[dict, float]:
-    """Per-model and overall ratios of measured ``wall_seconds`` to the estimate, over the
-    stored runs of the campaign."""
-    if not len(stored) or "wall_seconds" not in stored:
-        return {}, 1.0
-    ratios = []
-    for h, model, wall in zip(
-        stored["config_hash"], stored["model"], stored["wall_seconds"], strict=True
-    ):
-        est = run_seconds(cfgs[h]) if h in cfgs else 0.0
-        if est > 1.0 and math.isfinite(float(wall)):
-            ratios.append((model, float(wall) / est))
-    if not ratios:
-        return {}, 1.0
-    df = pd.DataFrame(ratios, columns=["model", "ratio"])
-    per = df.groupby("model")["ratio"].median().to_dict()
-    return per, float(df["ratio"].median())
-
-
 def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.DataFrame:
     """One row per claim of the campaign: ``claim, experiments, runs`` (every run its verdict
     reads), ``stored`` (of those), ``new_runs`` (those no earlier claim brings),
-    ``cpu_hours`` (estimated, its new runs), ``cpu_hours_left`` (its new runs not stored,
-    calibrated on the stored ones), ``wall_hours_left`` (at ``workers`` processes) and
+    ``cpu_hours`` (estimated, its new runs), ``cpu_hours_left`` (estimated, its new runs not
+    stored), ``wall_hours_left`` (at ``workers`` processes on an idle machine) and
     ``cpu_hours_done`` (the stored runs' measured ``wall_seconds``: data, compilation,
-    training and evaluation); a last row ``total``."""
+    training, evaluation and, for a niced run, time spent waiting); a last row ``total``."""
     runs = campaign_runs(profile)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
@@ -109,7 +88,6 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         stored = pd.DataFrame(rows)
     else:
         done = set()
-    per, overall = _calibration(stored, cfgs)
     walls = (
         dict(zip(stored["config_hash"], stored["wall_seconds"], strict=True))
         if len(stored) and "wall_seconds" in stored
@@ -130,8 +108,7 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "cpu_hours": sum(run_seconds(c) for c in mine) / 3600,
                 "cpu_hours_done": float(np.nansum([walls.get(c.config_hash, np.nan) for c in mine]))
                 / 3600,
-                "cpu_hours_left": sum(run_seconds(c) * per.get(c.model, overall) for c in left)
-                / 3600,
+                "cpu_hours_left": sum(run_seconds(c) for c in left) / 3600,
             }
         )
     df = pd.DataFrame(table)
@@ -164,8 +141,9 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
     if not len(df):
         return f"{profile}: no runs"
     lines = [
-        f"{profile}: runs and hours per claim, in campaign order (hours left calibrated on the "
-        f"stored runs; wall hours at {workers} workers)",
+        f"{profile}: runs and hours per claim, in campaign order (hours: the estimator's; done: "
+        f"the stored runs' wall seconds, waiting included; wall hours left at {workers} idle "
+        "workers)",
         f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "
         f"{'left h':>6} {'wall h':>6}  experiments",
     ]
