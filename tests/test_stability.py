@@ -82,6 +82,7 @@ def test_unknown_profile_and_case():
 
 
 # ----------------------------------------------------------------------------- physics
+@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
 def test_stiff_rk4_diverges_adaptive_stays_accurate():
     rows = S.case_stiffness(TINY)
     _check_recorded(rows)

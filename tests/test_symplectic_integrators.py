@@ -109,6 +109,7 @@ def test_one_step_is_symplectic_for_the_separable_hnn_mass(method):
     assert float(jnp.max(jnp.abs(phi_x.T @ _j(2) @ phi_x - _j(2)))) > 1e-7
 
 
+@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
 def test_learned_h_bounded_over_ten_thousand_steps():
     scene = models.Scene(dof=1, angular=(True,), canonical=True)
     model = models.make("hnn", scene, key=jax.random.PRNGKey(0), width=16, dtype="float64")
