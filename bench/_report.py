@@ -209,10 +209,10 @@ def _no_runs(v) -> bool:
 
 
 def _cell_text(v) -> str:
+    if v is not None and v.verdict.startswith("pending"):
+        return v.verdict
     if v is None or v.detail == "no runs":
         return "no runs"
-    if v.verdict.startswith("pending"):
-        return v.verdict
     if v.n_seeds == 0:
         return f"**{v.verdict}** (cells missing)"
     return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
@@ -254,7 +254,7 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "is named: missing runs, a test set that does not discriminate, failed runs, the metric "
         "(claim 4: geometric-mean error vs MSE), or the budget (the paper profile trains 8000 "
         "steps on 800 trajectories at width 256 with 5 seeds; quick 1000 steps on 200 at width "
-        "128 with 3).",
+        "128 with 5).",
         "",
         "| " + " | ".join(head) + " |",
         "|" + " --- |" * len(head),
