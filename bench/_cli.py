@@ -268,7 +268,6 @@ def _sweep_names(args) -> list[str]:
 
 
 def _do_sweep(args, names) -> int:
-    from .core import _runner
 
     _check_sweep_args(args)
     if not names:
@@ -277,23 +276,32 @@ def _do_sweep(args, names) -> int:
     _usable_results(args)
     from .studies.paper._budget import run_seconds
 
-    res = _runner.run_experiments(
-        names,
-        args.profile,
-        args.results,
-        order=run_seconds,  # longest runs first: the workers finish together
-        executor=args.executor,
-        workers=None if args.workers == 0 else args.workers,
-        address=args.address,
-        progress=not args.no_progress,
-        ensemble=args.ensemble,
-    )
+    # longest runs first: the workers finish together
+    res = _run_experiments(args, names, order=run_seconds)
     for name, rows in res.items():
         counts = {}
         for r in rows:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
         print(f"{name}: {len(rows)} new runs {counts}")
     return 0
+
+
+def _run_experiments(args, names, *, order, seeds=None) -> dict:
+    """One sweep of ``names`` with the sweep options of ``args`` (sweep, bench, campaign)."""
+    from .core import _runner
+
+    return _runner.run_experiments(
+        names,
+        args.profile,
+        args.results,
+        seeds=seeds,
+        order=order,
+        executor=args.executor,
+        workers=None if args.workers == 0 else args.workers,
+        address=args.address,
+        progress=not args.no_progress,
+        ensemble=args.ensemble,
+    )
 
 
 def _cmd_estimate(args) -> int:
@@ -309,7 +317,6 @@ def _cmd_estimate(args) -> int:
 
 
 def _cmd_campaign(args) -> int:
-    from .core import _runner
     from .core._experiments import REPLICATION_SEEDS
     from .studies.paper._campaign import campaign_experiments, priority
 
@@ -325,18 +332,8 @@ def _cmd_campaign(args) -> int:
     _usable_results(args)
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
     print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
-    res = _runner.run_experiments(
-        names,
-        args.profile,
-        args.results,
-        seeds=seeds,
-        order=priority(args.profile),  # claim by claim, longest runs first within a claim
-        executor=args.executor,
-        workers=None if args.workers == 0 else args.workers,
-        address=args.address,
-        progress=not args.no_progress,
-        ensemble=args.ensemble,
-    )
+    # claim by claim, longest runs first within a claim
+    res = _run_experiments(args, names, order=priority(args.profile), seeds=seeds)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0

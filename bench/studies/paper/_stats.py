@@ -353,6 +353,16 @@ def _bounds(d) -> tuple[float, float, float, int]:
     return (*t_bounds(values), int(np.isfinite(values).sum()))
 
 
+def _decide(lo: float, holds, contradicts) -> str:
+    """A part's status from its test: undecided without bounds, else "holds" when ``holds()``,
+    "contradicts" when ``contradicts()``, undecided otherwise."""
+    if not np.isfinite(lo):
+        return "undecided"
+    if holds():
+        return "holds"
+    return "contradicts" if contradicts() else "undecided"
+
+
 def _fmt_margin(delta: float) -> str:
     return f"{math.exp(delta):.3g}x"
 
@@ -360,14 +370,7 @@ def _fmt_margin(delta: float) -> str:
 def _greater(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
     """An ordering: the effect (a log ratio) exceeds the margin ``exp(delta)``."""
     point, lo, hi, n = _bounds(d)
-    if not np.isfinite(lo):
-        status = "undecided"
-    elif lo > delta:
-        status = "holds"
-    elif hi < delta:
-        status = "contradicts"
-    else:
-        status = "undecided"
+    status = _decide(lo, lambda: lo > delta, lambda: hi < delta)
     return _Part(
         name,
         status,
@@ -385,14 +388,7 @@ def _greater(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
 def _at_most(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
     """ "No gain" / "no better" / "matches or beats": the effect stays below the margin."""
     point, lo, hi, n = _bounds(d)
-    if not np.isfinite(lo):
-        status = "undecided"
-    elif hi < delta:
-        status = "holds"
-    elif lo > delta:
-        status = "contradicts"
-    else:
-        status = "undecided"
+    status = _decide(lo, lambda: hi < delta, lambda: lo > delta)
     return _Part(
         name,
         status,
@@ -410,14 +406,7 @@ def _at_most(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
 def _equivalent(name: str, d, delta: float = DELTA_2, note: str = "") -> _Part:
     """Equivalence (TOST): the effect lies within ``+-delta``."""
     point, lo, hi, n = _bounds(d)
-    if not np.isfinite(lo):
-        status = "undecided"
-    elif -delta < lo and hi < delta:
-        status = "holds"
-    elif lo > delta or hi < -delta:
-        status = "contradicts"
-    else:
-        status = "undecided"
+    status = _decide(lo, lambda: -delta < lo and hi < delta, lambda: lo > delta or hi < -delta)
     return _Part(
         name,
         status,
@@ -436,14 +425,7 @@ def _band(name: str, values, low: float, high: float, note: str = "") -> _Part:
     """The mean of ``values`` lies inside ``[low, high]`` (both one-sided tests), outside it
     (one of them the other way), or undecided."""
     point, lo, hi, n = _bounds(values)
-    if not np.isfinite(lo):
-        status = "undecided"
-    elif lo > low and hi < high:
-        status = "holds"
-    elif hi < low or lo > high:
-        status = "contradicts"
-    else:
-        status = "undecided"
+    status = _decide(lo, lambda: lo > low and hi < high, lambda: hi < low or lo > high)
     return _Part(
         name,
         status,
@@ -462,14 +444,11 @@ def _threshold(name: str, values, threshold: float, note: str = "", above: bool 
     """The mean of ``values`` lies above ``threshold`` (``above``; below otherwise): holds when
     its one-sided bound is past the threshold, contradicts when the other bound is short of it."""
     point, lo, hi, n = _bounds(values)
-    if not np.isfinite(lo):
-        status = "undecided"
-    elif (lo > threshold) if above else (hi < threshold):
-        status = "holds"
-    elif (hi < threshold) if above else (lo > threshold):
-        status = "contradicts"
-    else:
-        status = "undecided"
+    status = _decide(
+        lo,
+        lambda: (lo > threshold) if above else (hi < threshold),
+        lambda: (hi < threshold) if above else (lo > threshold),
+    )
     return _Part(
         name,
         status,
