@@ -131,6 +131,21 @@ def _loso_text(j, key: str) -> str:
     return "changes: " + "; ".join(f"without seed {s}: {v.verdict}" for s, v in changes)
 
 
+def _not_run_note(profile) -> list[str]:
+    """One line per claim that is not judged at ``profile`` (its experiments do not run there)."""
+    from .studies.paper._rules import claims_not_run
+
+    out = []
+    for study in claims_not_run(profile):
+        names = ", ".join(f"`{e.name}`" for e in study.experiments)
+        runs_at = sorted({p for e in study.experiments for p in (e.profiles or ())})
+        out.append(
+            f"Claim {study.claim} is not run at {profile} ({names} runs at "
+            f"{', '.join(runs_at)}): see *Verdicts at both budgets*."
+        )
+    return [*out, ""] if out else []
+
+
 def _claims_table(j) -> list[str]:
     """One row per claim (claim 4: per metric and spring start): the final verdict, the
     verdicts on the primary and replication seeds, whether it replicates, and what dropping
@@ -277,6 +292,13 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
 
     for key in keys:
         vs = [m.get(key) for m in maps]
+        claim = next(m[key].claim for m in maps if key in m)
+        for i, m in enumerate(maps):  # a key its pending campaign has no rows for yet
+            if vs[i] is None:
+                vs[i] = next(
+                    (v for v in m.values() if v.claim == claim and v.verdict.startswith("pending")),
+                    None,
+                )
         cells = [_cell_text(v) for v in vs]
         real = [v for v in vs if not _no_runs(v)]
         agree = (
@@ -469,6 +491,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "",
         *_claims_table(j),
         "",
+        *_not_run_note(profile),
         "### Every part: effect, margin, test, level, and its status on each seed set",
         "",
         *_parts_table(j),

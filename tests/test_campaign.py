@@ -8,7 +8,7 @@ from bench.core import _experiments as E
 from bench.core import _store
 from bench.studies import paper as P
 from bench.studies.paper import _campaign as C
-from bench.studies.paper._common import SYMREG_WEIGHTS_QUICK
+from bench.studies.paper._common import SYMREG_WEIGHTS_CORE
 
 NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 
@@ -34,7 +34,7 @@ def test_paper_core_covers_every_claim_and_drops_the_extras():
     assert {c.system for c in sym} == {"chain_pendulum"}
     assert {c.model for c in sym} == {"node_so_symreg", "constant_velocity"}
     weights = {dict(c.model_options).get("weight") for c in sym} - {None}
-    assert sorted(weights) == sorted(SYMREG_WEIGHTS_QUICK)
+    assert sorted(weights) == sorted(SYMREG_WEIGHTS_CORE)
     damped = E.expand("damped", "paper-core")
     assert not any(c.dissipation is True or c.model == "node" for c in damped)
     rel = {

@@ -276,3 +276,22 @@ def test_smoke_every_model_and_system(executor, tmp_path):
     assert not failed
     assert len(_store.load_runs(tmp_path)) == len(configs)
     print(f"{executor}: {len(configs)} smoke runs in {time.perf_counter() - t0:.0f} s")
+
+
+def test_schedule_starts_one_run_of_every_cell_before_the_other_seeds():
+    """Seeds of one cell compile the same programs: the first of each cell goes first
+    (longest first among them), then the rest longest first; a tuple key keeps its groups."""
+    from bench.core._runner import _schedule
+
+    long = [RunConfig(system="chain_pendulum", k=2, model="hnn_so", seed=s) for s in range(3)]
+    short = [RunConfig(system="chain_pendulum", k=2, model="node", seed=s) for s in range(3)]
+    cost = {"hnn_so": 10.0, "node": 1.0}
+    got = _schedule(long + short, lambda c: cost[c.model])
+    assert [(c.model, c.seed) for c in got] == [
+        ("hnn_so", 0), ("node", 0), ("hnn_so", 1), ("hnn_so", 2), ("node", 1), ("node", 2)
+    ]
+    # a (rank, seconds) key: node's group first, the rule inside each group
+    got = _schedule(long + short, lambda c: (c.model == "node", cost[c.model]))
+    assert [(c.model, c.seed) for c in got] == [
+        ("node", 0), ("node", 1), ("node", 2), ("hnn_so", 0), ("hnn_so", 1), ("hnn_so", 2)
+    ]

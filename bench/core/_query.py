@@ -157,13 +157,17 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
     """The runs of experiment ``name``: every stored run (any seed) whose configuration is one
     of the experiment's cells under ``profile``, shared runs included whichever experiment
     produced them, plus the rows tagged with the experiment (results of older declarations,
-    whose cells no longer expand); without a profile, the rows tagged with that experiment."""
+    whose cells no longer expand); none for an experiment that does not run at ``profile``
+    (its ``profiles``); without a profile, the rows tagged with that experiment."""
     if not len(runs):
         return runs
     if profile is not None:
         try:
-            from ._experiments import RunConfig, expand
+            from ._experiments import RunConfig, expand, get
 
+            exp = get(name)
+            if exp.profiles is not None and profile not in exp.profiles:
+                return runs.iloc[0:0]  # not run at this profile: no stored row speaks for it
             cells = {_cell_key(c) for c in expand(name, profile)}
             keys = [_cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
             match = pd.Series([k in cells for k in keys], index=runs.index)

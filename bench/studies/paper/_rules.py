@@ -298,6 +298,19 @@ def _restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
 
 
+def runs_at(study, profile: str | None) -> bool:
+    """Whether a study's claim is judged at ``profile``: one of its experiments runs there
+    (``Experiment.profiles``). Always with no profile."""
+    if profile is None or not study.experiments:
+        return True
+    return any(e.profiles is None or profile in e.profiles for e in study.experiments)
+
+
+def claims_not_run(profile: str | None) -> list:
+    """The claim studies not judged at ``profile`` (:func:`runs_at`), by claim number."""
+    return [s for s in claim_studies() if not runs_at(s, profile)]
+
+
 def claim_studies() -> list:
     """The registered studies with a verdict rule, by claim number."""
     return sorted((s for s in studies() if s.rule is not None), key=lambda s: s.claim)
@@ -308,13 +321,16 @@ def evaluate_claims(
 ) -> list[Verdict]:
     """Every verdict (claim 4 gives several); a claim whose computation fails is
     "inconclusive" with the error. With ``profile``, each claim sees only the runs of its
-    experiments (by config hash, plus older rows tagged with them) and its verdicts carry it.
+    experiments (by config hash, plus older rows tagged with them) and its verdicts carry it;
+    a claim whose experiments do not run at ``profile`` has no verdict (:func:`claims_not_run`).
     """
     import dataclasses
 
     out = []
     for study in claim_studies():
         n = study.claim
+        if not runs_at(study, profile):
+            continue  # e.g. claim 6 at quick: no verdict, not an inconclusive one
         try:
             got = study.rule(_restrict(runs, study, profile), curves)
             got = got if isinstance(got, list) else [got]

@@ -66,6 +66,10 @@ LOSS = Experiment(
     profile_overrides=_shared(),
     include=_loss_include,
     claim=6,
+    # Not at quick (issue 20): its verdict is inconclusive at every checkpoint of quick's
+    # learning curves, so the five-seed quick budget is spent where it decides; the paper-core
+    # campaign runs claim 6 first (issue 24).
+    profiles=("smoke", "paper", "paper-core"),
 )
 
 
