@@ -20,7 +20,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench replicate stability perf figures report clean \
+.PHONY: install lock upgrade test test-slow lint format bench compare replicate stability perf figures report clean \
 	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-stop paper-core-report
 
 install: $(STAMP)
@@ -67,27 +67,38 @@ format: $(STAMP)
 	$(PY) -m ruff format systems models bench tests
 	$(PY) -m ruff check --fix systems models bench tests
 
+# Your runs go to $(RESULTS) (git-ignored); the committed reference results are under
+# results/reference/<budget>/, read-only (results/README.md). `make bench` ends with the
+# comparison against the reference of its profile ($(RESULTS)/COMPARE.md). Maintainers
+# regenerate a reference with RESULTS=results/reference/quick.
+RESULTS ?= results/own
+REFERENCE ?= results/reference/quick
+
 bench: $(STAMP)
-	$(PY) -m bench bench --profile $(PROFILE) --workers $(WORKERS)
+	$(PY) -m bench --results $(RESULTS) bench --profile $(PROFILE) --workers $(WORKERS)
+
+# Any two results folders side by side (default: the quick reference against your runs).
+compare: $(STAMP)
+	$(PY) -m bench --results $(RESULTS) compare $(REFERENCE) $(RESULTS) --out $(RESULTS)/COMPARE.md
 
 # The replication of issue 20: the claim experiments again on the profile's replication seeds
 # (quick: 5-9), stored beside the runs of `make bench`; the report judges every claim on both.
 replicate: $(STAMP)
-	$(PY) -m bench campaign --profile $(PROFILE) --replication --workers $(WORKERS)
-	$(PY) -m bench figures
-	$(PY) -m bench report
+	$(PY) -m bench --results $(RESULTS) campaign --profile $(PROFILE) --replication --workers $(WORKERS)
+	$(PY) -m bench --results $(RESULTS) figures
+	$(PY) -m bench --results $(RESULTS) report
 
 stability: $(STAMP)
-	$(PY) -m bench stability --profile $(PROFILE) --workers $(WORKERS)
+	$(PY) -m bench --results $(RESULTS) stability --profile $(PROFILE) --workers $(WORKERS)
 
 perf: $(STAMP)
-	$(PY) -m bench perf
+	$(PY) -m bench --results $(RESULTS) perf
 
 figures: $(STAMP)
-	$(PY) -m bench figures
+	$(PY) -m bench --results $(RESULTS) figures
 
 report: $(STAMP)
-	$(PY) -m bench report
+	$(PY) -m bench --results $(RESULTS) report
 
 # The paper-core campaign (issue 24): the paper's budget on the cells each verdict needs, niced in
 # the background, resumable at any moment (runs are content-addressed). Its process group is
@@ -95,7 +106,7 @@ report: $(STAMP)
 # scheduler autogroup, where Linux (sched_autogroup_enabled = 1) ignores the nice level against
 # other sessions: the autogroup itself is niced too, or the campaign takes half the machine.
 # `env kill`: the shell's builtin kill (dash) does not signal a process group.
-CAMPAIGN_DIR ?= results/paper
+CAMPAIGN_DIR ?= results/reference/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
 CAMPAIGN_WORKERS ?= 2

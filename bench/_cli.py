@@ -19,6 +19,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from ._compare import OWN_DIR, reference_dir
 from .core._experiments import (
     PROFILES,
     RunConfig,
@@ -63,7 +64,12 @@ def _float(name):
 
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m bench", description=__doc__)
-    p.add_argument("--results", default="results", help="results directory (default results/)")
+    p.add_argument(
+        "--results",
+        default=str(OWN_DIR),
+        help=f"results directory (default {OWN_DIR}/, git-ignored: your runs; the committed "
+        "reference results are under results/reference/, read-only)",
+    )
     sub = p.add_subparsers(dest="verb", required=True, parser_class=_Parser)
 
     sub.add_parser("list", help="systems, models, experiments, profiles")
@@ -93,6 +99,17 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("experiment", nargs="?")
     s.add_argument("--all", action="store_true", help="every registered experiment")
     _sweep_opts(s, default_profile="quick")
+
+    cm = sub.add_parser(
+        "compare",
+        help="two results folders side by side: claims, cells, runs (default: the reference "
+        "of the results' profile against --results)",
+    )
+    cm.add_argument(
+        "a", nargs="?", help="the reference folder (default: results/reference/<profile>)"
+    )
+    cm.add_argument("b", nargs="?", help="the folder to check (default: --results)")
+    cm.add_argument("--out", default=None, help="also write the comparison (Markdown) here")
 
     sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
     sub.add_parser("report", help="write results/REPORT.md")
@@ -136,6 +153,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     _sweep_opts(b, default_profile="quick")
     b.add_argument("--skip-stability", action="store_true", help="do not run the stability cases")
+    b.add_argument(
+        "--no-compare",
+        action="store_true",
+        help="do not compare with the reference of the profile (results/reference/<profile>)",
+    )
     return p
 
 
@@ -356,6 +378,11 @@ def _stored_runs(args, verb: str, action: str) -> None:
 
     results = _store.check_results_dir(args.results, create=False)
     runs = _store.load_runs(results)  # damaged row files are named and set aside here
+    stale = _store.stale_tables(results)
+    if stale:  # tables others read (pandas users, the figures of a fresh clone): rebuild them
+        what = ", ".join(f"{name} ({why})" for name, why in stale)
+        print(f"warning: rebuilt from the row files: {what}", file=sys.stderr)
+        _store.rebuild_tables(results)
     unread = _store.unread_rows(results)
     if unread:
         print(
@@ -391,8 +418,11 @@ def _cmd_report(args) -> int:
 def _cmd_perf(args) -> int:
     from .studies import perf
 
-    # its own defaults; `python -m bench.perf --help` lists its options
-    out = perf.main(["--ensemble"] if getattr(args, "ensemble", False) else [])
+    # its own defaults; `python -m bench.perf --help` lists its options; written to --results
+    results = _usable_results(args)
+    ens = getattr(args, "ensemble", False)
+    name = "perf_ensemble.csv" if ens else "perf.csv"
+    out = perf.main([*(["--ensemble"] if ens else []), "--out", str(results / name)])
     return int(out or 0)
 
 
@@ -448,6 +478,7 @@ def _cmd_bench(args) -> int:
         "ensemble": args.ensemble,
         "experiments": names,
         "provenance": provenance(),  # this process's versions, device and commit
+        "schema_version": _schema_version(),
     }
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
@@ -455,6 +486,50 @@ def _cmd_bench(args) -> int:
     _cmd_figures(args)
     _cmd_report(args)
     print(f"bench: {meta['wall_seconds'] / 60:.1f} min (sweep and stability), report written")
+    ref = reference_dir(args.profile)
+    if args.no_compare or ref is None or not ref.is_dir():
+        return 0
+    if ref.resolve() == results.resolve():
+        return 0  # regenerating the reference itself
+    args.a, args.b, args.out = str(ref), str(results), str(results / "COMPARE.md")
+    return _cmd_compare(args)
+
+
+def _schema_version() -> int:
+    from .core._schema import SCHEMA_VERSION
+
+    return SCHEMA_VERSION
+
+
+def _cmd_compare(args) -> int:
+    """Print the claims table and the one-line summary of ``compare`` (the whole comparison
+    with ``--out``)."""
+    from ._compare import compare
+    from .core._query import load_tables
+
+    b = Path(args.b or args.results)
+    a = args.a
+    if a is None:
+        profile = load_tables(b)[2] if b.is_dir() else None
+        ref = reference_dir(profile) if profile else None
+        if ref is None or not ref.is_dir():
+            raise ValueError(
+                f"no reference folder for the runs of {b} (profile {profile}); name one: "
+                "python -m bench compare A B"
+            )
+        a = ref
+    comp = compare(a, b)
+    text = comp.markdown()
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(text)
+    claims = text[text.index("## Claims") : text.index("## Cells")].rstrip()
+    print(claims)
+    for w in comp.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    if args.out:
+        print(f"cells and runs: {args.out}")
+    print(comp.summary)
     return 0
 
 
@@ -513,4 +588,5 @@ def _main(argv) -> int:
         "bench": _cmd_bench,
         "estimate": _cmd_estimate,
         "campaign": _cmd_campaign,
+        "compare": _cmd_compare,
     }[args.verb](args)

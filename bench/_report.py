@@ -1,12 +1,12 @@
-"""``results/REPORT.md``: machine, commit, profile, the eight verdicts, one table and figure per
-experiment, and the reference's defects that the suite does not copy.
+"""``REPORT.md`` of a results folder: machine, commit, profile, the verdicts, one table and
+figure per experiment, and the reference's defects that the suite does not copy.
 
 Entry point: :func:`write_report(results_dir, compare=None) -> Path`. Everything in it is
 computed from the stored runs (``bench.core``'s query layer); figures are linked, not
 regenerated (:func:`make_figures` draws every registered study's figure). ``compare`` lists
 other results folders (e.g. the paper-profile runs) whose verdicts are tabulated beside this
 folder's; by default, every subfolder of ``results_dir`` that holds stored runs
-(``results/paper``, ``results/paper_gpu``).
+(``results/reference/paper``, ``results/reference/paper_gpu``).
 """
 
 from __future__ import annotations
@@ -207,14 +207,35 @@ def _parts_table(j) -> list[str]:
     return out
 
 
+def _folder_label(d: Path) -> str:
+    """A folder as the report names it: relative to ``results/`` where it lies under it."""
+    from ._compare import ROOT
+
+    try:
+        return str(Path(d).resolve().relative_to(ROOT / "results"))
+    except ValueError:
+        return Path(d).name
+
+
 def compare_folders(results_dir: Path) -> list[Path]:
-    """Subfolders of ``results_dir`` holding stored runs (``paper`` first): the default
-    ``compare`` list of :func:`write_report`."""
-    found = []
-    for d in sorted(Path(results_dir).iterdir()) if Path(results_dir).exists() else []:
-        if d.is_dir() and any((d / f).exists() for f in ("runs.parquet", "runs.csv", ".rows")):
+    """The folders whose verdicts the report sets beside its own (the default ``compare`` list
+    of :func:`write_report`): the committed reference folders (``results/reference/*``: the
+    paper-core campaign first) other than ``results_dir`` itself, then the subfolders of
+    ``results_dir`` holding stored runs."""
+    from ._compare import REFERENCE_ROOT
+
+    def runs_in(d: Path) -> bool:
+        return d.is_dir() and any((d / f).exists() for f in ("runs.parquet", "runs.csv", ".rows"))
+
+    here = Path(results_dir).resolve()
+    refs = sorted(REFERENCE_ROOT.iterdir()) if REFERENCE_ROOT.is_dir() else []
+    subs = sorted(Path(results_dir).iterdir()) if Path(results_dir).is_dir() else []
+    found, seen = [], set()
+    for d in [*sorted(refs, key=lambda d: (d.name != "paper", d.name)), *subs]:
+        if runs_in(d) and d.resolve() != here and d.resolve() not in seen:
+            seen.add(d.resolve())
             found.append(d)
-    return sorted(found, key=lambda d: (d.name != "paper", d.name))
+    return found
 
 
 def _no_runs(v) -> bool:
@@ -259,7 +280,9 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
     """Every claim's verdict here and in each other results folder, side by side."""
     if not others:
         return []
-    labels = [profile or "this folder"] + [f"{p or 'unknown'} (`{d.name}/`)" for d, p, _ in others]
+    labels = [f"{profile or 'this folder'} (here)" if others else profile or "this folder"] + [
+        f"{p or 'unknown'} (`{_folder_label(d)}/`)" for d, p, _ in others
+    ]
     head = ["claim", *labels, "agree", "likely cause of a disagreement"]
     out = [
         "## Verdicts at both budgets",

@@ -435,3 +435,30 @@ def test_resume_after_kill(tmp_path):
     assert len(executed) <= 6 + 1
     assert not list(rows_dir.glob(".tmp*"))
     assert _store.unread_rows(res) == []  # and no row was left damaged
+
+
+@pytest.mark.parametrize("verb", ["report", "figures"])
+def test_report_and_figures_rebuild_a_damaged_runs_table_and_name_it(
+    stored, monkeypatch, capsys, verb
+):
+    """A truncated runs.parquet (and a runs.csv of other runs) is named and rebuilt from the
+    row files, the truth; a second call finds nothing to rebuild."""
+    import bench._report
+
+    res, configs = stored
+    monkeypatch.setattr(bench._report, "write_report", lambda d: None)
+    monkeypatch.setattr(bench._report, "make_figures", lambda d: None)
+    _store.rebuild_tables(res)
+    assert _store.stale_tables(res) == []
+    data = (res / "runs.parquet").read_bytes()
+    (res / "runs.parquet").write_bytes(data[: len(data) // 2])
+    pd.read_csv(res / "runs.csv").iloc[1:].to_csv(res / "runs.csv", index=False)
+    assert main(["--results", str(res), verb]) == 0
+    err = capsys.readouterr().err
+    assert "warning: rebuilt from the row files: runs.parquet (unreadable" in err
+    assert "runs.csv (other runs than the row files)" in err and "curves" not in err
+    df = pd.read_parquet(res / "runs.parquet")
+    assert sorted(df["config_hash"]) == sorted(c.config_hash for c in configs)
+    assert _store.stale_tables(res) == []
+    assert main(["--results", str(res), verb]) == 0  # nothing to rebuild the second time
+    assert "rebuilt" not in capsys.readouterr().err

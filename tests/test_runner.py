@@ -288,10 +288,20 @@ def test_schedule_starts_one_run_of_every_cell_before_the_other_seeds():
     cost = {"hnn_so": 10.0, "node": 1.0}
     got = _schedule(long + short, lambda c: cost[c.model])
     assert [(c.model, c.seed) for c in got] == [
-        ("hnn_so", 0), ("node", 0), ("hnn_so", 1), ("hnn_so", 2), ("node", 1), ("node", 2)
+        ("hnn_so", 0),
+        ("node", 0),
+        ("hnn_so", 1),
+        ("hnn_so", 2),
+        ("node", 1),
+        ("node", 2),
     ]
     # a (rank, seconds) key: node's group first, the rule inside each group
     got = _schedule(long + short, lambda c: (c.model == "node", cost[c.model]))
     assert [(c.model, c.seed) for c in got] == [
-        ("node", 0), ("node", 1), ("node", 2), ("hnn_so", 0), ("hnn_so", 1), ("hnn_so", 2)
+        ("node", 0),
+        ("node", 1),
+        ("node", 2),
+        ("hnn_so", 0),
+        ("hnn_so", 1),
+        ("hnn_so", 2),
     ]

@@ -80,7 +80,7 @@ def _schedule(todo: list[RunConfig], order: Callable[[RunConfig], float]) -> lis
         group, seconds = (tuple(k[:-1]), k[-1]) if isinstance(k, tuple) else ((), k)
         return (group, fc[0], seconds)
 
-    ranked = sorted(zip(first, todo), key=key, reverse=True)
+    ranked = sorted(zip(first, todo, strict=True), key=key, reverse=True)
     return [c for _, c in ranked]
 
 

@@ -370,7 +370,62 @@ def rebuild_tables(results_dir) -> pd.DataFrame:
             os.replace(tmp, results_dir / name)
         finally:
             Path(tmp).unlink(missing_ok=True)
+    record_schema(results_dir)
     return df
+
+
+META = "bench_meta.json"
+
+
+def record_schema(results_dir) -> None:
+    """Record the tables' schema version (:data:`bench.core._schema.SCHEMA_VERSION`) in
+    ``bench_meta.json`` (other keys kept; ``python -m bench compare`` checks it)."""
+    from ._schema import SCHEMA_VERSION
+
+    path = Path(results_dir) / META
+    try:
+        meta = json.loads(path.read_text())
+        meta = meta if isinstance(meta, dict) else {}
+    except (OSError, ValueError):
+        meta = {}
+    if meta.get("schema_version") == SCHEMA_VERSION:
+        return
+    meta["schema_version"] = SCHEMA_VERSION
+    _atomic_write_bytes(path, json.dumps(meta, indent=1).encode())
+
+
+TABLES = (
+    "runs.parquet",
+    "runs.csv",
+    "curves.parquet",
+    "checkpoints.parquet",
+    "checkpoint_curves.parquet",
+)
+
+
+def stale_tables(results_dir) -> list[tuple[str, str]]:
+    """The tables of ``results_dir`` that do not match ``.rows/`` (the truth), as
+    ``(file name, why)``: missing, unreadable (truncated, not a table) or, for the runs tables,
+    holding other runs than the row files. Empty without ``.rows/`` (nothing to rebuild from)."""
+    results_dir = Path(results_dir)
+    if not (results_dir / ROWS).is_dir():
+        return []
+    rows = {p.stem for p in (results_dir / ROWS).glob("*.json")}
+    out = []
+    for name in TABLES:
+        path = results_dir / name
+        if not path.exists():
+            if rows:
+                out.append((name, "missing"))
+            continue
+        try:
+            df = pd.read_csv(path) if name.endswith(".csv") else pd.read_parquet(path)
+        except Exception as e:  # noqa: BLE001 - any reader error means a damaged table
+            out.append((name, f"unreadable ({type(e).__name__})"))
+            continue
+        if name.startswith("runs.") and set(df.get("config_hash", pd.Series(dtype=str))) != rows:
+            out.append((name, "other runs than the row files"))
+    return out
 
 
 def load_runs(results_dir="results") -> pd.DataFrame:

@@ -31,7 +31,7 @@ Fig. 5, where claim 4's verdict differs between the budgets). Until issue 20 it 
 4000 steps at quick, 2 seeds, checkpoints at 500, 1000, 2000, 4000 (what follows describes
 that design); since issue 20 it has no training of its own at quick (its cells are the shared
 1000-step runs, and the five seeds of the verdicts needed its 7 minutes), and the longer runs
-are the paper-core campaign's (``results/paper/``, 8000 steps, checkpoints at 1000, 2000,
+are the paper-core campaign's (``results/reference/paper/``, 8000 steps, checkpoints at 1000, 2000,
 4000, 8000), whose report carries this section. Only runs longer than their profile's own
 steps count as "longer runs". The two models are those whose ratio
 decides claims 3 and 4 and whose quick errors sit furthest from the paper budget's (HNN+SO
@@ -84,7 +84,7 @@ LEARNING = Experiment(
     title="Learning curves: NODE+SO and HNN+SO past the quick budget (chain, spring)",
     axes={"system": SYSTEMS, "k": (2,), "model": LEARNING_MODELS},
     # quick: the shared 1000-step cells (no training of its own since issue 20, whose five
-    # seeds it pays for; the longer runs are the paper-core campaign's, results/paper/)
+    # seeds it pays for; the longer runs are the paper-core campaign's, results/reference/paper/)
     profile_overrides=_shared({"smoke": {"steps": 40}}),
     include=_learning_cell,
 )
@@ -299,10 +299,13 @@ def _curve_runs(runs: pd.DataFrame, cp: pd.DataFrame) -> pd.DataFrame:
 
 
 def _paper_reference(results_dir: Path) -> pd.DataFrame:
-    """Final errors of the paper-budget runs stored beside (``<results>/paper*/``), if any."""
+    """Final errors of the paper-budget runs of the report's other folders (the committed
+    ``results/reference/paper*/`` and ``<results>/paper*/``), if any."""
+    from .._report import compare_folders
+
     parts = []
-    for d in sorted(Path(results_dir).glob("paper*")):
-        if d.is_dir():
+    for d in compare_folders(results_dir):
+        if d.name.startswith("paper"):
             try:
                 r, _, _ = load_tables(d)
             except Exception:  # noqa: BLE001 - a reference folder is optional

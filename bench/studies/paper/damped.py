@@ -91,7 +91,7 @@ DAMPED = Experiment(
         "paper-core": {
             "model": ("node_so", "hnn_so", "mixture_hnn", *TRIVIAL_MODELS),
             "dissipation": (None, False),
-        }
+        },
     },
     include=_damped_include,
     claim=5,

@@ -1,0 +1,107 @@
+"""``python -m bench compare A B`` (issue 21): claims, cells and runs of two results folders.
+
+The folders hold synthetic tables (tests/_synthetic.py: no training), written as a results
+folder without row files (runs.parquet, curves.parquet, bench_meta.json)."""
+
+import json
+
+import numpy as np
+import pytest
+from _synthetic import synthetic_tables
+
+from bench._cli import main
+from bench._compare import compare
+from bench.core._schema import SCHEMA_VERSION
+
+
+def _folder(path, runs, curves, schema=SCHEMA_VERSION):
+    path.mkdir(parents=True)
+    runs.to_parquet(path / "runs.parquet", index=False)
+    curves.to_parquet(path / "curves.parquet", index=False)
+    if schema is not None:
+        (path / "bench_meta.json").write_text(json.dumps({"schema_version": schema}))
+    return path
+
+
+@pytest.fixture(scope="module")
+def tables():
+    return synthetic_tables("quick", experiments=["second_order"])
+
+
+def test_identical_folders_agree_everywhere(tmp_path, tables):
+    runs, curves = tables
+    a = _folder(tmp_path / "a", runs, curves)
+    b = _folder(tmp_path / "b", runs, curves)
+    c = compare(a, b)
+    assert len(c.claims) >= 3 and c.claims["same"].all() and c.claims_differ == []
+    assert (c.claims["moved"] == "").all()
+    n_cells = len(runs.drop_duplicates([col for col in runs if col not in ("seed",)]))
+    assert 0 < len(c.cells) <= n_cells and not c.cells["flagged"].any()
+    assert np.allclose(c.cells["ratio"], 1.0)
+    assert len(c.runs) == len(runs) and (c.runs["rel_diff"] == 0).all()
+    assert f"{len(runs)} of {len(runs)} shared runs bit-identical" in c.summary
+    assert f"{len(c.claims)} of {len(c.claims)} claim verdicts the same" in c.summary
+
+
+def test_moved_cells_are_flagged_and_changed_verdicts_named(tmp_path, tables):
+    runs, curves = tables
+    other, other_curves = synthetic_tables(
+        "quick", experiments=["second_order"], scenario="contradict"
+    )
+    assert set(other["config_hash"]) == set(runs["config_hash"])  # the same runs, other errors
+    c = compare(_folder(tmp_path / "a", runs, curves), _folder(tmp_path / "b", other, other_curves))
+    assert "3" in c.claims_differ
+    row = c.claims.set_index("claim").loc["3"]
+    assert row["verdict_a"] != row["verdict_b"] and "->" in row["moved"]
+    assert c.cells["flagged"].any() and (c.runs["rel_diff"] > 0).any()
+    text = c.markdown()
+    assert "| 3 |" in text and "**no**" in text and "**yes**" in text
+
+
+def test_a_change_inside_the_seed_spread_is_not_flagged(tmp_path, tables):
+    runs, curves = tables
+    b = runs.copy()
+    pick = (b["model"] == "node_so") & (b["system"] == "chain_pendulum")
+    b.loc[pick, "rollout_error"] *= 1.0001  # round-off, far inside the seeds' spread
+    c = compare(_folder(tmp_path / "a", runs, curves), _folder(tmp_path / "b", b, curves))
+    assert not c.cells["flagged"].any()
+    assert (c.runs.loc[c.runs["rel_diff"] > 0, "model"] == "node_so").all()
+    assert int((c.runs["rel_diff"] > 0).sum()) == int(pick.sum())
+    # ... and a cell moved far outside its spread is
+    b.loc[pick, "rollout_error"] *= 3
+    c = compare(_folder(tmp_path / "a2", runs, curves), _folder(tmp_path / "b2", b, curves))
+    flagged = c.cells[c.cells["flagged"]]
+    assert len(flagged) >= 1 and flagged["cell"].str.startswith("node_so chain_pendulum").all()
+    assert np.allclose(flagged["ratio"], 3.0003, rtol=1e-3)
+
+
+def test_schema_versions_are_checked(tmp_path, tables):
+    runs, curves = tables
+    a = _folder(tmp_path / "a", runs, curves)
+    with pytest.raises(ValueError, match="schema") as e:
+        compare(a, _folder(tmp_path / "b", runs, curves, schema=SCHEMA_VERSION + 1))
+    assert "\n" not in str(e.value)
+    c = compare(a, _folder(tmp_path / "c", runs, curves, schema=None))
+    assert any("no schema version" in w for w in c.warnings)
+
+
+def test_cli_prints_claims_and_summary_and_writes_the_comparison(tmp_path, tables, capsys):
+    runs, curves = tables
+    a = _folder(tmp_path / "a", runs, curves)
+    b = _folder(tmp_path / "b", runs, curves)
+    out = tmp_path / "cmp" / "COMPARE.md"
+    assert main(["compare", str(a), str(b), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "## Claims" in printed and printed.strip().splitlines()[-1].startswith("compare ")
+    assert "## Cells" in out.read_text() and "## Runs" in out.read_text()
+
+
+def test_cli_bad_folders_get_one_line(tmp_path, tables, capsys):
+    runs, curves = tables
+    b = _folder(tmp_path / "b", runs, curves)
+    assert main(["compare", str(tmp_path / "nope"), str(b)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and "does not exist" in err and "\n" not in err
+    (tmp_path / "empty").mkdir()
+    assert main(["compare", str(tmp_path / "empty"), str(b)]) == 2
+    assert "no stored runs" in capsys.readouterr().err
