@@ -6,7 +6,7 @@ jax.config.update("jax_enable_x64", True)
 
 from ._base import AbstractSystem, reference_masses_lengths  # noqa: E402
 from ._chain import ChainPendulum  # noqa: E402
-from ._coordinates import to_momentum, to_velocity  # noqa: E402
+from ._coordinates import derivatives, to_momentum, to_velocity  # noqa: E402
 from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset  # noqa: E402
 from ._registry import available, make, parameters  # noqa: E402
 from ._relativistic import RelativisticParticle  # noqa: E402
@@ -21,6 +21,7 @@ __all__ = [
     "SpringPendulum",
     "available",
     "cache_root",
+    "derivatives",
     "make",
     "make_dataset",
     "parameters",

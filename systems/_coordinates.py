@@ -12,7 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["to_momentum", "to_velocity"]
+__all__ = ["derivatives", "to_momentum", "to_velocity"]
 
 
 def _convert(fn, system, zs, args) -> np.ndarray:
@@ -47,3 +47,36 @@ def to_velocity(system, zs, args=None) -> np.ndarray:
     """States (N, ..., 2d) in (q, p) -> (q, qdot) with ``system.velocity`` (the inverse of
     :func:`to_momentum`); ``args`` as there."""
     return _convert(lambda s, q, p, a: s.velocity(q, p, a), system, zs, args)
+
+
+def derivatives(system, zs, args=None, canonical: bool = False) -> np.ndarray:
+    """The true time derivatives dz/dt at states ``zs`` (N, ..., 2d), float64.
+
+    In (q, qdot) (``canonical=False``) the system's vector field (qdot, qddot). In (q, p) it is
+    (qdot, dp/dt) with qdot = M(q)^-1 p and dp/dt = d/dt dL/dqdot along the motion: one jvp of
+    :meth:`AbstractSystem.momentum` in the direction of the (q, qdot) field (friction included,
+    which Hamilton's equations alone would miss). ``args`` as in :func:`to_momentum`. The
+    training targets of ``TrainConfig(target="derivative")`` (the HNN and LNN seeds' protocol).
+    """
+    zs = np.asarray(zs, dtype=np.float64)
+    if zs.ndim == 1:
+        a = None if args is None else np.asarray(args)[None]
+        return derivatives(system, zs[None], a, canonical)[0]
+    n, d = zs.shape[0], zs.shape[-1] // 2
+    a = np.zeros((n, 0)) if args is None else np.asarray(args, dtype=np.float64).reshape(n, -1)
+    flat = zs.reshape(n, -1, 2 * d)
+
+    def per_state(z, aa):
+        aa = None if aa.size == 0 else aa
+        q, x = z[:d], z[d:]
+        v = system.velocity(q, x, aa) if canonical else x
+        zv = jnp.concatenate([q, v])
+        f = system.vector_field(0.0, zv, aa)
+        if not canonical:
+            return f
+        _, pdot = jax.jvp(lambda y: system.momentum(y, aa), (zv,), (f,))
+        return jnp.concatenate([v, pdot])
+
+    per_traj = jax.vmap(per_state, in_axes=(0, None))
+    out = jax.jit(jax.vmap(per_traj))(jnp.asarray(flat), jnp.asarray(a))
+    return np.asarray(out, dtype=np.float64).reshape(zs.shape)

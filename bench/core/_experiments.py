@@ -14,7 +14,8 @@ runs do, and an experiment takes part in it only where its ``profile_overrides``
 base's overrides apply first, then the selection's, which usually narrow an axis).
 
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
-of every field (a field added later, ``eval_checkpoints``, counts only when it is not 0),
+of every field (fields added later, ``eval_checkpoints`` and ``train_target``, count only when
+they differ from their defaults, 0 and "rollout"),
 ``train_hash`` the same over every field except the ``eval_*`` ones, so runs
 that differ only in how they are evaluated share one training. Experiment and profile names
 are not part of either hash: experiments that expand to the same run share it.
@@ -39,6 +40,7 @@ from models import METHODS as INTEGRATORS  # the one list of integrator names
 COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
+TRAIN_TARGETS = ("rollout", "derivative")
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,9 @@ class RunConfig:
     eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._train.checkpoint_steps)
     dtype: str = "float32"
     seed: int = 0
+    # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the
+    # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
+    train_target: str = "rollout"
 
     def __post_init__(self):
         # Canonical forms, so that equal runs hash equally however they were written.
@@ -126,6 +131,7 @@ class RunConfig:
         check_choice("coordinates", self.coordinates, COORDINATES)
         check_choice("loss", self.loss, LOSSES)
         check_choice("dtype", self.dtype, DTYPES)
+        check_choice("train_target", self.train_target, TRAIN_TARGETS)
         return self
 
     def to_dict(self) -> dict:
@@ -176,7 +182,7 @@ class RunConfig:
 
 _NO = object()
 # Fields added after results were stored, with the default that leaves them out of the hashes.
-_NEW_FIELDS = {"eval_checkpoints": 0}
+_NEW_FIELDS = {"eval_checkpoints": 0, "train_target": "rollout"}
 
 
 def _is_missing(v) -> bool:

@@ -24,6 +24,15 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)
+    if cfg.train_target == "derivative":
+        import models
+
+        if models.spec(cfg.model).discrete:
+            allowed = [m for m in models.available() if not models.spec(m).discrete]
+            raise ValueError(
+                f"train_target 'derivative' needs a model with a vector field; {cfg.model!r} is a "
+                f"discrete map; allowed: {', '.join(allowed)}"
+            )
     for what in ("train_integrator", "eval_integrator"):
         method = getattr(cfg, what)
         problem = _integrator_problem(model_key, scene_key, method)

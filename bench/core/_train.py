@@ -5,7 +5,14 @@ Loss on a batch of B chunks z (B, C, 2d) observed at ts (C,):
     L = mean_{b, c, i} e(rollout(model, z[b, 0], ts, args[b])[c, i] - z[b, c, i])
         + mean_b model.penalty(rollout states of b, args[b])
 
-with e(x) = x^2 ("l2") or |x| ("l1"). Optimiser: clip_by_global_norm(clip) then AdamW with a
+with e(x) = x^2 ("l2") or |x| ("l1"). With ``target="derivative"`` (the HNN and LNN seeds'
+protocol: no rollout) the loss is on the instantaneous time derivatives instead,
+
+    L = mean_{b, c, i} e(F(z[b, c], args[b])_i - zdot[b, c, i]) + mean_b penalty(z[b], args[b])
+
+with F the model's vector field and zdot the true one at the same states (the dataset's
+``dz_train``, from :func:`systems.derivatives`); a discrete model has no vector field and cannot
+train so. Optimiser: clip_by_global_norm(clip) then AdamW with a
 cosine decay of the learning rate from lr to lr * lr_floor over ``steps``.
 
 Checkpoints: ``TrainConfig.checkpoints`` names training steps at which a copy of the parameters
@@ -37,6 +44,7 @@ from models._integrators import Integrator, rollout_batch
 
 LOSSES = ("l2", "l1")
 DTYPES = ("float32", "float64")
+TARGETS = ("rollout", "derivative")  # what the loss compares (module docstring)
 
 
 @dataclass(frozen=True)
@@ -56,6 +64,7 @@ class TrainConfig:
     log_every: int = 100  # progress-bar refresh, in steps (rounded up to whole blocks)
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
     checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
+    target: str = "rollout"  # "rollout" or "derivative" (module docstring)
 
     def __post_init__(self):
         for name in ("steps", "batch", "log_every", "steps_per_call"):
@@ -85,6 +94,8 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.loss {self.loss!r}: allowed {', '.join(LOSSES)}")
         if self.dtype not in DTYPES:
             raise ValueError(f"TrainConfig.dtype {self.dtype!r}: allowed {', '.join(DTYPES)}")
+        if self.target not in TARGETS:
+            raise ValueError(f"TrainConfig.target {self.target!r}: allowed {', '.join(TARGETS)}")
         cps = self.checkpoints
         if not isinstance(cps, tuple) or any(
             isinstance(c, bool) or not isinstance(c, int) or not 1 <= c <= self.steps for c in cps
@@ -159,12 +170,20 @@ def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
     )
 
 
-def loss_fn(model, z, args, ts, config: TrainConfig):
-    """The batch loss of the module docstring; z (B, C, 2d), args (B, P), ts (C,)."""
-    pred = rollout_batch(model, z[:, 0], ts, args, config.integrator)
-    err = pred - z
+def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):
+    """The batch loss of the module docstring; z (B, C, 2d), args (B, P), ts (C,); ``dz``
+    (B, C, 2d) the true time derivatives at ``z`` (``target="derivative"`` only)."""
+    if config.target == "derivative":
+        field = jax.vmap(
+            jax.vmap(lambda zz, a: model.vector_field(0.0, zz, a), in_axes=(0, None)), (0, 0)
+        )
+        pred, target, states = field(z, args), dz, z
+    else:
+        pred = rollout_batch(model, z[:, 0], ts, args, config.integrator)
+        target, states = z, pred
+    err = pred - target
     data = jnp.mean(err * err) if config.loss == "l2" else jnp.mean(jnp.abs(err))
-    penalty = jnp.mean(jax.vmap(model.penalty)(pred, args))
+    penalty = jnp.mean(jax.vmap(model.penalty)(states, args))
     return data + penalty.astype(data.dtype)
 
 
@@ -180,14 +199,17 @@ def make_step(static, config: TrainConfig, data, lr=None):
     ``lr`` (default ``config.lr``) may be a traced scalar: ensembles (``bench.core._ensemble``) vmap
     this one step over members with their own data, parameters and learning rate.
     """
-    z_all, args_all, ts = data
+    z_all, args_all, ts, *targets = data  # targets: (dz_all,) with target="derivative"
     opt = optimizer(config, lr=lr)
 
     def step(carry, xs):
         params, opt_state, dead, good = carry
         ix, on = xs
         model = eqx.combine(params, static)
-        loss, grads = eqx.filter_value_and_grad(loss_fn)(model, z_all[ix], args_all[ix], ts, config)
+        dz = targets[0][ix] if targets else None
+        loss, grads = eqx.filter_value_and_grad(loss_fn)(
+            model, z_all[ix], args_all[ix], ts, config, dz
+        )
         grads = eqx.filter(grads, eqx.is_inexact_array)
         ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
         updates, new_state = opt.update(grads, opt_state, params)
@@ -289,7 +311,7 @@ class _Batches:
         return np.stack(out).astype(np.int32)
 
 
-def _check_dataset(dataset):
+def _check_dataset(dataset, min_points: int = 2):
     for name in ("ts_train", "z_train", "args_train"):
         if not hasattr(dataset, name):
             raise ValueError(f"dataset must have ts_train, z_train, args_train; missing {name}")
@@ -301,9 +323,22 @@ def _check_dataset(dataset):
             f"dataset shapes must be ts_train (C,), z_train (N, C, 2d), args_train (N, P); got "
             f"{ts.shape}, {z.shape}, {args.shape}"
         )
-    if z.shape[1] < 2:
-        raise ValueError(f"training chunks need at least 2 points, got {z.shape[1]}")
+    if z.shape[1] < min_points:
+        raise ValueError(f"training chunks need at least {min_points} points, got {z.shape[1]}")
     return ts, z, args
+
+
+def _check_targets(dataset, z) -> np.ndarray:
+    dz = getattr(dataset, "dz_train", None)
+    if dz is None:
+        raise ValueError(
+            'target="derivative" needs dataset.dz_train, the true time derivatives at z_train '
+            "(systems.derivatives)"
+        )
+    dz = np.asarray(dz)
+    if dz.shape != z.shape:
+        raise ValueError(f"dz_train must have z_train's shape {z.shape}; got {dz.shape}")
+    return dz
 
 
 def prepare(model, dataset, config: TrainConfig):
@@ -318,14 +353,23 @@ def prepare(model, dataset, config: TrainConfig):
         )
     if config.dtype == "float64" and not jax.config.jax_enable_x64:
         raise ValueError("float64 training needs jax_enable_x64 (import systems enables it)")
-    ts, z, args = _check_dataset(dataset)
+    # a derivative target needs no interval: chunks of one state are the seeds' random states
+    ts, z, args = _check_dataset(dataset, 1 if config.target == "derivative" else 2)
     scene = getattr(model, "scene", None)
     if scene is not None and scene.n_args < args.shape[1]:
         # the data carry the system's parameters (e.g. the relativistic particle's default g);
         # a model whose scene takes none must see args of shape (0,), as at evaluation
         args = args[:, : scene.n_args]
     dtype = jnp.dtype(config.dtype)
-    return (jnp.asarray(z, dtype), jnp.asarray(args, dtype), jnp.asarray(ts, dtype))
+    data = (jnp.asarray(z, dtype), jnp.asarray(args, dtype), jnp.asarray(ts, dtype))
+    if config.target == "derivative":
+        if not hasattr(model, "vector_field"):
+            raise ValueError(
+                f'target="derivative" needs a model with a vector field; '
+                f"{type(model).__name__} is a discrete map"
+            )
+        data += (jnp.asarray(_check_targets(dataset, z), dtype),)
+    return data
 
 
 def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = False):
