@@ -70,6 +70,14 @@ def _parser() -> argparse.ArgumentParser:
         help=f"results directory (default {OWN_DIR}/, git-ignored: your runs; the committed "
         "reference results are under results/reference/, read-only)",
     )
+    p.add_argument(
+        "--model-module",
+        action="append",
+        default=[],
+        metavar="PKG.MODULE",
+        help="import this module first: a plug-in that registers models (models.register); "
+        "repeatable (also $DECON_MODEL_MODULES, comma-separated)",
+    )
     sub = p.add_subparsers(dest="verb", required=True, parser_class=_Parser)
 
     sub.add_parser("list", help="systems, models, experiments, profiles")
@@ -163,6 +171,13 @@ def _parser() -> argparse.ArgumentParser:
 
 def _sweep_opts(p, default_profile):
     p.add_argument("--profile", default=default_profile, help=f"one of {', '.join(PROFILES)}")
+    p.add_argument(
+        "--models",
+        default=None,
+        metavar="A,B",
+        help="replace the experiments' trained models with these (built-in or plug-in names); "
+        "their trivial predictors stay",
+    )
     p.add_argument("--executor", default="local", help="local (default) or ray")
     p.add_argument("--address", default=None, help="Ray cluster address (ray executor)")
     p.add_argument(
@@ -308,6 +323,21 @@ def _do_sweep(args, names) -> int:
     return 0
 
 
+def _model_list(args) -> list[str] | None:
+    """``--models a,b`` as a list of registered names (ValueError naming the allowed ones)."""
+    import models
+
+    given = getattr(args, "models", None)
+    if given is None:
+        return None
+    names = [m.strip() for m in given.split(",") if m.strip()]
+    if not names:
+        raise ValueError("--models needs at least one model name")
+    for m in names:
+        check_choice("model", m, models.available())
+    return names
+
+
 def _run_experiments(args, names, *, order, seeds=None) -> dict:
     """One sweep of ``names`` with the sweep options of ``args`` (sweep, bench, campaign)."""
     from .core import _runner
@@ -317,6 +347,7 @@ def _run_experiments(args, names, *, order, seeds=None) -> dict:
         args.profile,
         args.results,
         seeds=seeds,
+        models=_model_list(args),
         order=order,
         executor=args.executor,
         workers=None if args.workers == 0 else args.workers,
@@ -574,6 +605,15 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv) -> int:
     args = _parser().parse_args(argv)
+    if args.model_module:  # the sweep's worker processes inherit the environment
+        import os
+
+        import models
+
+        given = [m for item in args.model_module for m in item.split(",") if m.strip()]
+        old = [m for m in os.environ.get(models._models.MODULES_ENV, "").split(",") if m]
+        os.environ[models._models.MODULES_ENV] = ",".join(dict.fromkeys([*old, *given]))
+        models.load_plugins()
     if args.verb == "list":
         return _cmd_list(args)
     if args.verb == "run":

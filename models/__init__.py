@@ -3,7 +3,9 @@
 Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract model classes,
 :func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
 parameter-free reference predictors), :func:`coordinates` (what a model accepts),
-:func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`),
+:func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
+:func:`load_plugins` (models from outside the suite: entry-point group ``decon_bench.models``,
+``$DECON_MODEL_MODULES``),
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve), :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
 """
@@ -19,7 +21,15 @@ from ._integrators import (
     rollout,
     rollout_batch,
 )
-from ._models import available, coordinates, make, n_parameters, trivial_models
+from ._models import (
+    available,
+    coordinates,
+    load_plugins,
+    make,
+    n_parameters,
+    register,
+    trivial_models,
+)
 from ._scalar import acceleration_from_lagrangian
 from ._scene import Scene
 from ._spec import ModelSpec, spec
@@ -44,8 +54,10 @@ __all__ = [
     "acceleration_from_lagrangian",
     "available",
     "coordinates",
+    "load_plugins",
     "make",
     "n_parameters",
+    "register",
     "spec",
     "symplectic_error",
     "trivial_models",

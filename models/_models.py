@@ -785,18 +785,150 @@ _REGISTRY = {
 }
 
 
+BUILT_IN = tuple(_REGISTRY)
+ENTRY_POINT_GROUP = "decon_bench.models"
+MODULES_ENV = "DECON_MODEL_MODULES"  # comma-separated plug-in modules (--model-module)
+_PLUGINS: set[str] = set()  # plug-in sources already loaded ("ep:<name>", "module:<name>")
+
+
+def register(
+    name: str,
+    cls: type,
+    *,
+    build: Callable | None = None,
+    options: dict | None = None,
+    takes_dissipation: bool = False,
+    coordinates: str | None = None,
+    activation: str = "tanh",
+) -> str:
+    """Register a model from outside the suite under ``name``; returns ``name``.
+
+    The contract (checked here, a one-line ValueError naming what is missing): ``cls`` is a
+    subclass of :class:`AbstractContinuousModel` (a learned field ``vector_field(t, z, args)``)
+    or :class:`AbstractDiscreteModel` (a learned map ``step(z, dt, args)``), with every
+    abstract method implemented and a class attribute ``structure`` in (None, "hamiltonian",
+    "lagrangian"); ``build(scene, width, depth, activation, dtype, *, key, dissipation,
+    **options)`` returns an instance (default: ``cls(scene, width, depth, activation, dtype,
+    key=key, **options)``); ``options`` maps each option name to a validator returning the
+    value; ``takes_dissipation``: the model adds a dissipation term in damped scenes (then
+    ``build`` receives ``dissipation``); ``coordinates``: None (either), "velocity" or
+    "momentum". :func:`spec` reads its capabilities like a built-in's. Re-registering the
+    same plug-in name replaces it; a built-in name cannot be taken.
+    """
+    import inspect
+
+    def bad(what: str):
+        raise ValueError(f"model plug-in {name!r}: {what}")
+
+    if not isinstance(name, str) or not name.isidentifier():
+        bad("the name must be a Python identifier")
+    if name in BUILT_IN:
+        bad(f"the name is a built-in model; built-ins: {', '.join(BUILT_IN)}")
+    if not isinstance(cls, type) or not issubclass(
+        cls, AbstractContinuousModel | AbstractDiscreteModel
+    ):
+        bad(
+            "the class must subclass models.AbstractContinuousModel (a vector field) or "
+            "models.AbstractDiscreteModel (a map); got "
+            f"{getattr(cls, '__name__', cls)!r}"
+        )
+    missing = sorted(getattr(cls, "__abstractmethods__", ()) or ())
+    if missing:
+        bad(f"{cls.__name__} does not implement {', '.join(missing)}")
+    if getattr(cls, "structure", "?") not in (None, "hamiltonian", "lagrangian"):
+        bad(f"{cls.__name__}.structure must be None, 'hamiltonian' or 'lagrangian'")
+    if coordinates not in (None, _V, _P):
+        bad(f"coordinates must be None, {_V!r} or {_P!r}; got {coordinates!r}")
+    if activation not in ACTIVATIONS:
+        bad(f"activation must be one of {sorted(ACTIVATIONS)}; got {activation!r}")
+    options = dict(options or {})
+    if not all(isinstance(k, str) and callable(v) for k, v in options.items()):
+        bad("options must map option names to validator callables")
+    if build is None:
+        build = _plain(cls)
+        target = cls
+        probe = ("scene", 1, 1, "tanh", "float32")
+        kwargs = {"key": None}
+    else:
+        target, probe, kwargs = (
+            build,
+            ("scene", 1, 1, "tanh", "float32"),
+            {
+                "key": None,
+                "dissipation": False,
+            },
+        )
+    if not callable(build):
+        bad("build must be callable")
+    try:
+        inspect.signature(target).bind(*probe, **kwargs)
+    except TypeError as e:
+        bad(
+            "build (or the class) must accept (scene, width, depth, activation, dtype, *, key"
+            f"{', dissipation' if target is build else ''}, **options): {e}"
+        )
+    except ValueError:  # no signature available: trust it
+        pass
+    _REGISTRY[name] = _Entry(cls, build, options, bool(takes_dissipation), coordinates, activation)
+    from ._spec import spec
+
+    spec.cache_clear()
+    return name
+
+
+def load_plugins(modules: str | None = None) -> None:
+    """Import the plug-in models, once each: the entry points of :data:`ENTRY_POINT_GROUP` and
+    the modules named in ``$DECON_MODEL_MODULES`` (or ``modules``), comma-separated. A module
+    registers its models on import (:func:`register`); an entry point that loads a callable
+    is called. A plug-in that fails to import is a one-line ValueError naming it."""
+    import importlib
+    import os
+    from importlib import metadata
+
+    names = modules if modules is not None else os.environ.get(MODULES_ENV, "")
+    todo = [("module:" + m.strip(), m.strip()) for m in names.split(",") if m.strip()]
+    try:
+        eps = list(metadata.entry_points(group=ENTRY_POINT_GROUP))
+    except Exception:  # noqa: BLE001 - a broken environment must not stop the built-ins
+        eps = []
+    todo += [("ep:" + ep.name, ep) for ep in eps]
+    for key, what in todo:
+        if key in _PLUGINS:
+            continue
+        _PLUGINS.add(key)
+        try:
+            obj = importlib.import_module(what) if isinstance(what, str) else what.load()
+            if callable(obj) and not isinstance(obj, type):
+                obj()
+        except ValueError:
+            raise
+        except Exception as e:  # noqa: BLE001 - one line naming the plug-in
+            source = (
+                "DECON_MODEL_MODULES/--model-module"
+                if isinstance(what, str)
+                else (f"entry point {ENTRY_POINT_GROUP}")
+            )
+            raise ValueError(
+                f"model plug-in {key.split(':', 1)[1]!r} ({source}) failed to load: "
+                f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
+            ) from None
+
+
 def available() -> list[str]:
-    """Names of the registered models."""
+    """Names of the registered models (built-ins, then plug-ins)."""
+    load_plugins()
     return list(_REGISTRY)
 
 
 def trivial_models() -> list[str]:
     """Names of the registered trivial predictors (no parameters, nothing to train)."""
+    load_plugins()
     return [n for n, entry in _REGISTRY.items() if entry.cls.trivial]
 
 
 def coordinates(name: str) -> tuple[str, ...]:
     """The coordinate settings ("velocity", "momentum") that model ``name`` accepts."""
+    load_plugins()
     if name not in _REGISTRY:
         raise ValueError(f"unknown model {name!r}; allowed: {available()}")
     needs = _REGISTRY[name].needs
@@ -821,6 +953,7 @@ def make(
     otherwise). ``dissipation`` None follows ``scene.damped`` for the structured models (hnn,
     hnn_so, lnn, vin, vin_implicit); False forces the plain variant; free models ignore it.
     """
+    load_plugins()
     if name not in _REGISTRY:
         close = difflib.get_close_matches(str(name), list(_REGISTRY), n=1)
         hint = f" (closest: {close[0]!r})" if close else ""

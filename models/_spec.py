@@ -48,7 +48,7 @@ class ModelSpec:
 @functools.cache
 def spec(name: str) -> ModelSpec:
     """The :class:`ModelSpec` of the registered model ``name`` (ValueError naming them)."""
-    if name not in _REGISTRY:
+    if name not in available():  # available() loads the plug-ins first
         raise ValueError(f"unknown model {name!r}; allowed: {available()}")
     entry = _REGISTRY[name]
     cls = entry.cls

@@ -378,7 +378,10 @@ def profile_defaults(profile: str) -> tuple[dict, tuple[int, ...]]:
 
 
 def expand(
-    exp: Experiment | str, profile: str = "quick", seeds: Sequence[int] | None = None
+    exp: Experiment | str,
+    profile: str = "quick",
+    seeds: Sequence[int] | None = None,
+    models: Sequence[str] | None = None,
 ) -> list[RunConfig]:
     """The runs of ``exp`` under ``profile``: product of the axes x seeds, filtered, unique.
 
@@ -387,7 +390,8 @@ def expand(
     Under a selection (:data:`SELECTIONS`) an experiment that does not declare it has no runs,
     and so has an experiment under a profile outside its ``profiles``.
     ``seeds`` replaces whatever seeds the profile and the experiment give (a replication on
-    another seed set, :data:`REPLICATION_SEEDS`).
+    another seed set, :data:`REPLICATION_SEEDS`). ``models`` replaces the experiment's trained
+    models (``--models``, e.g. a plug-in beside the built-ins); its trivial predictors stay.
     """
     exp = get(exp) if isinstance(exp, str) else exp
     if exp.profiles is not None and profile not in exp.profiles:
@@ -408,6 +412,14 @@ def expand(
             axes[key] = list(value)
         else:
             base[key] = value
+    if models is not None:
+        import models as _models
+
+        if "model" not in axes:
+            raise ValueError(f"experiment {exp.name!r} fixes its model; --models does not apply")
+        trivial = set(_models.trivial_models())
+        keep = [m for m in axes["model"] if m in trivial]
+        axes["model"] = list(dict.fromkeys([*models, *keep]))
     if replace_seeds is not None:
         axes["seed"] = tuple(int(x) for x in replace_seeds)
     elif "seed" not in axes:

@@ -124,7 +124,9 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         return _verdict(6, CLAIM_TITLES[6], [], None, 0, "log(err L1 / err L2), largest")
     arr = table.to_numpy().reshape(n, 2, len(models))
     parts = [
-        _equivalent(f"(a) {MODEL_LABELS[x]}: log(err L1 / err L2)", arr[:, 0, i] - arr[:, 1, i])
+        _equivalent(
+            f"(a) {MODEL_LABELS.get(x, x)}: log(err L1 / err L2)", arr[:, 0, i] - arr[:, 1, i]
+        )
         for i, x in enumerate(models)
     ]
     head = max(parts, key=lambda q: abs(q.point) if np.isfinite(q.point) else -1.0)
@@ -133,7 +135,8 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         for j in range(i + 1, len(models)):
             r1 = _relation(arr[:, 0, i] - arr[:, 0, j])
             r2 = _relation(arr[:, 1, i] - arr[:, 1, j])
-            name = f"{MODEL_LABELS[models[i]]} {r2} {MODEL_LABELS[models[j]]} (L2), {r1} (L1)"
+            la, lb = (MODEL_LABELS.get(models[x], models[x]) for x in (i, j))
+            name = f"{la} {r2} {lb} (L2), {r1} (L1)"
             ordered = {r for r in (r1, r2) if r in ("<", ">")}
             if ordered == {"<", ">"}:
                 reversed_.append(name)

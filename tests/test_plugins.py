@@ -1,0 +1,149 @@
+"""Plug-in models (issue 21): a model from outside the repository becomes a first-class name.
+
+The throwaway plug-in is installed the way pip leaves a package: its module and a
+``.dist-info`` folder with ``entry_points.txt`` in a directory on the path (written by hand
+here, so the test needs no build backend and no network); the sweep runs in a subprocess that
+sees it only through that entry point."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import models
+from models import _models as registry
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "decon_bench_example_model" / "decon_bench_example_model"
+
+
+def _install(site: Path, module: str, name: str, entry_point: bool = True) -> Path:
+    """The example model as package ``module`` registering ``name``, installed in ``site``."""
+    src = (EXAMPLE / "__init__.py").read_text().replace('"drag_so"', f'"{name}"')
+    (site / module).mkdir(parents=True)
+    (site / module / "__init__.py").write_text(src)
+    if entry_point:
+        info = site / f"{module}-0.1.dist-info"
+        info.mkdir()
+        (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {module}\nVersion: 0.1\n")
+        (info / "entry_points.txt").write_text(f"[decon_bench.models]\n{name} = {module}\n")
+    return site
+
+
+def _bench(args, site: Path, tmp_path: Path, timeout=300):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(site), str(ROOT)])
+    env["DECON_CACHE"] = str(tmp_path / "cache")
+    env.pop("DECON_MODEL_MODULES", None)
+    return subprocess.run(
+        [sys.executable, "-m", "bench", *args],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def test_an_installed_plugin_trains_beside_the_builtins_and_is_reported(tmp_path):
+    site = _install(tmp_path / "site", "throwaway_plugin", "throwaway_so")
+    res = tmp_path / "res"
+    p = _bench(
+        [
+            "--results",
+            str(res),
+            "sweep",
+            "second_order",
+            "--profile",
+            "smoke",
+            "--models",
+            "node_so,throwaway_so",
+            "--no-progress",
+        ],
+        site,
+        tmp_path,
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    runs = pd.read_parquet(res / "runs.parquet")
+    mine = runs[runs["model"] == "throwaway_so"]
+    assert len(mine) >= 2 and (mine["status"] == "ok").all()
+    assert set(runs["model"]) == {"node_so", "throwaway_so", "constant_velocity"}
+    p = _bench(["--results", str(res), "report"], site, tmp_path)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "throwaway_so" in (res / "REPORT.md").read_text()
+
+
+def test_model_module_option_loads_a_module_without_an_entry_point(tmp_path):
+    site = _install(tmp_path / "site", "loose_plugin", "loose_so", entry_point=False)
+    assert "loose_so" not in _bench(["list"], site, tmp_path).stdout
+    p = _bench(["--model-module", "loose_plugin", "list"], site, tmp_path)
+    assert p.returncode == 0 and "loose_so" in p.stdout, p.stderr
+    p = _bench(["--model-module", "no_such_plugin", "list"], site, tmp_path)
+    assert p.returncode == 2
+    err = p.stderr.strip()
+    assert err.startswith("error: model plug-in 'no_such_plugin'") and "\n" not in err
+
+
+@pytest.fixture
+def clean_registry():
+    before = dict(registry._REGISTRY)
+    yield
+    registry._REGISTRY.clear()
+    registry._REGISTRY.update(before)
+    models.spec.cache_clear()
+
+
+def _example_class():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_example_plugin", EXAMPLE / "__init__.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses (equinox) look the module up while defining
+    spec.loader.exec_module(mod)  # registers drag_so
+    return mod.DragSecondOrderODE
+
+
+def test_a_registered_plugin_is_read_like_a_builtin(clean_registry):
+    cls = _example_class()
+    s = models.spec("drag_so")
+    assert s.continuous and s.second_order and s.structure is None and not s.trivial
+    assert s.coordinates == ("velocity",)
+    scene = models.Scene(dof=2, angular=(True, True))
+    m = models.make("drag_so", scene, key=__import__("jax").random.PRNGKey(0), width=8)
+    assert isinstance(m, cls) and m.vector_field(0.0, __import__("numpy").zeros(4), None).shape == (
+        4,
+    )
+
+
+@pytest.mark.parametrize(
+    ("make_cls", "kw", "message"),
+    [
+        (lambda c: object, {}, "must subclass models.AbstractContinuousModel"),
+        (
+            lambda c: type("NoField", (models.AbstractContinuousModel,), {"__annotations__": {}}),
+            {},
+            "does not implement vector_field",
+        ),
+        (lambda c: type("Odd", (c,), {"structure": "symplectic"}), {}, "structure must be"),
+        (lambda c: c, {"coordinates": "polar"}, "coordinates must be"),
+        (lambda c: c, {"build": lambda scene: None}, "must accept (scene, width"),
+        (lambda c: c, {"options": {"weight": 1.0}}, "validator callables"),
+    ],
+)
+def test_a_plugin_breaking_the_contract_gets_one_line(clean_registry, make_cls, kw, message):
+    cls = _example_class()
+    with pytest.raises(ValueError, match="model plug-in 'broken'") as e:
+        models.register("broken", make_cls(cls), **kw)
+    assert message in str(e.value) and "\n" not in str(e.value)
+    assert "broken" not in models.available()
+
+
+def test_builtin_names_cannot_be_taken(clean_registry):
+    cls = _example_class()
+    with pytest.raises(ValueError, match="built-in model"):
+        models.register("node_so", cls)
