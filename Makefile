@@ -105,6 +105,7 @@ report: $(STAMP)
 # the campaign: pause/resume/stop act on all its workers at once. setsid gives it its own
 # scheduler autogroup, where Linux (sched_autogroup_enabled = 1) ignores the nice level against
 # other sessions: the autogroup itself is niced too, or the campaign takes half the machine.
+# The child nices its own autogroup after setsid (from outside, a race could nice the caller's).
 # `env kill`: the shell's builtin kill (dash) does not signal a process group.
 CAMPAIGN_DIR ?= results/reference/paper
 CAMPAIGN_PID := .cache/paper-core.pid
@@ -116,10 +117,10 @@ campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
 paper-core: $(STAMP)
 	@mkdir -p .cache
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
-	else setsid nohup nice -n 19 $(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
+	else setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; exec nice -n 19 "$$@"' sh \
+		$(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
 		--profile paper-core --workers $(CAMPAIGN_WORKERS) > $(CAMPAIGN_LOG) 2>&1 & \
 		echo $$! > $(CAMPAIGN_PID); \
-		echo 19 > /proc/$$(cat $(CAMPAIGN_PID))/autogroup 2>/dev/null || true; \
 		echo "paper-core: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
 
 paper-core-status: $(STAMP)

@@ -27,23 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-# The committed reference results, read-only: one folder per budget (results/README.md).
-REFERENCE_ROOT = ROOT / "results" / "reference"
-REFERENCE_DIRS = {
-    "smoke": None,
-    "quick": "quick",
-    "paper-core": "paper",  # the CPU campaign of issue 24 (paper-profile runs)
-    "paper": "paper",
-}
-# The user's own results (git-ignored): where make bench and every verb write by default.
-OWN_DIR = Path("results") / "own"
-
-
-def reference_dir(profile: str) -> Path | None:
-    """The committed reference folder of ``profile`` (None where there is none)."""
-    name = REFERENCE_DIRS.get(profile)
-    return None if name is None else REFERENCE_ROOT / name
+from .core._store import OWN_DIR, REFERENCE_DIRS, REFERENCE_ROOT, reference_dir  # noqa: F401
 
 
 def schema_version(results_dir) -> int | None:

@@ -39,6 +39,7 @@ from .core._query import (
     load_tables,
     select,
 )
+from .core._store import REFERENCE_ROOT, compare_folders
 from .core._studies import studies
 from .studies.paper import (
     TRIVIAL_FACTOR,
@@ -209,33 +210,10 @@ def _parts_table(j) -> list[str]:
 
 def _folder_label(d: Path) -> str:
     """A folder as the report names it: relative to ``results/`` where it lies under it."""
-    from ._compare import ROOT
-
     try:
-        return str(Path(d).resolve().relative_to(ROOT / "results"))
+        return str(Path(d).resolve().relative_to(REFERENCE_ROOT.parent))
     except ValueError:
         return Path(d).name
-
-
-def compare_folders(results_dir: Path) -> list[Path]:
-    """The folders whose verdicts the report sets beside its own (the default ``compare`` list
-    of :func:`write_report`): the committed reference folders (``results/reference/*``: the
-    paper-core campaign first) other than ``results_dir`` itself, then the subfolders of
-    ``results_dir`` holding stored runs."""
-    from ._compare import REFERENCE_ROOT
-
-    def runs_in(d: Path) -> bool:
-        return d.is_dir() and any((d / f).exists() for f in ("runs.parquet", "runs.csv", ".rows"))
-
-    here = Path(results_dir).resolve()
-    refs = sorted(REFERENCE_ROOT.iterdir()) if REFERENCE_ROOT.is_dir() else []
-    subs = sorted(Path(results_dir).iterdir()) if Path(results_dir).is_dir() else []
-    found, seen = [], set()
-    for d in [*sorted(refs, key=lambda d: (d.name != "paper", d.name)), *subs]:
-        if runs_in(d) and d.resolve() != here and d.resolve() not in seen:
-            seen.add(d.resolve())
-            found.append(d)
-    return found
 
 
 def _no_runs(v) -> bool:

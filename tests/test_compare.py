@@ -105,3 +105,20 @@ def test_cli_bad_folders_get_one_line(tmp_path, tables, capsys):
     (tmp_path / "empty").mkdir()
     assert main(["compare", str(tmp_path / "empty"), str(b)]) == 2
     assert "no stored runs" in capsys.readouterr().err
+
+
+def test_compare_folders_lists_references_then_subfolders_not_itself(tmp_path):
+    from bench.core._store import compare_folders
+
+    refs = tmp_path / "reference"
+    for name in ("quick", "paper", "empty"):
+        (refs / name).mkdir(parents=True)
+    (refs / "quick" / "runs.parquet").write_bytes(b"")
+    (refs / "paper" / ".rows").mkdir()
+    own = tmp_path / "own"
+    (own / "paper_gpu").mkdir(parents=True)
+    (own / "paper_gpu" / "runs.csv").write_text("")
+    (own / "figures").mkdir()
+    assert compare_folders(own, refs) == [refs / "paper", refs / "quick", own / "paper_gpu"]
+    # a reference folder is not compared with itself
+    assert compare_folders(refs / "quick", refs) == [refs / "paper"]

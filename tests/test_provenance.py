@@ -158,7 +158,7 @@ def test_bench_meta_json_records_provenance(tmp_path, monkeypatch):
     monkeypatch.setattr(runner, "run_experiments", lambda *a, **k: {})
     monkeypatch.setattr(cli, "_cmd_figures", lambda args: 0)
     monkeypatch.setattr(cli, "_cmd_report", lambda args: 0)
-    assert cli.main(["--results", str(tmp_path), "bench", "--skip-stability"]) == 0
+    assert cli.main(["--results", str(tmp_path), "bench", "--skip-stability", "--no-compare"]) == 0
     meta = json.loads((tmp_path / "bench_meta.json").read_text())
     assert meta["provenance"] == P.provenance()
 

@@ -42,6 +42,46 @@ CHECKSUM = "_row_sha256"
 NESTED = ("curves", "checkpoints")  # row fields kept out of the runs table (tables of their own)
 
 
+# The committed reference results, read-only: one folder per budget (results/README.md).
+REFERENCE_ROOT = Path(__file__).resolve().parents[2] / "results" / "reference"
+REFERENCE_DIRS = {
+    "smoke": None,
+    "quick": "quick",
+    "paper-core": "paper",  # the CPU campaign of issue 24 (paper-profile runs)
+    "paper": "paper",
+}
+# The user's own results (git-ignored): where make bench and every verb write by default.
+OWN_DIR = Path("results") / "own"
+
+
+def reference_dir(profile: str) -> Path | None:
+    """The committed reference folder of ``profile`` (None where there is none)."""
+    name = REFERENCE_DIRS.get(profile)
+    return None if name is None else REFERENCE_ROOT / name
+
+
+def holds_runs(d: Path) -> bool:
+    """``d`` is a folder with stored runs (a runs table or row files)."""
+    d = Path(d)
+    return d.is_dir() and any((d / f).exists() for f in ("runs.parquet", "runs.csv", ROWS))
+
+
+def compare_folders(results_dir: Path, reference_root: Path | None = None) -> list[Path]:
+    """The folders whose verdicts a report sets beside its own: the committed reference
+    folders (``results/reference/*``, the paper-core campaign first) other than
+    ``results_dir`` itself, then the subfolders of ``results_dir`` holding stored runs."""
+    root = REFERENCE_ROOT if reference_root is None else Path(reference_root)
+    here = Path(results_dir).resolve()
+    refs = sorted(root.iterdir()) if root.is_dir() else []
+    subs = sorted(Path(results_dir).iterdir()) if Path(results_dir).is_dir() else []
+    found, seen = [], set()
+    for d in [*sorted(refs, key=lambda d: (d.name != "paper", d.name)), *subs]:
+        if holds_runs(d) and d.resolve() != here and d.resolve() not in seen:
+            seen.add(d.resolve())
+            found.append(d)
+    return found
+
+
 class DamagedRowWarning(UserWarning):
     """A stored row file could not be read; it was moved aside and its run will be rerun."""
 

@@ -301,7 +301,7 @@ def _curve_runs(runs: pd.DataFrame, cp: pd.DataFrame) -> pd.DataFrame:
 def _paper_reference(results_dir: Path) -> pd.DataFrame:
     """Final errors of the paper-budget runs of the report's other folders (the committed
     ``results/reference/paper*/`` and ``<results>/paper*/``), if any."""
-    from .._report import compare_folders
+    from ..core._store import compare_folders
 
     parts = []
     for d in compare_folders(results_dir):
