@@ -1,6 +1,7 @@
 """Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
 
-Verbs: list, run, sweep, figures, report, perf, stability, bench, estimate, campaign. A bad
+Verbs: list, run, sweep, figures, report, perf, stability, bench, estimate, campaign,
+compare, data (export, verify). A bad
 name or value, a run that can never run (e.g. leapfrog on a first-order model) or a results
 folder that cannot be used prints one line ``error: ...`` on stderr and exits with code 2,
 without a traceback. A write that fails during a sweep (full disk) stops it with one line and
@@ -155,6 +156,19 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="on the profile's replication seeds instead of its own (quick: 5-9; issue 20)",
     )
+
+    da = sub.add_parser("data", help="export a profile's datasets with a card; verify a folder")
+    dsub = da.add_subparsers(dest="data_verb", required=True, parser_class=_Parser)
+    de = dsub.add_parser("export", help="the train and test arrays of a system at a profile")
+    de.add_argument("system", help="a system name (python -m bench list)")
+    de.add_argument("--k", type=_int("k"), default=None, help="only this k (links/masses)")
+    de.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
+    de.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
+    de.add_argument("--format", default="npz", help="npz (default) or hdf5")
+    de.add_argument("--out", required=True, help="the folder to write (new or empty)")
+    de.add_argument("--force", action="store_true", help="write into a non-empty folder")
+    dv = dsub.add_parser("verify", help="check an exported folder against its card")
+    dv.add_argument("folder")
 
     b = sub.add_parser(
         "bench", help="sweep every experiment, the stability cases, then figures and report"
@@ -532,6 +546,37 @@ def _schema_version() -> int:
     return SCHEMA_VERSION
 
 
+def _cmd_data(args) -> int:
+    """``data export``: write the datasets and print the folder; ``data verify``: one line per
+    array that differs from the card, exit code 1 if any."""
+    from . import _data, data_loader
+
+    if args.data_verb == "verify":
+        return data_loader.main(["verify", args.folder])
+    check_choice("profile", args.profile, list(PROFILES))
+    seeds = None
+    if args.seeds is not None:
+        try:
+            seeds = [int(x) for x in args.seeds.split(",") if x.strip()]
+        except ValueError:
+            raise ValueError(f"--seeds must be integers like 0,1; got {args.seeds!r}") from None
+    card = _data.export(
+        args.system,
+        args.out,
+        profile=args.profile,
+        k=args.k,
+        seeds=seeds,
+        fmt=args.format,
+        force=args.force,
+        progress=lambda m: print(m, file=sys.stderr),
+    )
+    for note in card["notes"]:
+        print(f"note: {note}")
+    n = len(card["datasets"])
+    print(f"{args.out}: {n} dataset(s), {len(card['arrays'])} arrays, card.json and README.md")
+    return 0
+
+
 def _cmd_compare(args) -> int:
     """Print the claims table and the one-line summary of ``compare`` (the whole comparison
     with ``--out``)."""
@@ -629,4 +674,5 @@ def _main(argv) -> int:
         "estimate": _cmd_estimate,
         "campaign": _cmd_campaign,
         "compare": _cmd_compare,
+        "data": _cmd_data,
     }[args.verb](args)

@@ -74,20 +74,7 @@ def _build(config: RunConfig, cache_root: Path):
     import models
 
     system = systems.make(config.system, **config.system_kwargs())
-    dcfg = systems.DatasetConfig(
-        system=config.system,
-        system_params=tuple(sorted(config.system_kwargs().items())),
-        n_generated=config.n_generated,
-        n_train=config.n_train,
-        chunk=config.chunk,
-        dt=config.dt,
-        n_test=config.n_test,
-        test_chunks=config.test_chunks,
-        noise=config.noise,
-        coordinates=config.coordinates,
-        random_args=config.random_args,
-        seed=config.seed,
-    )
+    dcfg = config.dataset_config()
     scene = models.Scene(
         dof=system.dof,
         angular=tuple(system.angular),

@@ -164,6 +164,25 @@ class RunConfig:
             kw["friction"] = self.friction
         return kw
 
+    def dataset_config(self):
+        """The ``systems.DatasetConfig`` of this run's training and test data."""
+        import systems
+
+        return systems.DatasetConfig(
+            system=self.system,
+            system_params=tuple(sorted(self.system_kwargs().items())),
+            n_generated=self.n_generated,
+            n_train=self.n_train,
+            chunk=self.chunk,
+            dt=self.dt,
+            n_test=self.n_test,
+            test_chunks=self.test_chunks,
+            noise=self.noise,
+            coordinates=self.coordinates,
+            random_args=self.random_args,
+            seed=self.seed,
+        )
+
     def _identity(self) -> dict:
         """The fields a hash covers: every one, except those of :data:`_NEW_FIELDS` left at
         their default (fields added later, so that older runs keep their hashes)."""

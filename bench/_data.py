@@ -1,0 +1,290 @@
+"""``python -m bench data export | verify``: a profile's exact training and test arrays, in
+files any framework reads, with a dataset card (issue 21).
+
+**Which datasets.** Those the profile's runs train and are tested on for the system: every
+experiment is expanded at the profile (:func:`bench.core._experiments.expand`) and the distinct
+``systems.DatasetConfig`` of its runs on that system are kept (``--k`` and ``--seeds`` narrow
+them), so the arrays are the ones behind the stored results, bit for bit. Each is written in
+both coordinate systems, ``z = (q, qdot)`` and ``z = (q, p)`` (the same trajectories: the
+momenta are computed from the velocities; they differ for every registered system). A system and
+``k`` that no experiment of the profile uses are exported at the profile's defaults, and the
+card says that too. ``damped_<system>`` selects the runs of ``<system>`` with friction.
+
+**The card** (``card.json``, and ``README.md`` for people): the system and its parameters, the
+protocol (dt, duration, chunking, counts, seeds, keys, noise), the generator and its
+tolerances, the suite's version and commit, per dataset its config, hash and the experiments
+that use it, and every array's file, key, shape and sha256. The reading side, ``verify``
+included, is :mod:`bench.data_loader`, copied into the folder as ``decon_data.py``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import inspect
+import shutil
+import sys
+from pathlib import Path
+
+from . import data_loader
+from .core._experiments import RunConfig, available, expand, profile_defaults
+
+DAMPED_PREFIX = "damped_"
+LOADER_NAME = "decon_data.py"
+
+
+def _dataset_name(c, k_in_name: bool) -> str:
+    parts = [f"k{dict(c.system_params).get('k')}"] if k_in_name else []
+    parts += [c.coordinates, f"n{c.n_train}"]
+    if c.noise:
+        parts.append(f"noise{c.noise:g}")
+    friction = dict(c.system_params).get("friction")
+    if friction:
+        parts.append(f"friction{friction:g}")
+    if c.random_args:
+        parts.append("randomargs")
+    for key, value in c.system_params:  # other parameters, e.g. masses1-1
+        if key not in ("k", "friction"):
+            values = value if isinstance(value, tuple | list) else (value,)
+            parts.append(
+                key + "-".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+            )
+    parts.append(f"seed{c.seed}")
+    return "_".join(parts)
+
+
+def select(system: str, profile: str, k=None, seeds=None) -> tuple[dict, list[str]]:
+    """(DatasetConfig -> the experiments using it, notes) for ``system`` at ``profile``."""
+    import systems
+
+    from .core._experiments import check_choice
+
+    check_choice("system", system, systems.available())
+    damped = system.startswith(DAMPED_PREFIX)
+    base = system[len(DAMPED_PREFIX) :] if damped else system
+    if k is not None and "k" not in systems.parameters(base):
+        raise ValueError(f"{system} takes no k; drop --k")
+    used: dict = {}
+    for name in available():
+        for r in expand(name, profile):
+            if r.system != base or (r.friction > 0) != damped:
+                continue
+            if k is not None and r.k != k or seeds is not None and r.seed not in seeds:
+                continue
+            used.setdefault(r.dataset_config(), set()).add(name)
+    notes = []
+    if not used:
+        defaults, profile_seeds = profile_defaults(profile)
+        fields = {f.name for f in dataclasses.fields(RunConfig)}
+        kw = {a: b for a, b in defaults.items() if a in fields}
+        friction = 0.4 if damped else 0.0
+        for s in seeds if seeds is not None else profile_seeds:
+            r = RunConfig(system=base, model="node", k=k, friction=friction, seed=s, **kw)
+            used[r.validate().dataset_config()] = set()
+        notes.append(
+            f"no experiment of profile {profile} trains on {system}"
+            + (f" with k = {k}" if k is not None else "")
+            + f"; exported at the profile's defaults (seeds {sorted({c.seed for c in used})})"
+        )
+    # both coordinate systems of each
+    out: dict = {}
+    for c, names in used.items():
+        for coords in ("velocity", "momentum"):
+            other = dataclasses.replace(c, coordinates=coords)
+            out.setdefault(other, set()).update(names if coords == c.coordinates else set())
+    return out, notes
+
+
+def export(
+    system: str,
+    out,
+    profile: str = "quick",
+    k: int | None = None,
+    seeds=None,
+    fmt: str = "npz",
+    force: bool = False,
+    progress=print,
+) -> dict:
+    """Write the datasets of ``system`` at ``profile`` to ``out``; returns the card."""
+    import systems
+
+    from .core._experiments import check_choice
+    from .core._provenance import provenance
+
+    check_choice("format", fmt, data_loader.FORMATS)
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file; name a folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ValueError(f"--out {out} is not empty; name a new folder or pass --force")
+    configs, notes = select(system, profile, k=k, seeds=seeds)
+    k_in_name = len({dict(c.system_params).get("k") for c in configs}) > 1
+    arrays: dict[str, dict] = {}
+    entries: dict[str, dict] = {}
+    order = sorted(configs.items(), key=lambda x: (_velocity_twin(x[0]), x[0].coordinates))
+    for i, (c, names) in enumerate(order):
+        name = _dataset_name(c, k_in_name)
+        progress(f"data: {i + 1}/{len(configs)} {name}")
+        d = systems.make_dataset(c)
+        a = {n: getattr(d, n) for n in data_loader.ARRAYS}
+        arrays[name] = a
+        entries[name] = {
+            "coordinates": c.coordinates,
+            "state": "z = (q, qdot)" if c.coordinates == "velocity" else "z = (q, p)",
+            "seed": c.seed,
+            "config": dataclasses.asdict(c),
+            "config_hash": c.hash(),
+            "used_by_experiments": sorted(names),
+            "angular": list(d.angular),
+        }
+    sys_obj = systems.make(next(iter(configs)).system, **dict(next(iter(configs)).system_params))
+    prov = provenance()
+    first = next(iter(configs))
+    card = {
+        "title": f"decon-bench data: {system} at profile {profile}",
+        "created": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "system": {
+            "name": system,
+            "class": type(sys_obj).__name__,
+            "parameters": sorted({p for c in configs for p in c.system_params}, key=str),
+            "dof": sys_obj.dof,
+            "angular": list(sys_obj.angular),
+            "n_args": sys_obj.n_args,
+            "description": inspect.getdoc(type(sys_obj)) or "",
+        },
+        "profile": profile,
+        "protocol": {
+            "dt": first.dt,
+            "duration": first.duration,
+            "points_per_trajectory": first.n_points,
+            "chunk": first.chunk,
+            "n_generated": sorted({c.n_generated for c in configs}),
+            "n_train": sorted({c.n_train for c in configs}),
+            "n_test": sorted({c.n_test for c in configs}),
+            "test_window": first.test_chunks * first.chunk,
+            "seeds": sorted({c.seed for c in configs}),
+            "noise_std_train_only": sorted({c.noise for c in configs}),
+            "random_args": sorted({c.random_args for c in configs}),
+            "text": inspect.getdoc(sys.modules[systems.make_dataset.__module__]),
+        },
+        "generator": {
+            "library": "diffrax",
+            "solver": "Dopri8",
+            "step_size_controller": f"PIDController(rtol={_tol('RTOL')}, atol={_tol('ATOL')})",
+            "max_steps": _tol("MAX_STEPS"),
+            "dtype": "float64",
+            "initial_states": inspect.getdoc(type(sys_obj).sample_initial) or "",
+        },
+        "suite": {
+            "name": "decon-bench",
+            "version": _version(),
+            "commit": prov.get("git_commit"),
+            "dirty": prov.get("git_dirty"),
+            **{n: prov.get(n) for n in ("jax_version", "diffrax_version", "numpy_version")},
+        },
+        "notes": notes,
+        "datasets": entries,
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    if force:
+        for p in out.iterdir():
+            if p.suffix in (".npz", ".h5"):
+                p.unlink()
+    card = data_loader.write(out, arrays, card, fmt)
+    shutil.copyfile(data_loader.__file__, out / LOADER_NAME)
+    (out / "README.md").write_text(card_markdown(card))
+    return card
+
+
+def _velocity_twin(c) -> str:
+    return dataclasses.replace(c, coordinates="velocity").canonical_json()
+
+
+def _tol(name: str):
+    from systems import _base
+
+    return getattr(_base, name)
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("decon-bench")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def card_markdown(card: dict) -> str:
+    """The dataset card for people (README.md of an exported folder)."""
+    s, p, g, u = card["system"], card["protocol"], card["generator"], card["suite"]
+    lines = [
+        f"# {card['title']}",
+        "",
+        f"Exported {card['created']} by decon-bench {u['version']} (commit {u['commit']}"
+        + (", with uncommitted changes" if u.get("dirty") else "")
+        + f"; jax {u.get('jax_version')}, diffrax {u.get('diffrax_version')}). "
+        f"Format: {card['format']}. Check it: `python decon_data.py verify .`",
+        "",
+        "## System",
+        "",
+        f"`{s['name']}` ({s['class']}): {s['dof']} degrees of freedom, angular coordinates "
+        f"{s['angular']}, {s['n_args']} per-trajectory parameters (`args_*`); parameters "
+        f"{s['parameters'] or 'default'}.",
+        "",
+        s["description"],
+        "",
+        "## Protocol",
+        "",
+        f"- dt = {p['dt']}, trajectories of {p['duration']} s ({p['points_per_trajectory']} "
+        f"points); training chunks of {p['chunk']} points, test windows of {p['test_window']}",
+        f"- training trajectories n_train = {p['n_train']} (of n_generated = "
+        f"{p['n_generated']} drawn), test trajectories n_test = {p['n_test']}",
+        f"- seeds {p['seeds']}; Gaussian noise std {p['noise_std_train_only']} on the training "
+        f"set only; random per-trajectory parameters: {p['random_args']}",
+        "",
+        p["text"],
+        "",
+        "## Generator",
+        "",
+        f"{g['library']} {g['solver']}, {g['step_size_controller']}, max_steps "
+        f"{g['max_steps']}, {g['dtype']}. Initial states: {g['initial_states']}",
+        "",
+    ]
+    if card["notes"]:
+        lines += ["## Notes", "", *[f"- {n}" for n in card["notes"]], ""]
+    lines += [
+        "## Datasets",
+        "",
+        "| dataset | state | seed | used by experiments | config hash |",
+        "|---|---|---|---|---|",
+    ]
+    for name, e in card["datasets"].items():
+        used = ", ".join(e["used_by_experiments"]) or "(none: the other coordinates)"
+        lines.append(
+            f"| `{name}` | {e['state']} | {e['seed']} | {used} | `{e['config_hash'][:16]}` |"
+        )
+    lines += [
+        "",
+        "## Arrays",
+        "",
+        "sha256 of the C-ordered little-endian float64 bytes (`decon_data.sha256`).",
+        "",
+        "| file | key | shape | sha256 |",
+        "|---|---|---|---|",
+    ]
+    for e in card["arrays"]:
+        lines.append(f"| {e['file']} | {e['key']} | {tuple(e['shape'])} | `{e['sha256']}` |")
+    lines += [
+        "",
+        "## Loading",
+        "",
+        "```python",
+        "import decon_data  # this folder's loader: NumPy only (h5py for .h5, torch optional)",
+        "names = decon_data.datasets('.')",
+        "arrays = decon_data.load('.', names[0])  # checked against the card",
+        "train = decon_data.TorchDataset('.', names[0], split='train')  # needs torch",
+        "```",
+        "",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,270 @@
+"""Read, check and write exported decon-bench datasets (``python -m bench data export``).
+
+Self-contained on purpose: it imports only the standard library and NumPy (h5py for ``.h5``
+files and torch for :func:`TorchDataset`, each only when used), and ``bench data export``
+copies it into every exported folder as ``decon_data.py``, so that a folder can be loaded and
+checked in any framework without installing the suite::
+
+    import decon_data                                  # or: from bench import data_loader
+    decon_data.datasets("DIR")                         # the names of the datasets in DIR
+    d = decon_data.load("DIR", "velocity_n200_seed0")  # {"z_train": ndarray, ...}, checked
+    problems = decon_data.verify("DIR")                # [] when every array matches the card
+
+    python decon_data.py verify DIR                    # the same from the shell
+
+A folder holds ``card.json`` (the dataset card: system, parameters, protocol, generator, the
+suite's version and commit, and every array's file, key, shape, dtype and sha256), ``README.md``
+(the card for people), the arrays, and this file. Each dataset has six float64 arrays:
+
+- ``ts_train`` (C,): the times of a training chunk, ``arange(C) * dt``;
+- ``z_train`` (N, C, 2d): N training chunks of C consecutive states;
+- ``args_train`` (N, P): each chunk's system parameters;
+- ``ts_test`` (T,), ``z_test`` (M, T, 2d), ``args_test`` (M, P): the test windows.
+
+A state is ``z = (q, qdot)`` in velocity coordinates and ``z = (q, p)`` in momentum
+(canonical) coordinates. Format ``npz``: one ``<dataset>.npz`` per dataset, keys as above;
+format ``hdf5``: one ``data.h5``, dataset ``/<dataset>/<array>``. The sha256 of an array is that
+of its C-ordered little-endian float64 bytes (:func:`sha256`), so any reader can recompute it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+CARD = "card.json"
+ARRAYS = ("ts_train", "z_train", "args_train", "ts_test", "z_test", "args_test")
+FORMATS = ("npz", "hdf5")
+H5_FILE = "data.h5"
+CARD_VERSION = 1
+
+
+def sha256(a) -> str:
+    """sha256 of ``a`` as C-ordered little-endian float64 bytes (the card's checksum)."""
+    return hashlib.sha256(np.ascontiguousarray(a, dtype="<f8").tobytes()).hexdigest()
+
+
+# ------------------------------------------------------------------------------- writing
+def write(folder, datasets: dict[str, dict[str, np.ndarray]], card: dict, fmt: str) -> dict:
+    """Write ``datasets`` (name -> the six arrays) to ``folder`` in format ``fmt`` and the
+    card (``card`` plus the array entries) to ``card.json``; returns the card written."""
+    if fmt not in FORMATS:
+        raise ValueError(f"format {fmt!r}: allowed {', '.join(FORMATS)}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    entries = []
+    for name, arrays in datasets.items():
+        missing = [a for a in ARRAYS if a not in arrays]
+        if missing:
+            raise ValueError(f"dataset {name!r} lacks {', '.join(missing)}")
+        for a in ARRAYS:
+            x = np.ascontiguousarray(arrays[a], dtype="<f8")
+            file = f"{name}.npz" if fmt == "npz" else H5_FILE
+            key = a if fmt == "npz" else f"{name}/{a}"
+            entries.append(
+                {
+                    "dataset": name,
+                    "array": a,
+                    "file": file,
+                    "key": key,
+                    "shape": list(x.shape),
+                    "dtype": "float64",
+                    "sha256": sha256(x),
+                }
+            )
+    if fmt == "npz":
+        for name, arrays in datasets.items():
+            np.savez(folder / f"{name}.npz", **{a: np.asarray(arrays[a], "<f8") for a in ARRAYS})
+    else:
+        h5py = _h5py()
+        with h5py.File(folder / H5_FILE, "w") as f:
+            for name, arrays in datasets.items():
+                g = f.create_group(name)
+                for a in ARRAYS:
+                    g.create_dataset(a, data=np.asarray(arrays[a], "<f8"))
+    card = {**card, "card_version": CARD_VERSION, "format": fmt, "arrays": entries}
+    (folder / CARD).write_text(json.dumps(card, indent=2, sort_keys=False) + "\n")
+    return card
+
+
+# ------------------------------------------------------------------------------- reading
+def read_card(folder) -> dict:
+    """The card of an exported folder (ValueError naming the folder if there is none)."""
+    path = Path(folder) / CARD
+    try:
+        card = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{folder}: no {CARD} (not an exported dataset folder)") from None
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{path}: unreadable card ({e})") from None
+    if not isinstance(card, dict) or not isinstance(card.get("arrays"), list):
+        raise ValueError(f"{path}: not a dataset card (no 'arrays' list)")
+    return card
+
+
+def datasets(folder) -> list[str]:
+    """The names of the datasets in an exported folder, in the card's order."""
+    return list(dict.fromkeys(e["dataset"] for e in read_card(folder)["arrays"]))
+
+
+def _read(folder: Path, file: str, key: str) -> np.ndarray:
+    path = folder / file
+    if file.endswith(".npz"):
+        with np.load(path, allow_pickle=False) as f:
+            return np.array(f[key])
+    with _h5py().File(path, "r") as f:
+        return np.array(f[key])
+
+
+def load(folder, dataset: str | None = None, check: bool = True) -> dict[str, np.ndarray]:
+    """The six arrays of ``dataset`` (default: the only one, else ValueError naming them);
+    ``check``: each array's shape and sha256 against the card (ValueError if one differs)."""
+    folder = Path(folder)
+    card = read_card(folder)
+    names = datasets(folder)
+    if dataset is None:
+        if len(names) != 1:
+            raise ValueError(f"{folder} holds {len(names)} datasets; name one of {names}")
+        dataset = names[0]
+    if dataset not in names:
+        raise ValueError(f"dataset {dataset!r} is not in {folder}; allowed: {', '.join(names)}")
+    out = {}
+    for e in card["arrays"]:
+        if e["dataset"] != dataset:
+            continue
+        x = _read(folder, e["file"], e["key"])
+        if check:
+            problem = _problem(e, x)
+            if problem:
+                raise ValueError(f"{folder}: {problem}")
+        out[e["array"]] = x
+    return out
+
+
+def _problem(e: dict, x: np.ndarray) -> str | None:
+    where = f"{e['file']}:{e['key']}"
+    if list(x.shape) != list(e["shape"]):
+        return f"{where}: shape {list(x.shape)}, the card says {e['shape']}"
+    if x.dtype != np.float64:
+        return f"{where}: dtype {x.dtype}, the card says float64"
+    if sha256(x) != e["sha256"]:
+        return f"{where}: sha256 differs from the card (the array was changed or damaged)"
+    return None
+
+
+def verify(folder) -> list[str]:
+    """Every disagreement between a folder and its card, one line each (empty: all match):
+    a missing or unreadable file, a missing key, a shape, dtype or sha256 that differs, and a
+    data file the card does not name."""
+    folder = Path(folder)
+    card = read_card(folder)
+    problems, named = [], set()
+    for e in card["arrays"]:
+        named.add(e["file"])
+        try:
+            x = _read(folder, e["file"], e["key"])
+        except FileNotFoundError:
+            problems.append(f"{e['file']}: missing")
+            continue
+        except KeyError:
+            problems.append(f"{e['file']}:{e['key']}: missing key")
+            continue
+        except Exception as err:  # noqa: BLE001 - any unreadable file is a finding, not a crash
+            problems.append(f"{e['file']}:{e['key']}: unreadable ({type(err).__name__}: {err})")
+            continue
+        p = _problem(e, x)
+        if p:
+            problems.append(p)
+    extra = sorted(
+        p.name for p in folder.iterdir() if p.suffix in (".npz", ".h5") and p.name not in named
+    )
+    problems += [f"{name}: a data file the card does not name" for name in extra]
+    return list(dict.fromkeys(problems))  # a missing file is named once
+
+
+# ------------------------------------------------------------------------- frameworks
+class Trajectories:
+    """One split of one dataset as a sequence of ``(z, args)`` pairs (NumPy), with the
+    shared times in ``ts``: ``z`` (C, 2d) a training chunk or (T, 2d) a test window."""
+
+    def __init__(self, folder, dataset: str | None = None, split: str = "train", check=True):
+        if split not in ("train", "test"):
+            raise ValueError(f"split {split!r}: allowed train, test")
+        arrays = load(folder, dataset, check=check)
+        self.split = split
+        self.ts = arrays[f"ts_{split}"]
+        self.z = arrays[f"z_{split}"]
+        self.args = arrays[f"args_{split}"]
+
+    def __len__(self) -> int:
+        return len(self.z)
+
+    def __getitem__(self, i):
+        return self.z[i], self.args[i]
+
+
+def TorchDataset(folder, dataset: str | None = None, split: str = "train", check=True):  # noqa: N802 - a class factory
+    """A ``torch.utils.data.Dataset`` over :class:`Trajectories`: item ``i`` is
+    ``(z, args)`` as float64 tensors, ``.ts`` the times (a tensor). Imports torch only here
+    (``pip install 'decon-bench[torch]'`` or torch itself)."""
+    try:
+        import torch
+        from torch.utils.data import Dataset
+    except ImportError as e:
+        raise ImportError(
+            "TorchDataset needs torch: pip install torch (or the suite's extra: "
+            "pip install 'decon-bench[torch]')"
+        ) from e
+
+    class _TrajectoryDataset(Dataset):
+        def __init__(self, base: Trajectories):
+            self.base = base
+            self.ts = torch.from_numpy(base.ts)
+
+        def __len__(self):
+            return len(self.base)
+
+        def __getitem__(self, i):
+            z, args = self.base[i]
+            return torch.from_numpy(np.ascontiguousarray(z)), torch.from_numpy(
+                np.ascontiguousarray(args)
+            )
+
+    return _TrajectoryDataset(Trajectories(folder, dataset, split, check))
+
+
+def _h5py():
+    try:
+        import h5py
+    except ImportError as e:
+        raise ImportError("hdf5 files need h5py: pip install h5py") from e
+    return h5py
+
+
+def main(argv=None) -> int:
+    """``python decon_data.py verify DIR``: exit 0 when every array matches the card."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if len(argv) != 2 or argv[0] != "verify":
+        print("usage: python decon_data.py verify DIR", file=sys.stderr)
+        return 2
+    try:
+        problems = verify(argv[1])
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    for p in problems:
+        print(f"damaged: {p}")
+    n = len(read_card(argv[1])["arrays"])
+    if problems:
+        print(f"{argv[1]}: {len(problems)} problem(s): the folder does not match its card")
+        return 1
+    print(f"{argv[1]}: all {n} arrays match the card")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
