@@ -170,7 +170,10 @@ def export(
         "generator": {
             "library": "diffrax",
             "solver": "Dopri8",
-            "step_size_controller": f"PIDController(rtol={_tol('RTOL')}, atol={_tol('ATOL')})",
+            "step_size_controller": (
+                f"PIDController(rtol={sys_obj.ground_truth_tol:g}, "
+                f"atol={sys_obj.ground_truth_tol:g})"
+            ),
             "max_steps": _tol("MAX_STEPS"),
             "dtype": "float64",
             "initial_states": inspect.getdoc(type(sys_obj).sample_initial) or "",

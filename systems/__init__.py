@@ -8,14 +8,20 @@ from ._base import AbstractSystem, reference_masses_lengths  # noqa: E402
 from ._chain import ChainPendulum  # noqa: E402
 from ._coordinates import derivatives, to_momentum, to_velocity  # noqa: E402
 from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset  # noqa: E402
+from ._mass_spring import MassSpring  # noqa: E402
+from ._pendulum import Pendulum  # noqa: E402
 from ._registry import available, make, parameters  # noqa: E402
 from ._relativistic import RelativisticParticle  # noqa: E402
 from ._spring import SpringPendulum  # noqa: E402
+from ._two_body import TwoBody  # noqa: E402
 
 __all__ = [
     "AbstractSystem",
     "ChainPendulum",
     "Dataset",
+    "MassSpring",
+    "Pendulum",
+    "TwoBody",
     "DatasetConfig",
     "RelativisticParticle",
     "SpringPendulum",

@@ -12,15 +12,16 @@ body: Q = -f dT/dqdot (for T = 1/2 sum m_i |v_i|^2 with v_i = J_i(q) qdot, sum_i
 exactly, whatever the coordinates.
 
 Ground truth is integrated in float64 by diffrax (8th-order Dormand-Prince, PID step control at
-rtol = atol = 1e-11), saved at the requested times. The batched solver is one module-level
-``eqx.filter_jit`` function taking the system as an argument, so it is traced once per system
-type, state size and number of save times (array fields such as masses are traced, not baked
-in).
+rtol = atol = 1e-11, or the tighter ``ground_truth_tol`` of a system that sets one), saved at
+the requested times. The batched solver is one module-level ``eqx.filter_jit`` function
+taking the system as an argument, so it is traced once per system type, state size and number
+of save times (array fields such as masses are traced, not baked in).
 """
 
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import diffrax
 import equinox as eqx
@@ -44,6 +45,9 @@ class AbstractSystem(eqx.Module):
 
     name: eqx.AbstractVar[str]
     angular: eqx.AbstractVar[tuple[bool, ...]]
+    # rtol = atol of the ground truth (a class constant): 1e-11, or tighter where a system's
+    # conservation test needs it (two_body: 1e-13, energy to < 1e-9 over ten orbits)
+    ground_truth_tol: ClassVar[float] = RTOL
     friction: eqx.AbstractVar[float]
     n_args: eqx.AbstractVar[int]
 
@@ -140,7 +144,7 @@ class AbstractSystem(eqx.Module):
         """Raise ValueError for states outside the system's domain (hook; none by default)."""
 
     def simulate(
-        self, z0, ts, args=None, *, rtol=RTOL, atol=ATOL, solver="dopri8", stats=False
+        self, z0, ts, args=None, *, rtol=None, atol=None, solver="dopri8", stats=False
     ) -> Array:
         """Ground-truth trajectory z(ts) from z(ts[0]) = z0, float64, shape (len(ts), 2*dof).
 
@@ -164,12 +168,13 @@ class AbstractSystem(eqx.Module):
         return out[0]
 
     def simulate_batch(
-        self, z0s, ts, args=None, *, rtol=RTOL, atol=ATOL, solver="dopri8", stats=False
+        self, z0s, ts, args=None, *, rtol=None, atol=None, solver="dopri8", stats=False
     ) -> Array:
         """Ground-truth trajectories for a batch of initial states, shape (N, len(ts), 2*dof).
 
         ``args``: None (default parameters), shape (n_args,) (shared) or (N, n_args).
-        ``rtol``, ``atol``: the PID controller's tolerances (default 1e-11, the ground truth);
+        ``rtol``, ``atol``: the PID controller's tolerances (default: the ground truth's,
+        ``ground_truth_tol``, 1e-11 unless the system sets it tighter);
         ``solver``: ``dopri8`` (default) | ``dopri5`` | ``tsit5`` | ``kvaerno5`` (implicit, for
         stiff systems). The solve runs in float64 with ``max_steps`` = 10^6 and does not raise:
         a solve that fails (out of steps) returns inf from where it stopped. With
@@ -180,6 +185,8 @@ class AbstractSystem(eqx.Module):
         """
         if solver not in SOLVERS:
             raise ValueError(f"solver {solver!r}: allowed {', '.join(SOLVERS)}")
+        rtol = self.ground_truth_tol if rtol is None else rtol
+        atol = self.ground_truth_tol if atol is None else atol
         for name, tol in (("rtol", rtol), ("atol", atol)):
             if not (isinstance(tol, int | float) and 0 < tol < 1):
                 raise ValueError(f"{name} must be a number in (0, 1), got {tol!r}")
@@ -206,7 +213,7 @@ class AbstractSystem(eqx.Module):
                     f"args must have shape ({self.n_args},) or ({n}, {self.n_args}); "
                     f"got {args.shape}"
                 )
-        default = (rtol, atol, solver) == (RTOL, ATOL, "dopri8")
+        default = (rtol, atol, solver) == (self.ground_truth_tol,) * 2 + ("dopri8",)
         if default and not stats:
             return _solve_batch(self, jnp.asarray(z0s), jnp.asarray(ts), jnp.asarray(args))
         zs, info = _solve_batch_with(
@@ -235,7 +242,7 @@ def _as_float_array(x, what: str) -> np.ndarray:
 def _solve_batch(system: AbstractSystem, z0s, ts, args):
     term = diffrax.ODETerm(system.vector_field)
     solver = diffrax.Dopri8()
-    controller = diffrax.PIDController(rtol=RTOL, atol=ATOL)
+    controller = diffrax.PIDController(rtol=system.ground_truth_tol, atol=system.ground_truth_tol)
 
     def one(z0, a):
         sol = diffrax.diffeqsolve(

@@ -8,8 +8,11 @@ from collections.abc import Callable
 
 from ._base import AbstractSystem
 from ._chain import chain_pendulum
+from ._mass_spring import mass_spring
+from ._pendulum import pendulum
 from ._relativistic import relativistic_particle
 from ._spring import spring_pendulum
+from ._two_body import two_body
 
 DAMPED_FRICTION = 0.4  # the paper's damped runs
 
@@ -19,6 +22,10 @@ _FACTORIES: dict[str, tuple[Callable[..., AbstractSystem], dict]] = {
     "relativistic_particle": (relativistic_particle, {}),
     "damped_chain_pendulum": (chain_pendulum, {"friction": DAMPED_FRICTION}),
     "damped_spring_pendulum": (spring_pendulum, {"friction": DAMPED_FRICTION}),
+    # the HNN seed's tasks (issue 22)
+    "mass_spring": (mass_spring, {}),
+    "pendulum": (pendulum, {}),
+    "two_body": (two_body, {}),
 }
 
 

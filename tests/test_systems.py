@@ -30,9 +30,13 @@ CONSERVATIVE = [
     ("spring_pendulum", {"k": 1}),
     ("spring_pendulum", {"k": 2}),
     ("relativistic_particle", {}),
+    ("mass_spring", {}),
+    ("pendulum", {}),
+    ("two_body", {}),
 ]
+# every registered system (a new one is picked up here), at k = 2 where it takes a k
 ALL_DEFAULT = [
-    (name, {} if name == "relativistic_particle" else {"k": 2}) for name in systems.available()
+    (name, {"k": 2} if "k" in systems.parameters(name) else {}) for name in systems.available()
 ]
 
 
@@ -63,6 +67,9 @@ def test_available_names():
         "relativistic_particle",
         "damped_chain_pendulum",
         "damped_spring_pendulum",
+        "mass_spring",
+        "pendulum",
+        "two_body",
     ]:
         assert name in names
 
