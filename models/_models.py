@@ -876,6 +876,9 @@ def register(
     return name
 
 
+_ENTRY_POINTS: list = []  # [the entry points of ENTRY_POINT_GROUP], once scanned
+
+
 def load_plugins(modules: str | None = None) -> None:
     """Import the plug-in models, once each: the entry points of :data:`ENTRY_POINT_GROUP` and
     the modules named in ``$DECON_MODEL_MODULES`` (or ``modules``), comma-separated. A module
@@ -887,11 +890,13 @@ def load_plugins(modules: str | None = None) -> None:
 
     names = modules if modules is not None else os.environ.get(MODULES_ENV, "")
     todo = [("module:" + m.strip(), m.strip()) for m in names.split(",") if m.strip()]
-    try:
-        eps = list(metadata.entry_points(group=ENTRY_POINT_GROUP))
-    except Exception:  # noqa: BLE001 - a broken environment must not stop the built-ins
-        eps = []
-    todo += [("ep:" + ep.name, ep) for ep in eps]
+    if not _ENTRY_POINTS:  # scanned once a process: a scan reads every installed package's
+        # metadata (~7 ms), and available() is asked for every configuration of a sweep
+        try:
+            _ENTRY_POINTS.append(list(metadata.entry_points(group=ENTRY_POINT_GROUP)))
+        except Exception:  # noqa: BLE001 - a broken environment must not stop the built-ins
+            _ENTRY_POINTS.append([])
+    todo += [("ep:" + ep.name, ep) for ep in _ENTRY_POINTS[0]]
     for key, what in todo:
         if key in _PLUGINS:
             continue
