@@ -80,6 +80,8 @@ def _experiment_table(rows: pd.DataFrame) -> list[str]:
         ("mse", "MSE"),
         ("energy_violation", "energy violation"),
         ("energy_pct_max_pe", "energy % max PE"),
+        ("energy_mse", "energy MSE"),
+        ("derivative_mse_test", "test loss dz/dt"),
         ("symplectic_error", "symplectic error"),
         ("n_params", "params"),
         ("train_seconds", "train s"),

@@ -115,9 +115,8 @@ def test_derivative_targets_need_targets_and_a_vector_field():
 
 def test_the_new_field_leaves_existing_hashes_alone():
     c = RunConfig(system="chain_pendulum", k=2, model="node_so")
-    old = _hash(
-        {a: b for a, b in c.to_dict().items() if a not in ("train_target", "eval_checkpoints")}
-    )
+    new = ("train_target", "eval_checkpoints", "duration")
+    old = _hash({a: b for a, b in c.to_dict().items() if a not in new})
     assert c.config_hash == old
     d = dataclasses.replace(c, train_target="derivative")
     assert d.config_hash != c.config_hash and d.train_hash != c.train_hash
@@ -142,3 +141,37 @@ def test_a_derivative_run_trains_and_is_evaluated_on_rollouts(tmp_path):
     row = execute_run(check_runnable(cfg), cache_root=tmp_path)
     assert row["status"] == "ok" and np.isfinite(row["rollout_error"])
     assert row["train_target"] == "derivative" and row["steps_done"] == 40
+    # the seeds' losses: the field error at training and test states (recorded, positive)
+    assert all(0 < row[f"derivative_mse_{s}"] < np.inf for s in ("train", "test"))
+
+
+def test_noisy_inputs_get_the_true_field_at_the_clean_states(tmp_path):
+    """The HNN seed's protocol: noise on the observed states, targets the true dz/dt where
+    the system was (its data.py adds the noise after computing dz/dt)."""
+    from bench.core._execute import _build
+
+    cfg = RunConfig(
+        system="mass_spring",
+        model="node",
+        coordinates="momentum",
+        train_target="derivative",
+        noise=0.1,
+        n_generated=6,
+        n_train=6,
+        n_test=2,
+        test_chunks=2,
+        chunk=5,
+    )
+    system, data, _, _ = _build(cfg, tmp_path)
+    clean = systems.make_dataset(dataclasses.replace(cfg.dataset_config(), noise=0.0), tmp_path)
+    assert np.std(data.z_train - clean.z_train) == pytest.approx(0.1, rel=0.3)  # noisy inputs
+    np.testing.assert_array_equal(data.z_train_clean, clean.z_train)
+    expected = systems.derivatives(system, clean.z_train, None, canonical=True)
+    np.testing.assert_array_equal(data.dz_train, expected)
+    # H = q^2 + p^2: dq/dt = 2p, dp/dt = -2q at the clean states (not the noisy ones)
+    np.testing.assert_allclose(
+        data.dz_train,
+        np.stack([2 * clean.z_train[..., 1], -2 * clean.z_train[..., 0]], -1),
+        rtol=1e-12,
+        atol=1e-12,
+    )

@@ -18,6 +18,7 @@ Sweeps over many runs are :mod:`bench.core._runner`'s.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -95,20 +96,28 @@ def _build(config: RunConfig, cache_root: Path):
     )
     data = systems.make_dataset(dcfg, cache_dir=cache_root)
     if config.train_target == "derivative":
-        data = WithDerivatives(data, system, canonical=scene.canonical)
+        clean = None
+        if dcfg.noise > 0:  # the same trajectories and windows without the observation noise
+            clean = systems.make_dataset(dataclasses.replace(dcfg, noise=0.0), cache_root)
+        data = WithDerivatives(data, system, canonical=scene.canonical, clean=clean)
     return system, data, scene, model
 
 
 class WithDerivatives:
-    """A dataset plus ``dz_train``: the true dz/dt at its training states, in the run's
-    coordinates (:func:`systems.derivatives`; for ``train_target="derivative"``). With
-    observation noise the states are the noisy ones and the targets the true field there."""
+    """A dataset plus ``dz_train``: the true dz/dt of its training states, in the run's
+    coordinates (:func:`systems.derivatives`; for ``train_target="derivative"``).
 
-    def __init__(self, data, system, canonical: bool):
+    With observation noise (``clean``: the same dataset without it) the seeds' protocol: the
+    inputs are the noisy states and the targets the true field at the clean ones (the HNN
+    seed's data.py: noise added to q and p after dz/dt is computed), so a model is asked for
+    the field at where the system really was, from a noisy reading of it."""
+
+    def __init__(self, data, system, canonical: bool, clean=None):
         self._data = data
         args = np.asarray(data.args_train)
+        self.z_train_clean = data.z_train if clean is None else clean.z_train
         self.dz_train = systems.derivatives(
-            system, data.z_train, args if args.shape[-1] else None, canonical=canonical
+            system, self.z_train_clean, args if args.shape[-1] else None, canonical=canonical
         )
 
     def __getattr__(self, name):
@@ -430,6 +439,8 @@ def _evaluate(config, system, data, model, cache_root, rolled=None, roll=None):
         "energy_pct_max_pe": M.energy_pct_max_pe(
             h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
         ),
+        "energy_mse": M.energy_mse(h_pred, h_true),
+        **_derivative_mse(config, system, data, model),
         "rollout_error_velocity": scores["rollout_error_velocity"],
         "mse_velocity": scores["mse_velocity"],
         "symplectic_error": M.symplectic_error(
@@ -452,6 +463,51 @@ def _evaluate(config, system, data, model, cache_root, rolled=None, roll=None):
     }
     full = {"err": err_t, "energy_violation": ev_t, "z_pred": zhat[:4], "z_true": z[:4]}
     return metrics, curves, full
+
+
+_DERIVATIVE_STATES = 2048  # states per split at most for the derivative MSEs
+
+
+def _derivative_mse(config, system, data, model) -> dict:
+    """The HNN seed's train and test losses, whatever the run trained on: the mean squared
+    difference between the model's field and the true dz/dt (:func:`systems.derivatives`, in
+    the run's coordinates) at up to :data:`_DERIVATIVE_STATES` training states (noisy where the
+    data are) and test states (noise-free). Computed for derivative-target runs only (the
+    seeds' protocol; it costs a compile per run); NaN otherwise and for a model without a
+    vector field."""
+    import jax
+    import jax.numpy as jnp
+
+    import models
+
+    if (
+        config.train_target != "derivative"
+        or isinstance(model, models.AbstractDiscreteModel)
+        or not hasattr(model, "vector_field")
+    ):
+        return {"derivative_mse_train": float("nan"), "derivative_mse_test": float("nan")}
+    out = {}
+    dtype = jnp.dtype(config.dtype)
+    canonical = config.coordinates == "momentum"
+    field = jax.jit(jax.vmap(lambda zz, a: model.vector_field(0.0, zz, a)))
+    for split in ("train", "test"):
+        z, args = getattr(data, f"z_{split}"), np.asarray(getattr(data, f"args_{split}"))
+        # targets at the clean states (training: the noise-free twin, as in training)
+        clean = getattr(data, "z_train_clean", z) if split == "train" else z
+        states = z.reshape(-1, z.shape[-1])
+        clean = clean.reshape(-1, z.shape[-1])
+        a = np.repeat(args, z.shape[1], axis=0)
+        pick = np.linspace(0, len(states) - 1, min(_DERIVATIVE_STATES, len(states))).astype(int)
+        states, clean, a = states[pick], clean[pick], a[pick]
+        true = systems.derivatives(system, clean, a if a.shape[-1] else None, canonical)
+        pred = np.asarray(
+            field(jnp.asarray(states, dtype), jnp.asarray(a, dtype)), dtype=np.float64
+        )
+        d = pred - np.asarray(true, dtype=np.float64)
+        out[f"derivative_mse_{split}"] = (
+            float(np.mean(d**2)) if np.all(np.isfinite(d)) else float("nan")
+        )
+    return out
 
 
 def _checkpoints(config, system, data, meta, final_metrics, final_curves, roll) -> dict | None:

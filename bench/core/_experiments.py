@@ -64,6 +64,7 @@ class RunConfig:
     n_train: int = 800
     chunk: int = 5
     dt: float = 0.03
+    duration: float = 10.0  # seconds simulated per trajectory (chunks and test windows in it)
     n_test: int = 200
     test_chunks: int = 20
     steps: int = 8000
@@ -91,7 +92,7 @@ class RunConfig:
             object.__setattr__(self, name, tuple(sorted((str(a), b) for a, b in value)))
         if self.k is not None:
             object.__setattr__(self, "k", _as_int(self.k, "k"))
-        for name in ("friction", "noise", "dt", "lr", "eval_rtol"):
+        for name in ("friction", "noise", "dt", "duration", "lr", "eval_rtol"):
             object.__setattr__(self, name, _as_float(getattr(self, name), name))
         for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
             object.__setattr__(self, name, _as_int(getattr(self, name), name))
@@ -109,7 +110,7 @@ class RunConfig:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0; got {v}")
-        for name in ("dt", "lr", "eval_rtol"):
+        for name in ("dt", "duration", "lr", "eval_rtol"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a finite number > 0; got {v}")
@@ -151,6 +152,9 @@ class RunConfig:
         for f in dataclasses.fields(cls):  # optional fields come back from tables as NaN
             if f.default is None and f.name in kw and _is_missing(kw[f.name]):
                 kw[f.name] = None
+            # a field added later is empty in the rows written before it: its default
+            elif f.name in _NEW_FIELDS and f.name in kw and _is_missing(kw[f.name]):
+                kw[f.name] = _NEW_FIELDS[f.name]
         if "dissipation" in kw and kw["dissipation"] is not None:
             kw["dissipation"] = bool(kw["dissipation"])
         return cls(**kw)
@@ -175,6 +179,7 @@ class RunConfig:
             n_train=self.n_train,
             chunk=self.chunk,
             dt=self.dt,
+            duration=self.duration,
             n_test=self.n_test,
             test_chunks=self.test_chunks,
             noise=self.noise,
@@ -201,7 +206,7 @@ class RunConfig:
 
 _NO = object()
 # Fields added after results were stored, with the default that leaves them out of the hashes.
-_NEW_FIELDS = {"eval_checkpoints": 0, "train_target": "rollout"}
+_NEW_FIELDS = {"eval_checkpoints": 0, "train_target": "rollout", "duration": 10.0}
 
 
 def _is_missing(v) -> bool:

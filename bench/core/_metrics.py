@@ -182,6 +182,13 @@ def energy_pct_max_pe(h_pred, h_true, potential_range: float) -> float:
     return float(100.0 * np.mean(diff[..., 1:]) / pr)
 
 
+def energy_mse(h_pred, h_true) -> float:
+    """mean over trajectories and every time (t = 0 included) of (H(zhat) - H(z))^2, H the true
+    energy: the HNN seed's "energy MSE" along rollouts. NaN if a prediction is non-finite."""
+    d = np.asarray(h_pred, dtype=np.float64) - np.asarray(h_true, dtype=np.float64)
+    return float(np.mean(d**2)) if np.all(np.isfinite(d)) else float("nan")
+
+
 def mse(zhat, z, angular=()) -> float:
     """mean over t >= 1, trajectories and entries of (zhat - z)^2, angle differences wrapped.
 

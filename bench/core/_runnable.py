@@ -20,7 +20,7 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
     with the integrators that ``node`` allows. Checks are cached per model, scene and method.
     """
     cfg.validate()
-    _check_system_and_data(_data_key(cfg))
+    cfg.dataset_config()  # the system, its parameters, the dataset's shape (ValueError)
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)
@@ -47,23 +47,6 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
     return cfg
 
 
-def _data_key(cfg: RunConfig) -> tuple:
-    return (
-        cfg.system,
-        tuple(sorted(cfg.system_kwargs().items())),
-        cfg.n_generated,
-        cfg.n_train,
-        cfg.chunk,
-        cfg.dt,
-        cfg.n_test,
-        cfg.test_chunks,
-        cfg.noise,
-        cfg.coordinates,
-        cfg.random_args,
-        cfg.seed,
-    )
-
-
 def _scene_key(cfg: RunConfig) -> tuple:
     return (
         cfg.system,
@@ -76,28 +59,6 @@ def _scene_key(cfg: RunConfig) -> tuple:
 
 def _model_key(cfg: RunConfig) -> tuple:
     return (cfg.model, cfg.model_options, cfg.dissipation, cfg.activation, cfg.dtype)
-
-
-@functools.lru_cache(maxsize=256)
-def _check_system_and_data(key: tuple) -> None:
-    import systems
-
-    (system, params, n_gen, n_train, chunk, dt, n_test, test_chunks, noise, coords, ra, seed) = key
-    systems.make(system, **dict(params))  # the system's own ValueError (unknown parameter, ...)
-    systems.DatasetConfig(
-        system=system,
-        system_params=params,
-        n_generated=n_gen,
-        n_train=n_train,
-        chunk=chunk,
-        dt=dt,
-        n_test=n_test,
-        test_chunks=test_chunks,
-        noise=noise,
-        coordinates=coords,
-        random_args=ra,
-        seed=seed,
-    )
 
 
 @functools.lru_cache(maxsize=256)

@@ -38,6 +38,11 @@ _CONFIG = {
     "n_train": ("count", "training chunks"),
     "chunk": ("count", "points per training chunk"),
     "dt": ("s (simulated)", "time step between observed points"),
+    "duration": (
+        "s (simulated)",
+        "length of each simulated trajectory; chunks and test windows start anywhere in it "
+        "(empty in rows from before the field: 10)",
+    ),
     "n_test": ("count", "test trajectories"),
     "test_chunks": ("count", "test trajectory length in chunks (chunk * test_chunks points)"),
     "steps": ("count", "training steps"),
@@ -95,6 +100,20 @@ _RUN = {
         "%",
         "100 * mean over t >= 1 of |H(zhat) - H(z)| / (max V - min V) (the LNN seed's metric); "
         "empty for unbounded potentials or non-finite predictions",
+    ),
+    "energy_mse": (
+        "H units^2",
+        "mean over test trajectories and every t (t = 0 included) of (H(zhat) - H(z))^2 (the HNN "
+        "seed's energy MSE along rollouts); empty for non-finite predictions",
+    ),
+    "derivative_mse_train": (
+        "(state units / s)^2",
+        "mean of (model field - true dz/dt)^2 at up to 2048 training states, in the run's "
+        "coordinates (the HNN seed's train loss); derivative-target runs only, empty otherwise",
+    ),
+    "derivative_mse_test": (
+        "(state units / s)^2",
+        "the same at up to 2048 test states (noise-free; the HNN seed's test loss)",
     ),
     "mse": (
         "state units^2",

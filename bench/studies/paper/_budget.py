@@ -81,6 +81,10 @@ MS_PER_STEP = {
 # removed HNN+SO's training variants, 106 s, and the spring's evaluations, 78 s).
 STABILITY_S = 243.0
 TRADEOFF_S = (274.0 - 106.0 - 78.0) / 2
+# The HNN seed's tasks at quick (derivative targets, not in WALL_S's rollout-trained costs):
+# 79 + 96 + 62 s wall for the three experiments, 2 workers, cold caches
+# (`python -m bench sweep hnn_seed_<system> --profile quick --workers 2`, 2026-11-24)
+SEED_TASKS_S = 237.0
 
 
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
@@ -157,11 +161,12 @@ def estimate_seconds(
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
     """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study``, from :func:`estimate_seconds` and the
-    measured shares of the others (the learning-curve experiment is read from the registry:
-    ``bench.studies.learning`` imports this package, not the reverse)."""
+    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks``, from
+    :func:`estimate_seconds` and the measured shares of the others (the learning-curve
+    experiment is read from the registry: ``bench.studies.learning`` imports this package, not
+    the reverse)."""
     from ...core._experiments import available, get
 
     extra = tuple(get(n) for n in ("learning_curves",) if n in available())
     paper = estimate_seconds(profile, workers=workers, experiments=PAPER_EXPERIMENTS + extra)
-    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S
+    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S + SEED_TASKS_S
