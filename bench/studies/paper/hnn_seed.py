@@ -334,7 +334,7 @@ def figure(results_dir) -> list[Path]:
         ax.set_xticks(range(len(SYSTEMS)), [s.replace("_", "-") for s in SYSTEMS])
         ax.set_ylabel(label)
     axes[0].plot([], [], "k_", ms=12, mew=2, label="seed's number (MLP, HNN)")
-    axes[0].legend(fontsize=7)
+    axes[0].legend(fontsize=7, loc="lower left")
     fig.suptitle("HNN seed tasks: bars ours (geometric mean, min-max over seeds)", fontsize=10)
     return save_figure(fig, Path(results_dir) / "figures", "fig_hnn_seed")
 
