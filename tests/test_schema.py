@@ -30,7 +30,7 @@ def rows(tmp_path_factory):
         RunConfig(
             system="chain_pendulum",
             k=1,
-            model="hnn_so",
+            model="node",  # the cheapest model that runs in (q, p)
             coordinates="momentum",
             eval_checkpoints=2,
             **SMOKE,

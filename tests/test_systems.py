@@ -30,10 +30,7 @@ CONSERVATIVE = [
     ("spring_pendulum", {"k": 1}),
     ("spring_pendulum", {"k": 2}),
     ("relativistic_particle", {}),
-    ("mass_spring", {}),
-    ("pendulum", {}),
-    ("two_body", {}),
-]
+]  # the HNN seed's systems: conservation and closed forms in tests/test_systems_seed.py
 # every registered system (a new one is picked up here), at k = 2 where it takes a k
 ALL_DEFAULT = [
     (name, {"k": 2} if "k" in systems.parameters(name) else {}) for name in systems.available()

@@ -27,8 +27,9 @@ figure.
   notebook scores energy as q^2 + p^2, the mass-spring's H, not the pendulum's (a defect: ours
   uses the pendulum's H), so its pendulum number is not the same quantity.
 
-Budgets: ``paper`` is the seed's; ``quick`` the seed's data with 1000 steps (the seed: 2000,
-two-body 10000) and 200 two-body orbits (the seed: 800), inside ``make bench``; ``smoke`` tiny.
+Budgets: ``paper`` (and the ``paper-core`` campaign) is the seed's; ``quick`` the seed's data
+with 1000 steps (the seed: 2000, two-body 10000) and 200 two-body orbits (the seed: 800), inside
+``make bench``; ``smoke`` tiny.
 Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are not here yet (issue 22).
 """
 
@@ -147,6 +148,7 @@ def _experiment(system: str) -> Experiment:
         profile_overrides={
             "smoke": {**_SMOKE, "seeds": (0,)},
             "quick": _QUICK[system],
+            "paper-core": {},  # the seed's budget: part of the CPU campaign (issue 24)
         },
         include=_include,
         claim=10,
