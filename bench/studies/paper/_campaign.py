@@ -10,9 +10,10 @@ verdict reads (the Rayleigh HNN, the learned-map HNN, the LNN with a kinetic pri
 NODE on damped data, k = 1, 3, 4) stay in the full ``paper`` profile, for a GPU or a cluster.
 
 Order (:data:`CAMPAIGN_CLAIMS`): the claims that the learning-curve study found unsettled at
-quick first (6, 4, 1, 3), then 2, 5, 9, 7, 8; within a claim, the longest runs first. A run that
-several claims share is counted, and run, with the first of them. Runs are content-addressed,
-so a campaign killed at any moment loses only the runs in flight; run it again to resume.
+quick first (6, 4, 1, 3), then the HNN seed's cheap tasks (10), then 2, 5, 9, 7, 8; within a
+claim, the longest runs first. A run that several claims share is counted, and run, with the
+first of them. Runs are content-addressed, so a campaign killed at any moment loses only the
+runs in flight; run it again to resume.
 
 Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
 costs scaled to the profile's steps, batch and width. The stored runs' own seconds are shown
@@ -32,7 +33,7 @@ from ...core._experiments import available, expand, get
 from ._budget import run_seconds
 
 # The order in which a campaign settles the claims (issue 24).
-CAMPAIGN_CLAIMS = (6, 4, 1, 3, 2, 5, 9, 7, 8)
+CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8)
 
 
 def campaign_experiments(profile: str = "paper-core") -> list[str]:
