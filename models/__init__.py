@@ -21,7 +21,7 @@ from ._integrators import (
     rollout,
     rollout_batch,
 )
-from ._models import (
+from ._registry import (
     available,
     coordinates,
     load_plugins,

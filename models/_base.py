@@ -19,6 +19,12 @@ def as_dtype(x, dtype) -> Array:
     return jnp.asarray(x, dtype)
 
 
+def split(z: Array) -> tuple[Array, Array]:
+    """(q, second half) of a state z = (q, qdot) or (q, p) along its last axis."""
+    d = z.shape[-1] // 2
+    return z[..., :d], z[..., d:]
+
+
 class AbstractModel(eqx.Module):
     """A learned model of the dynamics of a :class:`Scene`.
 

@@ -17,6 +17,9 @@ from ._mlp import MLP
 _SHIFT = math.log(math.e - 1.0)
 
 
+MASS_EPS = 1e-3  # floor on the diagonal of a learned mass factor: M stays invertible
+
+
 def cholesky_from_raw(raw: Array, dof: int, eps: float) -> Array:
     """Lower-triangular C from dof (dof + 1) / 2 numbers; diagonal softplus(.) + eps > 0."""
     rows, cols = np.tril_indices(dof)

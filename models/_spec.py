@@ -7,7 +7,7 @@ import functools
 from dataclasses import dataclass
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel
-from ._models import _REGISTRY, available, coordinates
+from ._registry import _REGISTRY, available, coordinates
 
 __all__ = ["ModelSpec", "spec"]
 

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 import models
-from models import _models as registry
+from models import _registry as registry
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "decon_bench_example_model" / "decon_bench_example_model"

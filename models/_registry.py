@@ -1,0 +1,382 @@
+"""The model registry: every registered model, each assembled from the bias parts of the
+sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``, ``_vin``,
+``_trivial``).
+
+| name         | biases                                                                   |
+| ------------ | ------------------------------------------------------------------------ |
+| node         | ODE: dz/dt = MLP(z)                                                      |
+| node_so      | ODE + second order: dq/dt = qdot, dqdot/dt = MLP(q, qdot)               |
+| hnn          | ODE + energy + exact symplectic: J grad H, general H(q, p)               |
+| hnn_so       | hnn + second order: separable H = 1/2 p^T M^-1(q) p + V(q)               |
+| mixture_hnn  | the paper's damped comparator: hnn_so field + a free MLP field in (q, p) |
+| node_symreg  | node + soft symplectic penalty weight * mean ||J DF - (J DF)^T||^2       |
+| node_so_symreg | canonical NODE+SO: dq/dt = M^-1(q) p, dp/dt = MLP(q, p), + the penalty |
+| lnn          | ODE + second order + energy: Euler-Lagrange of a learned L(q, qdot)      |
+| vin          | discrete + variational: Verlet step of L = 1/2 v^T M v - U(q)            |
+| vin_implicit | discrete + variational: midpoint DEL step of a general learned L(q, v)   |
+| resnet       | discrete, free: z_{n+1} = z_n + MLP(z_n)                                 |
+| constant_velocity | trivial, no parameters: q(t) = q0 + t qdot0 (see ``_trivial``)      |
+| at_rest      | trivial, no parameters: q(t) = q0, qdot(t) = 0                           |
+
+``hnn`` takes ``momentum_map`` (default True: p = M(q) qdot with a learned M in a velocity
+scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
+in for p and dz/dt = J grad H on (q, qdot).
+
+The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
+part when the scene is damped (or ``dissipation=True``).
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Callable
+from typing import NamedTuple
+
+import equinox as eqx
+import jax
+
+from ._base import AbstractContinuousModel, AbstractDiscreteModel
+from ._hnn import HNN, MixtureHNN, SeparableHNN
+from ._lnn import LNN
+from ._mlp import ACTIVATIONS, DTYPES, INITS
+from ._node import CanonicalSecondOrderODE, NeuralODE, SecondOrderODE
+from ._resnet import ResNet
+from ._scalar import SOLVES
+from ._scene import Scene
+from ._trivial import AtRest, ConstantVelocity
+from ._vin import VIN, ImplicitVIN
+
+
+def _positive_float(name):
+    def check(x):
+        if isinstance(x, bool) or not isinstance(x, int | float) or not x >= 0:
+            raise ValueError(f"option {name} must be a number >= 0, got {x!r}")
+        return float(x)
+
+    return check
+
+
+def _choice(name, allowed):
+    def check(x):
+        if x not in allowed:
+            raise ValueError(f"option {name} must be one of {allowed}, got {x!r}")
+        return x
+
+    return check
+
+
+def _positive_int(name):
+    def check(x):
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            raise ValueError(f"option {name} must be an int >= 1, got {x!r}")
+        return x
+
+    return check
+
+
+def _boolean(name):
+    def check(x):
+        if not isinstance(x, bool):
+            raise ValueError(f"option {name} must be True or False, got {x!r}")
+        return x
+
+    return check
+
+
+def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True):
+    if separable and not scene.canonical:
+        return SeparableHNN(scene, *a, key=key, dissipation=dissipation)
+    return HNN(
+        scene, *a, key=key, separable=separable, dissipation=dissipation, momentum_map=momentum_map
+    )
+
+
+def _trivial(cls):
+    def build(s, width, depth, activation, dtype, *, key, dissipation):
+        return cls(s, dtype)
+
+    return build
+
+
+class _Entry(NamedTuple):
+    """A registered model: its class (whose markers the spec reads), how to build it, its
+    options (name -> validator), whether it takes a dissipation term (the structured models),
+    the coordinates it needs (None: either) and its default activation."""
+
+    cls: type
+    build: Callable
+    options: dict = {}
+    structured: bool = False
+    needs: str | None = None
+    activation: str = "tanh"
+
+
+def _plain(cls):
+    """The builder of a model class that takes no dissipation term."""
+
+    def build(s, *a, key, dissipation, **options):
+        return cls(s, *a, key=key, **options)
+
+    return build
+
+
+_V, _P = "velocity", "momentum"
+_REGISTRY = {
+    "node": _Entry(NeuralODE, _plain(NeuralODE)),
+    "node_so": _Entry(SecondOrderODE, _plain(SecondOrderODE)),
+    "hnn": _Entry(HNN, _build_hnn, {"momentum_map": _boolean("momentum_map")}, True),
+    "hnn_so": _Entry(
+        SeparableHNN,
+        lambda s, *a, key, dissipation: _build_hnn(
+            s, *a, key=key, separable=True, dissipation=dissipation
+        ),
+        structured=True,
+    ),
+    "mixture_hnn": _Entry(MixtureHNN, _plain(MixtureHNN)),
+    "node_symreg": _Entry(
+        NeuralODE,
+        lambda s, *a, key, dissipation, weight=1.0: NeuralODE(s, *a, key=key, weight=weight),
+        {"weight": _positive_float("weight")},
+    ),
+    "node_so_symreg": _Entry(
+        CanonicalSecondOrderODE,
+        lambda s, *a, key, dissipation, weight=1.0: CanonicalSecondOrderODE(
+            s, *a, key=key, weight=weight
+        ),
+        {"weight": _positive_float("weight")},
+        needs=_P,
+    ),
+    "lnn": _Entry(
+        LNN,
+        LNN,
+        {
+            "solve": _choice("solve", SOLVES),
+            "eps": _positive_float("eps"),
+            "init": _choice("init", INITS),
+            "kinetic_prior": _positive_float("kinetic_prior"),
+        },
+        True,
+        _V,
+        "softplus",
+    ),
+    "vin": _Entry(VIN, VIN, {}, True, _V),
+    "vin_implicit": _Entry(
+        ImplicitVIN, ImplicitVIN, {"newton_steps": _positive_int("newton_steps")}, True, _V
+    ),
+    "resnet": _Entry(ResNet, _plain(ResNet)),
+    "constant_velocity": _Entry(ConstantVelocity, _trivial(ConstantVelocity)),
+    "at_rest": _Entry(AtRest, _trivial(AtRest)),
+}
+
+
+BUILT_IN = tuple(_REGISTRY)
+ENTRY_POINT_GROUP = "decon_bench.models"
+MODULES_ENV = "DECON_MODEL_MODULES"  # comma-separated plug-in modules (--model-module)
+_PLUGINS: set[str] = set()  # plug-in sources already loaded ("ep:<name>", "module:<name>")
+
+
+def register(
+    name: str,
+    cls: type,
+    *,
+    build: Callable | None = None,
+    options: dict | None = None,
+    takes_dissipation: bool = False,
+    coordinates: str | None = None,
+    activation: str = "tanh",
+) -> str:
+    """Register a model from outside the suite under ``name``; returns ``name``.
+
+    The contract (checked here, a one-line ValueError naming what is missing): ``cls`` is a
+    subclass of :class:`AbstractContinuousModel` (a learned field ``vector_field(t, z, args)``)
+    or :class:`AbstractDiscreteModel` (a learned map ``step(z, dt, args)``), with every
+    abstract method implemented and a class attribute ``structure`` in (None, "hamiltonian",
+    "lagrangian"); ``build(scene, width, depth, activation, dtype, *, key, dissipation,
+    **options)`` returns an instance (default: ``cls(scene, width, depth, activation, dtype,
+    key=key, **options)``); ``options`` maps each option name to a validator returning the
+    value; ``takes_dissipation``: the model adds a dissipation term in damped scenes (then
+    ``build`` receives ``dissipation``); ``coordinates``: None (either), "velocity" or
+    "momentum". :func:`spec` reads its capabilities like a built-in's. Re-registering the
+    same plug-in name replaces it; a built-in name cannot be taken.
+    """
+    import inspect
+
+    def bad(what: str):
+        raise ValueError(f"model plug-in {name!r}: {what}")
+
+    if not isinstance(name, str) or not name.isidentifier():
+        bad("the name must be a Python identifier")
+    if name in BUILT_IN:
+        bad(f"the name is a built-in model; built-ins: {', '.join(BUILT_IN)}")
+    if not isinstance(cls, type) or not issubclass(
+        cls, AbstractContinuousModel | AbstractDiscreteModel
+    ):
+        bad(
+            "the class must subclass models.AbstractContinuousModel (a vector field) or "
+            "models.AbstractDiscreteModel (a map); got "
+            f"{getattr(cls, '__name__', cls)!r}"
+        )
+    missing = sorted(getattr(cls, "__abstractmethods__", ()) or ())
+    if missing:
+        bad(f"{cls.__name__} does not implement {', '.join(missing)}")
+    if getattr(cls, "structure", "?") not in (None, "hamiltonian", "lagrangian"):
+        bad(f"{cls.__name__}.structure must be None, 'hamiltonian' or 'lagrangian'")
+    if coordinates not in (None, _V, _P):
+        bad(f"coordinates must be None, {_V!r} or {_P!r}; got {coordinates!r}")
+    if activation not in ACTIVATIONS:
+        bad(f"activation must be one of {sorted(ACTIVATIONS)}; got {activation!r}")
+    options = dict(options or {})
+    if not all(isinstance(k, str) and callable(v) for k, v in options.items()):
+        bad("options must map option names to validator callables")
+    if build is None:
+        build = _plain(cls)
+        target = cls
+        probe = ("scene", 1, 1, "tanh", "float32")
+        kwargs = {"key": None}
+    else:
+        target, probe, kwargs = (
+            build,
+            ("scene", 1, 1, "tanh", "float32"),
+            {
+                "key": None,
+                "dissipation": False,
+            },
+        )
+    if not callable(build):
+        bad("build must be callable")
+    try:
+        inspect.signature(target).bind(*probe, **kwargs)
+    except TypeError as e:
+        bad(
+            "build (or the class) must accept (scene, width, depth, activation, dtype, *, key"
+            f"{', dissipation' if target is build else ''}, **options): {e}"
+        )
+    except ValueError:  # no signature available: trust it
+        pass
+    _REGISTRY[name] = _Entry(cls, build, options, bool(takes_dissipation), coordinates, activation)
+    from ._spec import spec
+
+    spec.cache_clear()
+    return name
+
+
+_ENTRY_POINTS: list = []  # [the entry points of ENTRY_POINT_GROUP], once scanned
+
+
+def load_plugins(modules: str | None = None) -> None:
+    """Import the plug-in models, once each: the entry points of :data:`ENTRY_POINT_GROUP` and
+    the modules named in ``$DECON_MODEL_MODULES`` (or ``modules``), comma-separated. A module
+    registers its models on import (:func:`register`); an entry point that loads a callable
+    is called. A plug-in that fails to import is a one-line ValueError naming it."""
+    import importlib
+    import os
+    from importlib import metadata
+
+    names = modules if modules is not None else os.environ.get(MODULES_ENV, "")
+    todo = [("module:" + m.strip(), m.strip()) for m in names.split(",") if m.strip()]
+    if not _ENTRY_POINTS:  # scanned once a process: a scan reads every installed package's
+        # metadata (~7 ms), and available() is asked for every configuration of a sweep
+        try:
+            _ENTRY_POINTS.append(list(metadata.entry_points(group=ENTRY_POINT_GROUP)))
+        except Exception:  # noqa: BLE001 - a broken environment must not stop the built-ins
+            _ENTRY_POINTS.append([])
+    todo += [("ep:" + ep.name, ep) for ep in _ENTRY_POINTS[0]]
+    for key, what in todo:
+        if key in _PLUGINS:
+            continue
+        _PLUGINS.add(key)
+        try:
+            obj = importlib.import_module(what) if isinstance(what, str) else what.load()
+            if callable(obj) and not isinstance(obj, type):
+                obj()
+        except ValueError:
+            raise
+        except Exception as e:  # noqa: BLE001 - one line naming the plug-in
+            source = (
+                "DECON_MODEL_MODULES/--model-module"
+                if isinstance(what, str)
+                else (f"entry point {ENTRY_POINT_GROUP}")
+            )
+            raise ValueError(
+                f"model plug-in {key.split(':', 1)[1]!r} ({source}) failed to load: "
+                f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
+            ) from None
+
+
+def available() -> list[str]:
+    """Names of the registered models (built-ins, then plug-ins)."""
+    load_plugins()
+    return list(_REGISTRY)
+
+
+def trivial_models() -> list[str]:
+    """Names of the registered trivial predictors (no parameters, nothing to train)."""
+    load_plugins()
+    return [n for n, entry in _REGISTRY.items() if entry.cls.trivial]
+
+
+def coordinates(name: str) -> tuple[str, ...]:
+    """The coordinate settings ("velocity", "momentum") that model ``name`` accepts."""
+    load_plugins()
+    if name not in _REGISTRY:
+        raise ValueError(f"unknown model {name!r}; allowed: {available()}")
+    needs = _REGISTRY[name].needs
+    return (_V, _P) if needs is None else (needs,)
+
+
+def make(
+    name: str,
+    scene: Scene,
+    *,
+    key,
+    width: int = 256,
+    depth: int = 2,
+    activation: str | None = None,
+    dtype: str = "float32",
+    dissipation: bool | None = None,
+    **options,
+):
+    """Build the model ``name`` for ``scene``.
+
+    ``activation`` None takes the model's default (softplus for lnn, as in the LNN seed; tanh
+    otherwise). ``dissipation`` None follows ``scene.damped`` for the structured models (hnn,
+    hnn_so, lnn, vin, vin_implicit); False forces the plain variant; free models ignore it.
+    """
+    load_plugins()
+    if name not in _REGISTRY:
+        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=1)
+        hint = f" (closest: {close[0]!r})" if close else ""
+        raise ValueError(f"unknown model {name!r}{hint}; allowed: {available()}")
+    builder, allowed, structured, needs, default_activation = _REGISTRY[name][1:]
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a models.Scene, got {type(scene).__name__}")
+    for field, value in (("width", width), ("depth", depth)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{field} must be an int >= 1, got {value!r}")
+    activation = default_activation if activation is None else activation
+    if activation not in ACTIVATIONS:
+        raise ValueError(f"activation must be one of {sorted(ACTIVATIONS)}, got {activation!r}")
+    if dtype not in DTYPES:
+        raise ValueError(f"dtype must be one of {DTYPES}, got {dtype!r}")
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {unknown} for model {name!r}; allowed: {sorted(allowed)}"
+        )
+    options = {k: allowed[k](v) for k, v in options.items()}
+    if dissipation is not None and not isinstance(dissipation, bool):
+        raise ValueError(f"dissipation must be None, True or False, got {dissipation!r}")
+    if needs == _V and scene.canonical:
+        raise ValueError(f"model {name!r} needs velocity coordinates (Scene.canonical=False)")
+    if needs == _P and not scene.canonical:
+        raise ValueError(f"model {name!r} needs momentum coordinates (Scene.canonical=True)")
+    dissipation = (scene.damped if dissipation is None else dissipation) and structured
+    return builder(
+        scene, width, depth, activation, dtype, key=key, dissipation=dissipation, **options
+    )
+
+
+def n_parameters(model) -> int:
+    """The number of trainable scalars of a model."""
+    leaves = jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_inexact_array))
+    return int(sum(x.size for x in leaves))
