@@ -10,6 +10,7 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 and the integrators (``Integrator``, ``rollout``, ...).
 """
 
+from ._autoencoder import Autoencoder
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
 from ._integrators import (
     DESCRIPTIONS,
@@ -21,6 +22,7 @@ from ._integrators import (
     rollout,
     rollout_batch,
 )
+from ._latent import LatentModel, latent_scene
 from ._registry import (
     available,
     coordinates,
@@ -38,10 +40,12 @@ from ._trivial import AbstractTrivialModel
 
 __all__ = [
     "AbstractContinuousModel",
+    "Autoencoder",
     "DESCRIPTIONS",
     "METHODS",
     "ORDERS",
     "Integrator",
+    "LatentModel",
     "implicit_tolerance",
     "count_evaluations",
     "rollout",
@@ -53,6 +57,7 @@ __all__ = [
     "Scene",
     "acceleration_from_lagrangian",
     "available",
+    "latent_scene",
     "coordinates",
     "load_plugins",
     "make",

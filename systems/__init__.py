@@ -10,8 +10,10 @@ from ._coordinates import derivatives, to_momentum, to_velocity  # noqa: E402
 from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset  # noqa: E402
 from ._mass_spring import MassSpring  # noqa: E402
 from ._pendulum import Pendulum  # noqa: E402
+from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset  # noqa: E402
 from ._registry import available, make, parameters  # noqa: E402
 from ._relativistic import RelativisticParticle  # noqa: E402
+from ._render import read_angle, read_state, render  # noqa: E402
 from ._spring import SpringPendulum  # noqa: E402
 from ._two_body import TwoBody  # noqa: E402
 
@@ -21,6 +23,8 @@ __all__ = [
     "Dataset",
     "MassSpring",
     "Pendulum",
+    "PixelDataset",
+    "PixelDatasetConfig",
     "TwoBody",
     "DatasetConfig",
     "RelativisticParticle",
@@ -30,8 +34,12 @@ __all__ = [
     "derivatives",
     "make",
     "make_dataset",
+    "make_pixel_dataset",
     "parameters",
+    "read_angle",
+    "read_state",
     "reference_masses_lengths",
+    "render",
     "to_momentum",
     "to_velocity",
 ]

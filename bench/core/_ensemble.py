@@ -278,7 +278,9 @@ def plan_groups(
             cache_root is not None
             and (Path(cache_root) / "params" / c.train_hash / "model.eqx").exists()
         )
-        if cached or c.train_hash in trains or c.model in _trivial_names():
+        # pixel runs train their own way (bench.core._pixels): alone
+        pixels = c.observation != "state"
+        if cached or c.train_hash in trains or c.model in _trivial_names() or pixels:
             alone.append([c])
             continue
         trains.add(c.train_hash)

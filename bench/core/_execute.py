@@ -585,6 +585,10 @@ def execute_run(
     ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
     ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
     """
+    if config.observation == "pixels":  # frames, an autoencoder, latent dynamics (issue 22)
+        from ._pixels import execute_pixels
+
+        return execute_pixels(config, cache_root, progress)
     cache_root = Path(cache_root or systems.cache_root())
     row = base_row(config)
     art = artifact_dir(config.config_hash, cache_root)

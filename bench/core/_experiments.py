@@ -41,6 +41,7 @@ COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
+OBSERVATIONS = ("state", "pixels")  # what the models see (pixels: bench.core._pixels)
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,9 @@ class RunConfig:
     # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
     train_target: str = "rollout"
+    # what the models observe: "state" (z itself) or "pixels" (rendered frames of the state,
+    # an autoencoder and latent dynamics: bench.core._pixels; issue 22)
+    observation: str = "state"
 
     def __post_init__(self):
         # Canonical forms, so that equal runs hash equally however they were written.
@@ -133,6 +137,7 @@ class RunConfig:
         check_choice("loss", self.loss, LOSSES)
         check_choice("dtype", self.dtype, DTYPES)
         check_choice("train_target", self.train_target, TRAIN_TARGETS)
+        check_choice("observation", self.observation, OBSERVATIONS)
         return self
 
     def to_dict(self) -> dict:
@@ -206,7 +211,12 @@ class RunConfig:
 
 _NO = object()
 # Fields added after results were stored, with the default that leaves them out of the hashes.
-_NEW_FIELDS = {"eval_checkpoints": 0, "train_target": "rollout", "duration": 10.0}
+_NEW_FIELDS = {
+    "eval_checkpoints": 0,
+    "train_target": "rollout",
+    "duration": 10.0,
+    "observation": "state",
+}
 
 
 def _is_missing(v) -> bool:

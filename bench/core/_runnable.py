@@ -20,6 +20,10 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
     with the integrators that ``node`` allows. Checks are cached per model, scene and method.
     """
     cfg.validate()
+    if cfg.observation == "pixels":  # its own data and models (bench.core._pixels)
+        from ._pixels import check_pixels
+
+        return check_pixels(cfg)
     cfg.dataset_config()  # the system, its parameters, the dataset's shape (ValueError)
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)

@@ -57,6 +57,11 @@ _CONFIG = {
     "eval_checkpoints": ("count", "learning-curve checkpoints kept during training (0: none)"),
     "dtype": ("-", "float32 or float64 of the model and its training"),
     "seed": ("-", "seed of the data split, initialisation and batches"),
+    "observation": (
+        "-",
+        "what the models observe: state (z) or pixels (28 x 28 frames, an autoencoder and "
+        "latent dynamics; empty in rows from before the field: state)",
+    ),
     "train_target": (
         "-",
         "what training fits: rollout (the chunks through the integrator) or derivative (the "
@@ -146,6 +151,22 @@ _RUN = {
     "checkpoint_seconds": ("s", "wall time of scoring the learning-curve checkpoints"),
     "wall_seconds": ("s", "wall time of the whole run: data, compile, training, evaluation"),
     "ensemble_size": ("count", "runs trained together as one vmapped ensemble (1: alone)"),
+    # pixel runs (observation "pixels", bench.core._pixels); empty for state runs
+    "pixel_mse": ("1 (intensity^2)", "pixels: mean over t >= 1 of (decoded - true frames)^2"),
+    "pixel_mse_late": ("1 (intensity^2)", "pixels: pixel_mse over the last third of the horizon"),
+    "pixel_mse_static": ("1 (intensity^2)", "pixels: pixel_mse of holding the first observation"),
+    "recon_mse": ("1 (intensity^2)", "pixels: autoencoder reconstruction error, test frames"),
+    "pixel_loss_train": ("1", "pixels: the HNN seed's three-term loss on training windows"),
+    "pixel_loss_test": ("1", "pixels: the same on test windows (the seed's test loss)"),
+    "latent_energy_drift": (
+        "1",
+        "pixels: mean over rollouts of the range of the learned latent energy (HNN's H, VIN's "
+        "discrete energy) over its std across test starts; empty for models without one",
+    ),
+    "decoded_energy_mse": (
+        "H units^2",
+        "pixels: mean of (H(state read off decoded frames) - H(state read off true frames))^2",
+    ),
 }
 
 _PROVENANCE = {

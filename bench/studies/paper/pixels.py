@@ -1,0 +1,362 @@
+"""Learning from pixels (issue 22): the HNN seed's pixel pendulum (claim 11) and the VIN seed's
+pixel forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and a figure
+of predicted frames against the truth.
+
+**The task** (``observation="pixels"``; data, loss and metrics in :mod:`bench.core._pixels`):
+the suite's ``pendulum`` (H = 3 (1 - cos q) + p^2) rendered to 28 x 28 grey frames
+(``systems.render``), each observation a frame stacked with its successor; starts with |q0| <
+pi/6 and qdot0 ~ U(-1, 1) (the seed's Pendulum-v0 starts); dt = 0.08 s, 32 frames per small-angle
+period as the seed's Pendulum-v0 (dt 0.05 s, its faster pendulum) has. The seed (its text and
+greydanus/hamiltonian-nn experiment-pixels/): 200 trajectories of 100 frames (80/20 split),
+an autoencoder of four fully connected residual relu layers of 200 units each way with a latent
+of 2, the HNN (or the baseline MLP field) of width 200 on the latent, loss = pixel L2 + the
+auxiliary latent loss + 0.1 x the latent dynamics loss, Adam at lr 1e-3, weight decay 1e-5,
+batch 200, 10000 steps. Ours at ``paper``: the same, with AdamW, the suite's cosine decay and
+clipping, and an RK4 step in the dynamics loss (the seed trains with an Euler step and tests
+with RK4).
+
+**Models**: ``models.LatentModel`` = ``models.Autoencoder`` + a registered dynamics model on the
+2-number latent: ``hnn`` (J grad H on z = (q, p)) against the seed's baseline ``node`` (an MLP
+field), and the VIN seed's ``vin`` (velocity Verlet of a learned L on z = (q, qdot)) against its
+``resnet`` (z + MLP(z)). The VIN seed encodes frames to q and infers qdot; ours encodes the
+two-frame observation to (q, qdot) with the HNN seed's auxiliary loss (one encoder for all four
+models).
+
+**Claims.** 11 (HNN seed, Table 1's pixel row: energy MSE 9.27e-3 baseline -> 1.53e-4 HNN at
+similar losses): (a) the baseline's energy MSE is at least :data:`ENERGY_FACTOR` x the HNN's,
+(b) the HNN's test loss (the seed's three-term loss on held-out windows) at most
+:data:`LOSS_FACTOR` x the baseline's. The seed's pixel "energy" is computed in its notebooks
+from the latent rollouts; ours is the true pendulum energy of the state read off the decoded
+frames (``systems.read_state``), the same quantity for every model, scored against the same
+reading of the true frames. The HNN's own latent H drift is reported beside. 12 (VIN seed: the
+VIN's forecasts from pixels beat the residual network's over long horizons): the ResNet's pixel
+MSE over (a) the whole test horizon and (b) its last third at least 1.25x the VIN's. Both:
+one-sided t tests at level 0.05 on paired per-seed log ratios, 5 seeds; discriminating when the
+best model's pixel MSE beats holding the first observation (the trivial predictor) by 2x on
+every seed.
+
+Budgets: ``paper`` the seed's (above; 4 x 5 runs of 10000 steps: about 2.4 CPU hours here, a
+few GPU minutes, see :data:`PAPER_CPU_S`); ``quick`` 40 trajectories of 4 s (50 frames), width
+64, batch 64, 600 steps, test horizon 60 frames (make bench's budget); ``smoke`` tiny.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ...core._experiments import Experiment
+from ...core._query import experiment_rows, pick_profile
+from ...core._store import read_rows
+from ...core._studies import Study, register_study
+from .._figure import save_figure
+from ._rules import CLAIM_TITLES, _Disc, _verdict
+from ._stats import DELTA, TRIVIAL_FACTOR, _at_most, _bad, _greater, _paired
+
+ENERGY_FACTOR = 10.0  # claim 11 (a): "far better", an order of magnitude (the seed's: 60x)
+LOSS_FACTOR = 3.0  # claim 11 (b): the HNN's test loss at most 3x the baseline's
+FORECAST_FACTOR = math.exp(DELTA)  # claim 12: the ResNet's pixel MSE at least 1.25x the VIN's
+# The HNN seed's pixel-pendulum row (greydanus/hamiltonian-nn README, baseline -> HNN)
+SEED_ENERGY_MSE = (9.27e-3, 1.53e-4)
+HNN, BASELINE = {"model": "hnn"}, {"model": "node"}
+VIN_CELL, RESNET = {"model": "vin"}, {"model": "resnet"}
+PAPER_CPU_S = 4 * 5 * 430.0  # 10000 steps at ~40 ms (width 200, batch 200) + evaluation
+
+_COMMON = {
+    "system": "pendulum",
+    "observation": "pixels",
+    "dt": 0.08,
+    "chunk": 3,  # the seed's (x_t, x_t+1): three frames, two observations, one latent step
+    "duration": 8.0,  # 100 frames per trajectory
+    "n_generated": 160,
+    "n_train": 160,
+    "n_test": 40,
+    "test_chunks": 34,  # 102 frames: 101 observations, the seed's trajectory length
+    "width": 200,
+    "depth": 2,
+    "batch": 200,
+    "lr": 1e-3,
+    "steps": 10000,
+    "eval_checkpoints": 0,
+    "dtype": "float32",
+}
+_QUICK = {
+    "n_generated": 40,
+    "n_train": 40,
+    "n_test": 20,
+    "duration": 4.0,
+    "test_chunks": 20,
+    "width": 64,
+    "batch": 64,
+    "steps": 600,
+}
+_SMOKE = {
+    "n_generated": 4,
+    "n_train": 4,
+    "n_test": 2,
+    "duration": 0.8,
+    "test_chunks": 3,
+    "width": 8,
+    "batch": 4,
+    "steps": 4,
+    "seeds": (0,),
+}
+
+
+def _experiment(name: str, title: str, models: tuple[str, ...], claim: int) -> Experiment:
+    return Experiment(
+        name=name,
+        title=title,
+        axes={"model": models},
+        fixed=_COMMON,
+        profile_overrides={"smoke": _SMOKE, "quick": _QUICK, "paper-core": {}},
+        claim=claim,
+    )
+
+
+PIXEL_HNN = _experiment(
+    "pixel_pendulum_hnn", "HNN seed: pixel pendulum, latent HNN vs MLP", ("hnn", "node"), 11
+)
+PIXEL_VIN = _experiment(
+    "pixel_pendulum_vin", "VIN seed: pixel pendulum, latent VIN vs ResNet", ("vin", "resnet"), 12
+)
+EXPERIMENTS = (PIXEL_HNN, PIXEL_VIN)
+CLAIM_TITLES[11] = (
+    "HNN seed, pixels: the latent HNN conserves energy far better than the MLP at similar loss"
+)
+CLAIM_TITLES[12] = "VIN seed, pixels: the latent VIN forecasts better than a ResNet, long horizons"
+
+
+def _pixels(runs: pd.DataFrame, models: tuple[str, ...]) -> pd.DataFrame:
+    if not len(runs) or "observation" not in runs:
+        return runs.iloc[0:0]
+    return runs[(runs["observation"] == "pixels") & runs["model"].isin(models)]
+
+
+def _disc(r: pd.DataFrame) -> list[_Disc]:
+    """Discriminating: the best model (lowest mean log pixel MSE) beats holding the first
+    observation by TRIVIAL_FACTOR on every seed."""
+    ok = r[~_bad(r, "pixel_mse")]
+    if not len(ok):
+        return []
+    per = np.log(pd.to_numeric(ok["pixel_mse"])).groupby([ok["model"], ok["seed"]]).mean()
+    means = per.groupby(level=0).mean().sort_values()
+    best = str(means.index[0])
+    triv = np.log(pd.to_numeric(ok["pixel_mse_static"])).groupby(ok["seed"]).mean()
+    m = (triv - per.loc[best]).dropna()
+    if not len(m):
+        return [_Disc("pixels", "unknown")]
+    worst = float(m.min())
+    status = "yes" if worst >= math.log(TRIVIAL_FACTOR) else "no"
+    return [_Disc("pixels", status, best, worst, float(np.exp(triv).mean()))]
+
+
+def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
+    """Claim 11 (HNN seed, Table 1's pixel pendulum): (a) *greater* on ``log(decoded energy MSE
+    MLP / HNN)`` at the margin :data:`ENERGY_FACTOR`; (b) *at most* on ``log(test loss HNN /
+    MLP)`` at :data:`LOSS_FACTOR`. Failed runs score the worst value. Headline (a)."""
+    r = _pixels(runs, ("hnn", "node"))
+    if not len(r):
+        return _verdict(11, CLAIM_TITLES[11], [], None, 0, "log energy-MSE ratio")
+    e = _paired(r, BASELINE, HNN, "decoded_energy_mse")
+    loss = _paired(r, HNN, BASELINE, "pixel_loss_test")
+    parts = [
+        _greater("(a) log(decoded energy MSE MLP / HNN)", e.to_numpy(), math.log(ENERGY_FACTOR)),
+        _at_most("(b) log(test loss HNN / MLP)", loss.to_numpy(), math.log(LOSS_FACTOR)),
+    ]
+    drift = pd.to_numeric(r[r["model"] == "hnn"]["latent_energy_drift"], errors="coerce")
+    extra = f"HNN latent H drift (range / spread over starts) {np.nanmean(drift):.3g}"
+    return _verdict(
+        11,
+        CLAIM_TITLES[11],
+        parts,
+        parts[0],
+        min(len(e), len(loss)),
+        "log decoded-energy-MSE ratio MLP / HNN",
+        extra,
+        discs=_disc(r),
+        n_failed=int(_bad(r, "decoded_energy_mse").sum()),
+    )
+
+
+def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
+    """Claim 12 (VIN seed, pixels): *greater* on ``log(pixel MSE ResNet / VIN)`` at the margin
+    :data:`FORECAST_FACTOR` over (a) the whole horizon and (b) its last third. Headline (a)."""
+    r = _pixels(runs, ("vin", "resnet"))
+    if not len(r):
+        return _verdict(12, CLAIM_TITLES[12], [], None, 0, "log pixel-MSE ratio")
+    a = _paired(r, RESNET, VIN_CELL, "pixel_mse")
+    b = _paired(r, RESNET, VIN_CELL, "pixel_mse_late")
+    parts = [
+        _greater("(a) log(pixel MSE ResNet / VIN)", a.to_numpy(), DELTA),
+        _greater("(b) log(late pixel MSE ResNet / VIN)", b.to_numpy(), DELTA),
+    ]
+    drift = pd.to_numeric(r[r["model"] == "vin"]["latent_energy_drift"], errors="coerce")
+    extra = f"VIN latent energy drift (range / spread over starts) {np.nanmean(drift):.3g}"
+    return _verdict(
+        12,
+        CLAIM_TITLES[12],
+        parts,
+        parts[0],
+        min(len(a), len(b)),
+        "log pixel-MSE ratio ResNet / VIN",
+        extra,
+        discs=_disc(r),
+        n_failed=int(_bad(r, "pixel_mse").sum()),
+    )
+
+
+# ------------------------------------------------------------------------ table and figure
+LABELS = {"hnn": "HNN", "node": "MLP (HNN seed's baseline)", "vin": "VIN", "resnet": "ResNet"}
+
+
+def _rows(results_dir) -> tuple[list[dict], pd.DataFrame, str | None]:
+    """(row dicts with their curves, runs table, profile) of the two experiments."""
+    from ...core._store import load_runs
+
+    runs = load_runs(results_dir)
+    if not len(runs):
+        return [], runs, None
+    profile = pick_profile(runs)
+    if profile is not None:
+        runs = runs[runs["profile"] == profile]
+    parts = [experiment_rows(runs, e.name, profile) for e in EXPERIMENTS]
+    parts = [p for p in parts if len(p)]
+    table = pd.concat(parts, ignore_index=True) if parts else runs.iloc[0:0]
+    hashes = set(table["config_hash"]) if len(table) else set()
+    rows = [r for r in read_rows(results_dir) if r.get("config_hash") in hashes]
+    return rows, table, profile
+
+
+def _gm(x) -> float:
+    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
+    x = x[np.isfinite(x) & (x > 0)]
+    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
+
+
+def section(results_dir) -> str:
+    """The pixel models side by side, the HNN seed's pixel row beside ours."""
+    _, t, profile = _rows(Path(results_dir))
+    lines = [
+        "## Learning from pixels (claims 11 and 12)",
+        "",
+        f"Pendulum rendered to 28 x 28 frames, two stacked per observation (profile "
+        f"{profile or '-'}; geometric means over seeds). Pixel MSE: decoded latent rollouts "
+        "against the true frames over the test horizon (late: its last third; static: holding "
+        "the first observation). Energy MSE: the true energy of the state read off the decoded "
+        "frames against the same reading of the true ones (the seed's pixel energy is its own "
+        "latent quantity: compare orders of magnitude only). Latent drift: range of the learned "
+        "conserved scalar along a rollout over its spread across test starts. Protocol: "
+        "`bench/studies/paper/pixels.py`, `bench/core/_pixels.py`.",
+        "",
+        "| model | seeds | test loss | recon MSE | pixel MSE | late pixel MSE | static | "
+        "energy MSE (ours) | energy MSE (HNN seed) | latent drift |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    if not len(t):
+        return "\n".join([*lines, "| (no runs) | | | | | | | | | |"])
+
+    def f(x):
+        return "-" if not np.isfinite(x) else f"{x:.3g}"
+
+    seed = {"node": SEED_ENERGY_MSE[0], "hnn": SEED_ENERGY_MSE[1]}
+    for model in ("hnn", "node", "vin", "resnet"):
+        g = t[(t["model"] == model) & ~_bad(t, "pixel_mse")]
+        if not len(g):
+            continue
+        cells = [
+            _gm(g[c])
+            for c in (
+                "pixel_loss_test",
+                "recon_mse",
+                "pixel_mse",
+                "pixel_mse_late",
+                "pixel_mse_static",
+                "decoded_energy_mse",
+            )
+        ]
+        lines.append(
+            f"| {LABELS[model]} | {g['seed'].nunique()} | "
+            + " | ".join(f(x) for x in cells)
+            + f" | {f(seed.get(model, math.nan))} | {f(_gm(g['latent_energy_drift']))} |"
+        )
+    return "\n".join(lines)
+
+
+def figure(results_dir) -> list[Path]:
+    """Predicted frames against the truth (first test trajectory of the lowest seed, first
+    frame of each observation at a few times) and pixel MSE against time per model."""
+    import matplotlib.pyplot as plt
+
+    rows, _, _ = _rows(Path(results_dir))
+    rows = [
+        r for r in rows if r.get("status") == "ok" and (r.get("curves") or {}).get("frames_pred")
+    ]
+    if not rows:
+        return []
+    order = {m: i for i, m in enumerate(("hnn", "node", "vin", "resnet"))}
+    first = {}
+    for r in sorted(rows, key=lambda r: (order.get(r["model"], 9), r["seed"])):
+        first.setdefault(r["model"], r)
+    picked = list(first.values())
+    c0 = picked[0]["curves"]
+    n = len(c0["frame_index"])
+    fig = plt.figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
+    grid = fig.add_gridspec(len(picked) + 1, n + 1, width_ratios=[1] * n + [3.2])
+    dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0
+    panels = [("truth", c0["frames_true"])] + [
+        (f"{LABELS[r['model']]} s{r['seed']}", r["curves"]["frames_pred"]) for r in picked
+    ]
+    for i, (label, frames) in enumerate(panels):
+        for j in range(n):
+            ax = fig.add_subplot(grid[i, j])
+            ax.imshow(np.asarray(frames[j]), cmap="gray", vmin=0, vmax=1)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if j == 0:
+                ax.set_ylabel(label, fontsize=7)
+            if i == 0:
+                ax.set_title(f"t={c0['frame_index'][j] * dt:.1f}s", fontsize=7)
+    ax = fig.add_subplot(grid[:, n])
+    for r in rows:
+        c = r["curves"]
+        color = f"C{order.get(r['model'], 4)}"
+        ax.plot(c["t"][1:], c["pixel_mse"][1:], color=color, lw=0.8, alpha=0.6)
+    for m, i in order.items():
+        if m in first:
+            ax.plot([], [], color=f"C{i}", label=LABELS[m])
+    static = [_gm([r["pixel_mse_static"]]) for r in rows]
+    ax.axhline(np.nanmean(static), color="k", ls=":", lw=1, label="hold first frame")
+    ax.set_yscale("log")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("pixel MSE (per seed)")
+    ax.legend(fontsize=6)
+    fig.suptitle("Pixel pendulum: decoded latent rollouts against the true frames", fontsize=9)
+    return save_figure(fig, Path(results_dir) / "figures", "fig_pixels")
+
+
+STUDY_HNN = register_study(
+    Study(
+        name="pixel_pendulum_hnn",
+        experiments=(PIXEL_HNN,),
+        claim=11,
+        title=CLAIM_TITLES[11],
+        rule=claim_11,
+        stem="fig_pixels",
+        results_figure=figure,
+        section=section,
+        section_title="Learning from pixels (claims 11 and 12)",
+    )
+)
+STUDY_VIN = register_study(
+    Study(
+        name="pixel_pendulum_vin",
+        experiments=(PIXEL_VIN,),
+        claim=12,
+        title=CLAIM_TITLES[12],
+        rule=claim_12,
+    )
+)
