@@ -108,6 +108,12 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("experiment", nargs="?")
     s.add_argument("--all", action="store_true", help="every registered experiment")
     _sweep_opts(s, default_profile="quick")
+    s.add_argument(
+        "--seeds",
+        default=None,
+        metavar="5,6,7",
+        help="these seeds instead of the profile's (e.g. quick's replication seeds 5-9)",
+    )
 
     cm = sub.add_parser(
         "compare",
@@ -144,6 +150,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     es.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
     es.add_argument("--workers", type=_int("workers"), default=2, help="for the wall hours")
+
+    dl = sub.add_parser(
+        "diagnose-lnn",
+        help="the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
+        "(issue 23): <results>/lnn_diagnosis.csv",
+    )
+    dl.add_argument("--profile", default="quick", help="smoke, quick or paper")
 
     cp = sub.add_parser(
         "campaign",
@@ -328,12 +341,36 @@ def _do_sweep(args, names) -> int:
     from .studies.paper._budget import run_seconds
 
     # longest runs first: the workers finish together
-    res = _run_experiments(args, names, order=run_seconds)
+    seeds = _seed_list(getattr(args, "seeds", None))
+    res = _run_experiments(args, names, order=run_seconds, seeds=seeds)
     for name, rows in res.items():
         counts = {}
         for r in rows:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
         print(f"{name}: {len(rows)} new runs {counts}")
+    return 0
+
+
+def _seed_list(given: str | None) -> tuple[int, ...] | None:
+    """``--seeds 5,6,7`` as a tuple of integers >= 0 (ValueError in one line otherwise)."""
+    if given is None:
+        return None
+    try:
+        seeds = tuple(int(x) for x in given.split(","))
+    except ValueError:
+        seeds = ()
+    if not seeds or any(x < 0 for x in seeds):
+        raise ValueError(f"--seeds must be comma-separated integers >= 0, got {given!r}")
+    return seeds
+
+
+def _cmd_diagnose_lnn(args) -> int:
+    from .studies.paper._lnn_diagnosis import FILE, diagnose, summary
+
+    results = _usable_results(args)
+    df = diagnose(args.profile, results)
+    print(summary(df))
+    print(f"wrote {results / FILE} ({len(df)} rows)")
     return 0
 
 
@@ -675,4 +712,5 @@ def _main(argv) -> int:
         "campaign": _cmd_campaign,
         "compare": _cmd_compare,
         "data": _cmd_data,
+        "diagnose-lnn": _cmd_diagnose_lnn,
     }[args.verb](args)

@@ -63,6 +63,12 @@ def acceleration_from_lagrangian(
     raise ValueError(f"solve must be one of {SOLVES}, got {solve!r}")
 
 
+def velocity_hessian(L: Callable, q: Array, v: Array) -> Array:
+    """d2L/dv2 (dof, dof), the matrix the Euler-Lagrange solve inverts; for L = T - V with
+    T = 1/2 v^T M(q) v it is the mass matrix M(q)."""
+    return jax.hessian(L, argnums=1)(q, v)
+
+
 def lagrangian_energy(L: Callable, q: Array, v: Array) -> Array:
     """E = v . dL/dv - L, the energy that an autonomous L conserves."""
     lval, dLdv = jax.value_and_grad(L, argnums=1)(q, v)

@@ -30,8 +30,9 @@ SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])
 SEEDS = pd.Index(range(5), name="seed")
 
 
-# claims pinned on tables of their own (no rows in these): claim 10 in tests/test_hnn_seed.py
-OWN_TABLES = ("10",)
+# claims pinned on tables of their own (no rows in these): claim 9 in tests/test_lnn_seed.py,
+# claim 10 in tests/test_hnn_seed.py
+OWN_TABLES = ("9", "10")
 
 
 def _claims(runs, curves):

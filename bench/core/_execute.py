@@ -439,6 +439,9 @@ def _evaluate(config, system, data, model, cache_root, rolled=None, roll=None):
         "energy_pct_max_pe": M.energy_pct_max_pe(
             h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
         ),
+        "energy_pct_max_pe_last": M.energy_pct_max_pe_last(
+            h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
+        ),
         "energy_mse": M.energy_mse(h_pred, h_true),
         **_derivative_mse(config, system, data, model),
         "rollout_error_velocity": scores["rollout_error_velocity"],
@@ -566,6 +569,7 @@ NAN_METRICS = (
     "rollout_error_ref",
     "energy_violation_ref",
     "energy_pct_max_pe",
+    "energy_pct_max_pe_last",
     "symplectic_error",
 )
 

@@ -182,6 +182,14 @@ def energy_pct_max_pe(h_pred, h_true, potential_range: float) -> float:
     return float(100.0 * np.mean(diff[..., 1:]) / pr)
 
 
+def energy_pct_max_pe_last(h_pred, h_true, potential_range: float) -> float:
+    """100 * mean over trajectories of |H(zhat) - H(z)| at the LAST time / (max V - min V): the
+    LNN seed's notebook's version of :func:`energy_pct_max_pe` (its text: the mean over time).
+    NaN as there."""
+    h_pred, h_true = np.asarray(h_pred, dtype=np.float64), np.asarray(h_true, dtype=np.float64)
+    return energy_pct_max_pe(h_pred[..., -2:], h_true[..., -2:], potential_range)
+
+
 def energy_mse(h_pred, h_true) -> float:
     """mean over trajectories and every time (t = 0 included) of (H(zhat) - H(z))^2, H the true
     energy: the HNN seed's "energy MSE" along rollouts. NaN if a prediction is non-finite."""

@@ -106,6 +106,11 @@ _RUN = {
         "100 * mean over t >= 1 of |H(zhat) - H(z)| / (max V - min V) (the LNN seed's metric); "
         "empty for unbounded potentials or non-finite predictions",
     ),
+    "energy_pct_max_pe_last": (
+        "%",
+        "100 * |H(zhat) - H(z)| at the last test time / (max V - min V), mean over trajectories "
+        "(the LNN seed's notebook's version); empty as energy_pct_max_pe",
+    ),
     "energy_mse": (
         "H units^2",
         "mean over test trajectories and every t (t = 0 included) of (H(zhat) - H(z))^2 (the HNN "

@@ -78,7 +78,7 @@ matplotlib.use("Agg")
 # isort: off
 # The import order is the registration order: the report's and the figures' order.
 from . import energy, symplectic, second_order, coordinates, damped, loss  # noqa: E402
-from . import relativistic, double_pendulum, vin, hnn_seed  # noqa: E402, F401
+from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: E402, F401
 from . import pixels  # noqa: E402, F401
 
 # isort: on

@@ -1,0 +1,317 @@
+"""Why the suite's rollout-trained LNN fails on the unit double pendulum (issue 23): the learned
+d2L/dqdot2 along rollouts and at initialisation, computed from real (small) runs.
+
+Two parts, one table (``lnn_diagnosis.csv`` in the results folder; ``python -m bench
+diagnose-lnn --profile quick``):
+
+- ``init``: freshly initialised LNNs (width and depth of the profile, the appendix-B
+  initialisation) on the training chunks of the rollout-trained experiment
+  (``double_pendulum_energy``'s data at the profile's sizes), for an ablation over the kinetic
+  prior (0, 0.1), the solve (solve, pinv, regularised) and the activation (softplus, tanh):
+  the share of states whose Hessian H = d2L/dqdot2 is indefinite, its condition number
+  max|eig| / min|eig|, the largest |qddot| of the Euler-Lagrange solve, and whether the step-0
+  training loss (the RK4 rollout of every chunk, as the trainer computes it) is finite;
+- ``trained``: trained LNNs (the rollout-trained one with the suite's kinetic prior 0.1 and the
+  LU solve, the rollout-trained pure LNN with the seed's pseudo-inverse, and the seed's
+  protocol's pure LNN trained on derivatives, ``lnn_seed_double_pendulum``), per test
+  trajectory along the model's own rollout: the smallest eigenvalue and the largest condition
+  number of H, the first step at which H is indefinite or its condition exceeds
+  :data:`COND_LIMIT` ("singular_step"), and the first step at which the energy error exceeds the
+  potential's range or the state is non-finite ("blowup_step"); ``coincide`` says whether a
+  blow-up follows a near-singular H within :data:`LAG` steps (or at the same step).
+
+Every number comes from the trained or initialised models; none is typed in.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ...core._experiments import RunConfig, expand, profile_defaults
+from .double_pendulum import DOUBLE_PENDULUM_ENERGY
+from .lnn_seed import LNN_SEED
+
+COND_LIMIT = 1e3
+LAG = 5  # steps: a blow-up this soon after a near-singular Hessian counts as caused by it
+N_TRAJ = 40
+FILE = "lnn_diagnosis.csv"
+SIZES = {  # (seeds of the init part, seeds of the trained part, rollout-training steps)
+    "smoke": ((0,), (0,), 20),
+    "quick": ((0, 1, 2), (0, 1, 2), 1000),
+    "paper": ((0, 1, 2, 3, 4), (0, 1, 2, 3, 4), 8000),
+}
+
+
+def _eigs(model, zs):
+    import jax
+    import jax.numpy as jnp
+
+    from models._scalar import velocity_hessian
+
+    dof = zs.shape[-1] // 2
+
+    def one(z):
+        h = velocity_hessian(lambda q, v: model.lagrangian(q, v, None), z[:dof], z[dof:])
+        return jnp.linalg.eigvalsh(h)
+
+    return jax.vmap(one)(zs)
+
+
+def _field(model, zs):
+    import jax
+
+    return jax.vmap(lambda z: model.vector_field(0.0, z, None))(zs)
+
+
+def _roll(model, z0s, ts, integrator):
+    import models
+
+    return models.rollout_batch(model, z0s, ts, None, integrator)
+
+
+_JIT: dict = {}
+
+
+def _jit(fn):
+    """One ``eqx.filter_jit`` per function, so that seeds of one structure compile once."""
+    import equinox as eqx
+
+    return _JIT.setdefault(fn.__name__, eqx.filter_jit(fn))
+
+
+def hessian_eigs(model, zs):
+    """Eigenvalues (ascending) of the learned d2L/dqdot2 at states ``zs`` (N, 2d)."""
+    import jax.numpy as jnp
+
+    return np.asarray(_jit(_eigs)(model, jnp.asarray(zs, dtype=model.dtype)), dtype=np.float64)
+
+
+def condition(eigs) -> np.ndarray:
+    """max |eig| / min |eig| per row (inf where an eigenvalue is 0)."""
+    a = np.abs(np.asarray(eigs, dtype=np.float64))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(a.min(-1) > 0, a.max(-1) / np.where(a.min(-1) > 0, a.min(-1), 1), np.inf)
+
+
+def first_step(flags) -> np.ndarray:
+    """Per row, the first index where ``flags`` is true; -1 if never."""
+    flags = np.asarray(flags, dtype=bool)
+    return np.where(flags.any(-1), np.argmax(flags, axis=-1), -1)
+
+
+def coincide(singular: np.ndarray, blowup: np.ndarray, lag: int = LAG) -> np.ndarray:
+    """Whether each blow-up comes at or within ``lag`` steps after the first near-singular H
+    (False where there is no blow-up)."""
+    singular, blowup = np.asarray(singular), np.asarray(blowup)
+    return (blowup >= 0) & (singular >= 0) & (blowup >= singular) & (blowup - singular <= lag)
+
+
+def _rollout_config(profile: str, seed: int, options, steps: int) -> RunConfig:
+    base = expand(DOUBLE_PENDULUM_ENERGY, "smoke")[0]
+    d, _ = profile_defaults("paper" if profile == "paper" else profile)
+    fields = {k: v for k, v in d.items() if k in RunConfig.__dataclass_fields__}
+    fields.update(
+        model="lnn",
+        model_options=options,
+        activation="softplus",
+        seed=seed,
+        steps=steps,
+        eval_checkpoints=0,
+    )
+    return dataclasses.replace(base, **fields)
+
+
+def _init_rows(profile: str, cache_root) -> list[dict]:
+    import jax.numpy as jnp
+
+    import models
+
+    from ...core._execute import _build
+
+    seeds, _, steps = SIZES[profile]
+    rows = []
+    for kp in (0.0, 0.1):
+        for solve in ("solve", "pinv", "regularised"):
+            for act in ("softplus", "tanh"):
+                opts = tuple(sorted({"kinetic_prior": kp, "solve": solve}.items()))
+                for seed in seeds:
+                    cfg = dataclasses.replace(
+                        _rollout_config(profile, seed, opts, steps), activation=act
+                    )
+                    system, data, _, model = _build(cfg, Path(cache_root))
+                    z = np.asarray(data.z_train)  # (N, C, 2d)
+                    states = z.reshape(-1, z.shape[-1])
+                    eig = hessian_eigs(model, states)
+                    acc = _jit(_field)(model, jnp.asarray(states, dtype=model.dtype))
+                    acc = np.asarray(acc, dtype=np.float64)[:, system.dof :]
+                    pred = _jit(_roll)(
+                        model,
+                        jnp.asarray(z[:, 0], dtype=model.dtype),
+                        jnp.asarray(data.ts_train, dtype=model.dtype),
+                        models.Integrator(cfg.train_integrator),
+                    )
+                    err = (np.asarray(pred, dtype=np.float64) - z) ** 2
+                    loss0 = float(np.mean(err))
+                    cond = condition(eig)
+                    rows.append(
+                        {
+                            "part": "init",
+                            "training": "none (fresh)",
+                            "kinetic_prior": kp,
+                            "solve": solve,
+                            "activation": act,
+                            "seed": seed,
+                            "traj": -1,
+                            "n_states": len(states),
+                            "frac_indefinite": float(np.mean(eig[:, 0] < 0)),
+                            "min_eig": float(np.min(eig[:, 0])),
+                            "median_abs_min_eig": float(np.median(np.abs(eig).min(-1))),
+                            "cond_median": float(np.median(cond)),
+                            "cond_max": float(np.max(cond)),
+                            "max_abs_qddot": float(np.nanmax(np.abs(acc)))
+                            if np.isfinite(acc).any()
+                            else math.inf,
+                            "frac_nonfinite_qddot": float(np.mean(~np.isfinite(acc).all(-1))),
+                            "loss0": loss0,
+                            "loss0_finite": bool(np.isfinite(loss0)),
+                        }
+                    )
+    return rows
+
+
+def _trained_models(profile: str, cache_root):
+    """(label, config) of the trained LNNs the diagnosis reads: rollout-trained with the
+    suite's prior, rollout-trained pure with pinv, and the seed's protocol's pure LNN."""
+    _, seeds, steps = SIZES[profile]
+    out = []
+    for seed in seeds:
+        for label, opts in (
+            ("rollout, prior 0.1, solve", (("kinetic_prior", 0.1),)),
+            ("rollout, pure, pinv", (("kinetic_prior", 0.0), ("solve", "pinv"))),
+        ):
+            out.append((label, _rollout_config(profile, seed, opts, steps)))
+        seed_cfgs = [c for c in expand(LNN_SEED, profile) if c.model == "lnn" and c.seed == seed]
+        out += [("derivative (seed protocol), pure, pinv", c) for c in seed_cfgs]
+    return out
+
+
+def _trained_rows(profile: str, cache_root) -> list[dict]:
+    import jax
+    import jax.numpy as jnp
+
+    import models
+
+    from ...core._execute import _build, _train_cached
+
+    rows = []
+    for label, cfg in _trained_models(profile, cache_root):
+        system, data, _, model = _build(cfg, Path(cache_root))
+        model, meta = _train_cached(cfg, model, data, Path(cache_root), False)
+        z = np.asarray(data.z_test)[:N_TRAJ]
+        pred = _jit(_roll)(
+            model,
+            jnp.asarray(z[:, 0], dtype=model.dtype),
+            jnp.asarray(data.ts_test, dtype=model.dtype),
+            models.Integrator(cfg.eval_integrator, substeps=cfg.eval_substeps),
+        )
+        pred = np.asarray(pred, dtype=np.float64)  # (N, T, 2d)
+        n, t, d = pred.shape
+        flat = np.nan_to_num(pred.reshape(-1, d), nan=0.0, posinf=0.0, neginf=0.0)
+        eig = hessian_eigs(model, flat).reshape(n, t, -1)
+        cond = condition(eig)
+        energy = jax.jit(jax.vmap(jax.vmap(system.energy)))
+        e_true = np.asarray(energy(jnp.asarray(z[:, :1])), dtype=np.float64)  # conserved
+        e_pred = np.asarray(energy(jnp.asarray(np.nan_to_num(pred, nan=1e6))), dtype=np.float64)
+        finite = np.isfinite(pred).all(-1)
+        blow = ~finite | (np.abs(e_pred - e_true) > system.potential_range())
+        bad_h = (eig[..., 0] < 0) | (cond > COND_LIMIT)
+        bad_h &= finite
+        sing, bl = first_step(bad_h), first_step(blow)
+        co = coincide(sing, bl)
+        opts = dict(cfg.model_options)
+        for i in range(n):
+            ok = finite[i]
+            rows.append(
+                {
+                    "part": "trained",
+                    "training": label,
+                    "kinetic_prior": opts.get("kinetic_prior", 0.1),
+                    "solve": opts.get("solve", "solve"),
+                    "activation": cfg.activation,
+                    "seed": cfg.seed,
+                    "traj": i,
+                    "n_states": int(ok.sum()),
+                    "train_status": meta.get("status"),
+                    "frac_indefinite": float(np.mean(eig[i, ok, 0] < 0)) if ok.any() else math.nan,
+                    "min_eig": float(np.min(eig[i, ok, 0])) if ok.any() else math.nan,
+                    "cond_max": float(np.max(cond[i, ok])) if ok.any() else math.nan,
+                    "cond_median": float(np.median(cond[i, ok])) if ok.any() else math.nan,
+                    "singular_step": int(sing[i]),
+                    "blowup_step": int(bl[i]),
+                    "coincide": bool(co[i]),
+                }
+            )
+    return rows
+
+
+def diagnose(profile: str, results_dir, cache_root=None) -> pd.DataFrame:
+    """Run both parts and write ``<results_dir>/lnn_diagnosis.csv``; return the table."""
+    import systems
+
+    if profile not in SIZES:
+        raise ValueError(f"diagnose-lnn: profile must be one of {sorted(SIZES)}, got {profile!r}")
+    cache_root = Path(cache_root or systems.cache_root())
+    df = pd.DataFrame(_init_rows(profile, cache_root) + _trained_rows(profile, cache_root))
+    out = Path(results_dir) / FILE
+    out.parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out, index=False)
+    return df
+
+
+def summary(df: pd.DataFrame) -> str:
+    """The diagnosis as Markdown tables (the report's subsection)."""
+    if df is None or not len(df):
+        return ""
+    lines = ["### Diagnosis of the LNN's failures (`lnn_diagnosis.csv`)", ""]
+    init = df[df["part"] == "init"]
+    if len(init):
+        lines += [
+            "Fresh LNNs on the rollout-trained experiment's training chunks (means over seeds): "
+            "share of states with an indefinite d2L/dqdot2, median condition number, largest "
+            "|qddot|, seeds whose step-0 rollout loss is finite.",
+            "",
+            "| kinetic prior | solve | activation | indefinite | cond (median) | max abs qddot "
+            "| step-0 loss finite |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for (kp, solve, act), g in init.groupby(["kinetic_prior", "solve", "activation"]):
+            lines.append(
+                f"| {kp:g} | {solve} | {act} | {g['frac_indefinite'].mean():.2f} | "
+                f"{g['cond_median'].median():.3g} | {g['max_abs_qddot'].max():.3g} | "
+                f"{int(g['loss0_finite'].sum())}/{len(g)} |"
+            )
+        lines.append("")
+    tr = df[df["part"] == "trained"]
+    if len(tr):
+        lines += [
+            f"Trained LNNs along their own test rollouts ({N_TRAJ} trajectories per seed): "
+            f"trajectories whose d2L/dqdot2 turns indefinite or has condition > {COND_LIMIT:g} "
+            "(near-singular), that blow up (energy error above the potential's range or "
+            f"non-finite), and blow-ups within {LAG} steps after a near-singular Hessian.",
+            "",
+            "| training | seeds | trajectories | near-singular | blow-ups | blow-ups after "
+            "near-singular H | median smallest eigenvalue |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for label, g in tr.groupby("training", sort=False):
+            lines.append(
+                f"| {label} | {g['seed'].nunique()} | {len(g)} | "
+                f"{int((g['singular_step'] >= 0).sum())} | {int((g['blowup_step'] >= 0).sum())} "
+                f"| {int(g['coincide'].sum())} | {g['min_eig'].median():.3g} |"
+            )
+    return "\n".join(lines)

@@ -1,0 +1,238 @@
+"""Claim 9 (the LNN seed's double pendulum, issue 23): its declarations, the appendix-B
+initialisation against the seed's formula, derivative-target training of the seed's two models
+at a tiny size, the diagnosis quantities against the double pendulum's mass matrix, and the
+verdict rule on synthetic tables built to pass, to fail and to be undecided."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pandas as pd
+import pytest
+
+import models
+import systems
+from bench.core import _store
+from bench.core._experiments import expand
+from bench.core._train import TrainConfig, train
+from bench.studies.paper import _lnn_diagnosis as D
+from bench.studies.paper import lnn_seed as S
+from models._mlp import MLP
+from models._scalar import velocity_hessian
+
+SEEDS = (0, 1, 2, 3, 4)
+SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32
+
+
+def _unit():
+    return systems.make("chain_pendulum", k=2, **dict(S.UNIT_DOUBLE_PENDULUM))
+
+
+# ------------------------------------------------------------------------ declarations
+def test_declarations_follow_the_seed():
+    cfgs = expand(S.LNN_SEED, "paper")
+    assert {c.model for c in cfgs} == {"lnn", "node_so", "constant_velocity"}
+    assert {c.seed for c in cfgs} == set(SEEDS)
+    c = next(c for c in cfgs if c.model == "lnn")
+    # 600,000 random states, 32 states a batch, 3 hidden layers of 500 (4 weight layers)
+    assert c.n_train * c.chunk == 600_000 and c.batch * c.chunk == 32
+    assert (c.width, c.depth, c.activation, c.lr, c.train_target) == (
+        500,
+        3,
+        "softplus",
+        1e-3,
+        "derivative",
+    )
+    assert dict(c.model_options) == {"kinetic_prior": 0.0, "solve": "pinv"}
+    assert c.n_test == 40 and c.test_chunks * c.chunk == 100
+    assert dict(c.system_params) == {"lengths": (1.0, 1.0), "masses": (1.0, 1.0)}
+    assert {x.seed for x in expand(S.LNN_SEED, "quick")} == set(SEEDS)
+    assert expand(S.LNN_SEED, "paper-core")  # part of the CPU campaign
+
+
+# ------------------------------------------------------------------------ appendix B
+def test_appendix_b_initialisation_has_the_seeds_scales():
+    """Eq. 3 of the seed's appendix B, sigma = (1/sqrt(n)) {2.2 first, 0.58 i hidden i, n
+    output}, n = 500: the output layer's weights have std sqrt(500) = 22.4 (the stated output
+    scale), measured on a freshly initialised network."""
+    n = 500
+    net = MLP(6, 1, n, 3, "softplus", "float32", key=jax.random.PRNGKey(0), init="lnn")
+    want = [2.2 / math.sqrt(n), 0.58 * 1 / math.sqrt(n), 0.58 * 2 / math.sqrt(n), math.sqrt(n)]
+    got = [float(np.std(np.asarray(w))) for w in net.weights]
+    np.testing.assert_allclose(got, want, rtol=0.1)
+    assert got[-1] == pytest.approx(n / math.sqrt(n), rel=0.1)
+    assert all(float(jnp.abs(b).max()) == 0.0 for b in net.biases)  # biases zero
+
+
+# ------------------------------------------------------------------------ training
+def _states(n=64, seed=0):
+    """Random unit-double-pendulum states (chunks of one) with their true dz/dt."""
+    s = _unit()
+    rng = np.random.default_rng(seed)
+    z = np.concatenate([rng.uniform(-np.pi, np.pi, (n, 2)), rng.normal(0, 1, (n, 2))], -1)
+    z = z[:, None]
+    return type(
+        "Data",
+        (),
+        {
+            "z_train": z,
+            "ts_train": np.zeros(1),
+            "args_train": np.zeros((n, 0)),
+            "dz_train": systems.derivatives(s, z),
+            "angular": (True, True),
+        },
+    )()
+
+
+@pytest.mark.parametrize("model", ["lnn", "node_so"])
+def test_derivative_target_training_of_the_seeds_models(model):
+    """The seed's two models, at a tiny width, fit accelerations at random states: the loss
+    falls and stays finite (the pure LNN with the pseudo-inverse included)."""
+    c = next(c for c in expand(S.LNN_SEED, "smoke") if c.model == model)
+    scene = models.Scene(dof=2, angular=(True, True))
+    m = models.make(
+        model,
+        scene,
+        key=jax.random.PRNGKey(0),
+        width=32,
+        depth=2,
+        activation=c.activation,
+        **dict(c.model_options),
+    )
+    cfg = TrainConfig(
+        steps=200, batch=32, lr=3e-3, steps_per_call=50, log_every=50, target="derivative"
+    )
+    res = train(m, _states(), cfg)
+    losses = np.asarray(res.losses)
+    assert res.status == "ok" and np.all(np.isfinite(losses))
+    assert losses[-20:].mean() < 0.7 * losses[:5].mean()
+
+
+# ------------------------------------------------------------------------ diagnosis
+class _TrueL(eqx.Module):
+    """The true Lagrangian wearing a model's interface (diagnosis input)."""
+
+    system: object
+    dtype: str = eqx.field(static=True, default="float64")
+
+    def lagrangian(self, q, v, args):
+        return self.system.lagrangian(q, v)
+
+
+def _mass(q):
+    """Mass matrix of the unit double pendulum in absolute angles: [[2, c], [c, 1]],
+    c = cos(q1 - q2)."""
+    c = np.cos(q[..., 0] - q[..., 1])
+    return np.stack([np.stack([2 + 0 * c, c], -1), np.stack([c, 1 + 0 * c], -1)], -2)
+
+
+def test_hessian_of_the_true_lagrangian_is_the_mass_matrix():
+    s = _unit()
+    rng = np.random.default_rng(1)
+    z = np.concatenate([rng.uniform(-np.pi, np.pi, (8, 2)), rng.normal(0, 2, (8, 2))], -1)
+    for zi in z:
+        h = velocity_hessian(s.lagrangian, jnp.asarray(zi[:2]), jnp.asarray(zi[2:]))
+        np.testing.assert_allclose(np.asarray(h), _mass(zi[:2]), rtol=1e-12, atol=1e-12)
+    # the diagnosis' eigenvalues and condition numbers: closed form of [[2, c], [c, 1]]
+    eig = D.hessian_eigs(_TrueL(s), z)
+    c = np.cos(z[:, 0] - z[:, 1])
+    lam = np.stack([1.5 - np.sqrt(0.25 + c**2), 1.5 + np.sqrt(0.25 + c**2)], -1)
+    np.testing.assert_allclose(eig, lam, rtol=1e-10)
+    np.testing.assert_allclose(D.condition(eig), lam[:, 1] / lam[:, 0], rtol=1e-10)
+    assert np.all(eig[:, 0] > 0)  # positive definite: T is a positive quadratic form
+
+
+def test_first_step_and_coincidence():
+    flags = np.array([[0, 0, 1, 1], [0, 0, 0, 0], [1, 0, 0, 0]], bool)
+    np.testing.assert_array_equal(D.first_step(flags), [2, -1, 0])
+    sing, blow = np.array([2, -1, 0, 3, 5]), np.array([4, 7, -1, 2, 20])
+    np.testing.assert_array_equal(D.coincide(sing, blow, lag=5), [True, False, False, False, False])
+    assert D.condition(np.array([[0.0, 1.0]]))[0] == np.inf
+
+
+# ------------------------------------------------------------------------ the rule
+def _tables(energy_ratio: float, loss_ratio: float, spread: float = 0.0) -> pd.DataFrame:
+    """Rows of the experiment at smoke on seeds 0-4: the baseline's energy % ``energy_ratio``
+    x the LNN's and the LNN's test loss ``loss_ratio`` x the baseline's (per seed times
+    exp(spread * SPREAD)); constant velocity far worse in rollout error."""
+    rows = []
+    for c0 in expand(S.LNN_SEED, "smoke"):
+        for s in SEEDS:
+            c = dataclasses.replace(c0, seed=s)
+            jitter = math.exp(spread * SPREAD[s])
+            e_lnn, l_base = 0.4, 7.4e-2
+            energy, loss, err = {
+                "node_so": (e_lnn * energy_ratio * jitter, l_base, 0.05),
+                "lnn": (e_lnn, l_base * loss_ratio * jitter, 0.04),
+                "constant_velocity": (30.0, math.nan, 0.8),
+            }[c.model]
+            row = c.to_dict()
+            row.update(
+                config_hash=c.config_hash,
+                train_hash=c.train_hash,
+                experiment=S.LNN_SEED.name,
+                profile="smoke",
+                status="ok",
+                energy_pct_max_pe=energy,
+                energy_pct_max_pe_last=2 * energy,
+                derivative_mse_test=loss,
+                derivative_mse_train=loss,
+                rollout_error=err,
+                curves={"t": [0.1], "rel_error": [err], "energy_violation": [0.1]},
+            )
+            rows.append(_store._jsonable(row))
+    return _store.rows_frame(rows)
+
+
+def test_a_large_energy_gap_at_similar_loss_is_reproduced():
+    v = S.claim_9(_tables(energy_ratio=20.0, loss_ratio=1.0, spread=0.1))
+    assert v.verdict == "reproduced", v.detail
+    assert v.effect == pytest.approx(math.log(20.0), rel=1e-6)
+    assert "last-step" in v.detail and v.claim == 9
+
+
+def test_no_energy_gap_is_not_reproduced():
+    v = S.claim_9(_tables(energy_ratio=1.0, loss_ratio=1.0, spread=0.1))
+    assert v.verdict == "not reproduced", v.detail
+    # the LNN worse than the baseline (the rollout-trained runs' direction): not reproduced
+    assert S.claim_9(_tables(energy_ratio=0.01, loss_ratio=1.0)).verdict == "not reproduced"
+
+
+def test_a_gap_bought_with_a_worse_fit_is_partly_reproduced():
+    v = S.claim_9(_tables(energy_ratio=20.0, loss_ratio=30.0, spread=0.1))
+    assert v.verdict == "partly reproduced", v.detail
+
+
+def test_a_gap_on_the_margin_is_undecided():
+    v = S.claim_9(_tables(energy_ratio=S.ENERGY_FACTOR, loss_ratio=1.0, spread=1.0))
+    assert v.verdict == "inconclusive", v.detail
+    assert v.parts[0].status == "undecided"
+
+
+def test_diverged_lnns_count_against_the_claim_and_few_seeds_decide_nothing():
+    r = _tables(energy_ratio=20.0, loss_ratio=1.0, spread=0.1)
+    lnn = r["model"] == "lnn"
+    bad = r.copy()
+    bad.loc[lnn, "status"] = "diverged"
+    bad.loc[lnn, "energy_pct_max_pe"] = math.nan
+    assert S.claim_9(bad).verdict == "not reproduced"
+    assert S.claim_9(r[r["seed"] < 3]).verdict == "inconclusive"
+    assert S.claim_9(r.iloc[0:0]).verdict == "inconclusive"
+    # rollout-trained rows are not the seed's protocol: left out
+    assert S.claim_9(r.assign(train_target="rollout")).verdict == "inconclusive"
+
+
+def test_section_and_figure_from_a_results_folder(tmp_path):
+    r = _tables(energy_ratio=20.0, loss_ratio=1.0)
+    r.to_parquet(tmp_path / "runs.parquet", index=False)
+    text = S.section(tmp_path)
+    line = next(x for x in text.splitlines() if x.startswith("| LNN"))
+    # ours 0.4 (0.8 on the seed's scale) beside the seed's 0.4
+    assert "| 0.4 [0.4, 0.4] | 0.8 | 0.4 |" in line
+    paths = S.figure(tmp_path)
+    assert {p.suffix for p in paths} == {".png", ".pdf"}
