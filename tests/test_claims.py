@@ -32,7 +32,7 @@ SEEDS = pd.Index(range(5), name="seed")
 
 # claims pinned on tables of their own (no rows in these): claim 9 in tests/test_lnn_seed.py,
 # claim 10 in tests/test_hnn_seed.py
-OWN_TABLES = ("9", "10")
+OWN_TABLES = ("9", "10", "11", "12")  # claims 11, 12: tests/test_pixels.py
 
 
 def _claims(runs, curves):

@@ -10,6 +10,7 @@ import pytest
 from bench.core import _schema, _store
 from bench.core._execute import execute_run
 from bench.core._experiments import RunConfig
+from bench.core._pixels import PIXEL_METRICS
 from bench.core._runnable import check_runnable
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -19,6 +20,8 @@ SMOKE = dict(
 # Columns that only some runs carry: a run that fails has no metrics, an ensemble member sets
 # ensemble_size, and the runner adds experiment/profile/ensemble_size when it stores a row.
 OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
+# Pixel runs' own metrics (observation "pixels"): stored by tests/test_pixels.py's sweep.
+OPTIONAL |= set(PIXEL_METRICS)
 
 
 @pytest.fixture(scope="module")

@@ -187,11 +187,22 @@ def _gather(frames, idx, chunk: int):
     return jax.vmap(one)(jnp.asarray(idx))
 
 
-def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
-    """Train ``model`` with :func:`seed_loss`; returns (model, meta) as the store keeps them.
+def _train_config(steps, batch, lr):
+    from ._train import TrainConfig
 
-    A non-finite loss or gradient stops training at that block (``status`` diverged) and
-    keeps the last finite parameters."""
+    return TrainConfig(steps=steps, batch=batch, lr=lr, weight_decay=WEIGHT_DECAY)
+
+
+def _jit(fn):
+    import equinox as eqx
+
+    return eqx.filter_jit(fn)
+
+
+@_jit
+def _block(params, opt_state, frames, idx, static, hp):
+    """A block of training steps (one compile per model structure, shapes and ``hp``, shared
+    by the seeds of a sweep in one process)."""
     import equinox as eqx
     import jax
     import jax.numpy as jnp
@@ -199,34 +210,47 @@ def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
 
     import models
 
-    from ._train import TrainConfig, optimizer
+    from ._train import optimizer
+
+    steps, batch, lr, chunk, method, substeps = hp
+    integ = models.Integrator(method, substeps=substeps)
+    opt = optimizer(_train_config(steps, batch, lr))
+
+    def step(carry, i):
+        p, s = carry
+        f = _gather(frames, i, chunk)
+        loss, grads = jax.value_and_grad(
+            lambda p_: seed_loss(eqx.combine(p_, static), f, integ)[0]
+        )(p)
+        ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
+        updates, s2 = opt.update(grads, s, p)
+        p2 = eqx.apply_updates(p, updates)
+        keep = lambda a, b: jax.tree_util.tree_map(lambda x, y: jnp.where(ok, x, y), a, b)
+        return (keep(p2, p), keep(s2, s)), jnp.where(ok, loss, jnp.nan)
+
+    (params, opt_state), losses = jax.lax.scan(step, (params, opt_state), idx)
+    return params, opt_state, losses
+
+
+def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
+    """Train ``model`` with :func:`seed_loss`; returns (model, meta) as the store keeps them.
+
+    A non-finite loss or gradient stops training at that block (``status`` diverged) and
+    keeps the last finite parameters."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from ._train import optimizer
 
     dtype = jnp.dtype(c.dtype)
-    integ = models.Integrator(c.train_integrator, substeps=c.train_substeps)
-    tcfg = TrainConfig(steps=c.steps, batch=c.batch, lr=c.lr, weight_decay=WEIGHT_DECAY)
+    tcfg = _train_config(c.steps, c.batch, c.lr)
+    hp = (c.steps, c.batch, c.lr, c.chunk, c.train_integrator, c.train_substeps)
     opt = optimizer(tcfg)
     frames = jnp.asarray(data.frames_train, dtype)
     windows = _windows(*frames.shape[:2], c.chunk)
     batch = min(c.batch, len(windows))
     params, static = eqx.partition(model, eqx.is_inexact_array)
     opt_state = opt.init(params)
-
-    @eqx.filter_jit
-    def block(params, opt_state, idx):
-        def step(carry, i):
-            p, s = carry
-            f = _gather(frames, i, c.chunk)
-            loss, grads = jax.value_and_grad(
-                lambda p_: seed_loss(eqx.combine(p_, static), f, integ)[0]
-            )(p)
-            ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
-            updates, s2 = opt.update(grads, s, p)
-            p2 = eqx.apply_updates(p, updates)
-            keep = lambda a, b: jax.tree_util.tree_map(lambda x, y: jnp.where(ok, x, y), a, b)
-            return (keep(p2, p), keep(s2, s)), jnp.where(ok, loss, jnp.nan)
-
-        (params, opt_state), losses = jax.lax.scan(step, (params, opt_state), idx)
-        return params, opt_state, losses
 
     rng = np.random.default_rng(c.seed)
     losses, status, diverged_step, done = [], "ok", None, 0
@@ -235,7 +259,9 @@ def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
         k = min(BLOCK, c.steps - done)
         idx = windows[rng.integers(0, len(windows), size=(k, batch))]
         t0 = time.perf_counter()
-        new_params, new_state, block_losses = block(params, opt_state, idx)
+        new_params, new_state, block_losses = _block(
+            params, opt_state, frames, jnp.asarray(idx), static, hp
+        )
         block_losses = np.asarray(block_losses, dtype=np.float64)
         if done == 0:  # the first block includes the compile: time a second call of it
             compile_seconds = time.perf_counter() - t0
@@ -302,21 +328,34 @@ def _train_cached(c: RunConfig, model, data, cache_root: Path, progress: bool):
 
 def _loss_on(model, frames, chunk: int, integ, seed: int) -> float:
     """The seed's loss on up to :data:`_LOSS_WINDOWS` windows of ``frames`` (N, T, S, S)."""
-    import equinox as eqx
     import jax.numpy as jnp
 
     w = _windows(*frames.shape[:2], chunk)
     if len(w) > _LOSS_WINDOWS:
         w = w[np.random.default_rng(seed).choice(len(w), _LOSS_WINDOWS, replace=False)]
     f = _gather(jnp.asarray(frames, jnp.dtype(model.autoencoder.dtype)), w, chunk)
-    loss = eqx.filter_jit(lambda m, f: seed_loss(m, f, integ)[0])(model, f)
-    return float(loss)
+    return float(_loss_jit(model, f, integ))
+
+
+@_jit
+def _loss_jit(model, frames, integ):
+    return seed_loss(model, frames, integ)[0]
+
+
+@_jit
+def _roll(m, x0, n_t: int, integ):
+    """Latent rollouts of n_t frame steps from observations x0 and their decoded frames."""
+    import jax
+    import jax.numpy as jnp
+
+    ts = jnp.arange(n_t, dtype=x0.dtype) * LATENT_DT
+    zs = jax.vmap(lambda x: m.rollout(m.encode(x), ts, integ))(x0)
+    return zs, jax.vmap(jax.vmap(m.decode))(zs)
 
 
 def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     """(metrics, curves) of a trained latent model on the test trajectories (module
     docstring)."""
-    import equinox as eqx
     import jax
     import jax.numpy as jnp
 
@@ -328,12 +367,9 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     integ = eval_integrator(c)
     obs = np.asarray(data.observations(data.frames_test), dtype=np.float64)  # (N, T-1, 2, S, S)
     n_t = obs.shape[1]
-    ts = jnp.arange(n_t, dtype=dtype) * LATENT_DT
 
-    @eqx.filter_jit
     def roll(m, x0):
-        zs = jax.vmap(lambda x: m.rollout(m.encode(x), ts, integ))(x0)
-        return zs, jax.vmap(jax.vmap(m.decode))(zs)
+        return _roll(m, x0, n_t, integ)
 
     x0 = jnp.asarray(obs[:, 0], dtype)
     t0 = time.perf_counter()

@@ -85,6 +85,9 @@ TRADEOFF_S = (274.0 - 106.0 - 78.0) / 2
 # 79 + 96 + 62 s wall for the three experiments, 2 workers, cold caches
 # (`python -m bench sweep hnn_seed_<system> --profile quick --workers 2`, 2026-11-24)
 SEED_TASKS_S = 237.0
+# The pixel experiments at quick (issue 22; claims 11 and 12): 20 runs, 300 s summed
+# wall_seconds at 1 worker with the paper-core campaign paused (2026-11-25), /2 workers
+PIXELS_S = 300.0 / 2
 
 
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
@@ -161,7 +164,7 @@ def estimate_seconds(
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
     """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks``, from
+    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks``, from
     :func:`estimate_seconds` and the measured shares of the others (the learning-curve
     experiment is read from the registry: ``bench.studies.learning`` imports this package, not
     the reverse)."""
@@ -169,4 +172,4 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
 
     extra = tuple(get(n) for n in ("learning_curves",) if n in available())
     paper = estimate_seconds(profile, workers=workers, experiments=PAPER_EXPERIMENTS + extra)
-    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S + SEED_TASKS_S
+    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S + SEED_TASKS_S + PIXELS_S
