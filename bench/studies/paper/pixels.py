@@ -216,6 +216,7 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
 
 # ------------------------------------------------------------------------ table and figure
 LABELS = {"hnn": "HNN", "node": "MLP (HNN seed's baseline)", "vin": "VIN", "resnet": "ResNet"}
+SHORT = {"hnn": "HNN", "node": "MLP", "vin": "VIN", "resnet": "ResNet"}
 
 
 def _rows(results_dir) -> tuple[list[dict], pd.DataFrame, str | None]:
@@ -313,7 +314,7 @@ def figure(results_dir) -> list[Path]:
     grid = fig.add_gridspec(len(picked) + 1, n + 1, width_ratios=[1] * n + [3.2])
     dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0
     panels = [("truth", c0["frames_true"])] + [
-        (f"{LABELS[r['model']]} s{r['seed']}", r["curves"]["frames_pred"]) for r in picked
+        (f"{SHORT[r['model']]} s{r['seed']}", r["curves"]["frames_pred"]) for r in picked
     ]
     for i, (label, frames) in enumerate(panels):
         for j in range(n):
@@ -325,7 +326,10 @@ def figure(results_dir) -> list[Path]:
                 ax.set_ylabel(label, fontsize=7)
             if i == 0:
                 ax.set_title(f"t={c0['frame_index'][j] * dt:.1f}s", fontsize=7)
+    grid.update(wspace=0.08)
     ax = fig.add_subplot(grid[:, n])
+    ax.yaxis.set_label_position("right")
+    ax.yaxis.tick_right()
     for r in rows:
         c = r["curves"]
         color = f"C{order.get(r['model'], 4)}"
