@@ -176,9 +176,6 @@ def test_pixel_smoke_sweep_through_the_store(tmp_path):
     assert np.isfinite(drift["hnn"]) and np.isfinite(drift["vin"]) and np.isnan(drift["node"])
     again = _runner.sweep(configs, res, progress=False, cache_root=cache, workers=1)
     assert len(_store.load_runs(res)) == 4 and not [r for r in again if r["status"] != "ok"]
-    assert P.section(res).count("| HNN |") == 1
-    paths = P.figure(res)
-    assert {p.suffix for p in paths} == {".png", ".pdf"}
 
 
 # -------------------------------------------------------------------------- the verdicts
