@@ -233,6 +233,6 @@ def test_section_and_figure_from_a_results_folder(tmp_path):
     text = S.section(tmp_path)
     line = next(x for x in text.splitlines() if x.startswith("| LNN"))
     # ours 0.4 (0.8 on the seed's scale) beside the seed's 0.4
-    assert "| 0.4 [0.4, 0.4] | 0.8 | 0.4 |" in line
+    assert "| 0.4 [0.4, 0.4] | 0.4 | 0.8 | 0.4 |" in line
     paths = S.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"}

@@ -13,12 +13,14 @@ diagnose-lnn --profile quick``):
   training loss (the RK4 rollout of every chunk, as the trainer computes it) is finite;
 - ``trained``: trained LNNs (the rollout-trained one with the suite's kinetic prior 0.1 and the
   LU solve, the rollout-trained pure LNN with the seed's pseudo-inverse, and the seed's
-  protocol's pure LNN trained on derivatives, ``lnn_seed_double_pendulum``), per test
+  protocol's pure LNN trained on derivatives, ``lnn_seed_double_pendulum``, and the same
+  with the kinetic prior 0.1, an ablation), per test
   trajectory along the model's own rollout: the smallest eigenvalue and the largest condition
   number of H, the first step at which H is indefinite or its condition exceeds
   :data:`COND_LIMIT` ("singular_step"), and the first step at which the energy error exceeds the
-  potential's range or the state is non-finite ("blowup_step"); ``coincide`` says whether a
-  blow-up follows a near-singular H within :data:`LAG` steps (or at the same step).
+  potential's range or the state is non-finite ("blowup_step"); ``singular_before_blowup``
+  whether a near-singular H came first, ``coincide`` whether the blow-up follows it within
+  :data:`LAG` steps, ``cond_at_blowup`` / ``min_eig_at_blowup`` H in the steps before it.
 
 Every number comes from the trained or initialised models; none is typed in.
 """
@@ -32,9 +34,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import RunConfig, expand, profile_defaults
+from ...core._experiments import RunConfig, expand, get, profile_defaults
 from .double_pendulum import DOUBLE_PENDULUM_ENERGY
-from .lnn_seed import LNN_SEED
 
 COND_LIMIT = 1e3
 LAG = 5  # steps: a blow-up this soon after a near-singular Hessian counts as caused by it
@@ -195,8 +196,17 @@ def _trained_models(profile: str, cache_root):
             ("rollout, pure, pinv", (("kinetic_prior", 0.0), ("solve", "pinv"))),
         ):
             out.append((label, _rollout_config(profile, seed, opts, steps)))
-        seed_cfgs = [c for c in expand(LNN_SEED, profile) if c.model == "lnn" and c.seed == seed]
+        lnn_seed = get("lnn_seed_double_pendulum")
+        seed_cfgs = [c for c in expand(lnn_seed, profile) if c.model == "lnn" and c.seed == seed]
         out += [("derivative (seed protocol), pure, pinv", c) for c in seed_cfgs]
+        # ablation: the seed's protocol with the suite's kinetic prior
+        out += [
+            (
+                "derivative (seed protocol), prior 0.1, pinv",
+                dataclasses.replace(c, model_options=(("kinetic_prior", 0.1), ("solve", "pinv"))),
+            )
+            for c in seed_cfgs
+        ]
     return out
 
 
@@ -233,6 +243,7 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
         bad_h &= finite
         sing, bl = first_step(bad_h), first_step(blow)
         co = coincide(sing, bl)
+        before = (sing >= 0) & (bl >= 0) & (sing <= bl)
         opts = dict(cfg.model_options)
         for i in range(n):
             ok = finite[i]
@@ -254,9 +265,21 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
                     "singular_step": int(sing[i]),
                     "blowup_step": int(bl[i]),
                     "coincide": bool(co[i]),
+                    "singular_before_blowup": bool(before[i]),
+                    "cond_at_blowup": _at_blowup(cond[i], finite[i], bl[i], np.max),
+                    "min_eig_at_blowup": _at_blowup(eig[i, :, 0], finite[i], bl[i], np.min),
                 }
             )
     return rows
+
+
+def _at_blowup(x, finite, step: int, reduce, window: int = 3) -> float:
+    """``reduce`` of ``x`` over the finite states of the ``window`` steps up to a blow-up."""
+    if step < 0:
+        return math.nan
+    lo = max(0, step - window)
+    sel = np.asarray(x[lo : step + 1])[np.asarray(finite[lo : step + 1])]
+    return float(reduce(sel)) if len(sel) else math.nan
 
 
 def diagnose(profile: str, results_dir, cache_root=None) -> pd.DataFrame:
@@ -304,14 +327,21 @@ def summary(df: pd.DataFrame) -> str:
             "(near-singular), that blow up (energy error above the potential's range or "
             f"non-finite), and blow-ups within {LAG} steps after a near-singular Hessian.",
             "",
-            "| training | seeds | trajectories | near-singular | blow-ups | blow-ups after "
-            "near-singular H | median smallest eigenvalue |",
-            "|---|---|---|---|---|---|---|",
+            "| training | seeds | trajectories | near-singular H | indefinite at t = 0 | "
+            "blow-ups | blow-ups after a near-singular H | of those within "
+            f"{LAG} steps | P(blow-up given near-singular) | P(blow-up otherwise) | "
+            "median smallest eigenvalue | median cond at blow-up |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for label, g in tr.groupby("training", sort=False):
+            sing, blow = g["singular_step"] >= 0, g["blowup_step"] >= 0
+            p_s = blow[sing].mean() if sing.any() else math.nan
+            p_n = blow[~sing].mean() if (~sing).any() else math.nan
             lines.append(
-                f"| {label} | {g['seed'].nunique()} | {len(g)} | "
-                f"{int((g['singular_step'] >= 0).sum())} | {int((g['blowup_step'] >= 0).sum())} "
-                f"| {int(g['coincide'].sum())} | {g['min_eig'].median():.3g} |"
+                f"| {label} | {g['seed'].nunique()} | {len(g)} | {int(sing.sum())} | "
+                f"{int((g['singular_step'] == 0).sum())} | {int(blow.sum())} | "
+                f"{int(g['singular_before_blowup'].sum())} | {int(g['coincide'].sum())} | "
+                f"{p_s:.2f} | {p_n:.2f} | {g['min_eig'].median():.3g} | "
+                f"{g['cond_at_blowup'].median():.3g} |"
             )
     return "\n".join(lines)

@@ -64,10 +64,25 @@ from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
 from .._figure import save_figure
+from . import _lnn_diagnosis
 from ._common import UNIT_DOUBLE_PENDULUM
 from ._rules import CLAIM_TITLES, _per_system_disc, _verdict
 from ._stats import NOT_REPRODUCED, PARTLY, _at_most, _bad, _greater, _paired
 
+# Costs measured on this 2-core machine on 2026-11-25, the paper-core campaign paused (other
+# sessions' processes running): ms per training step at the paper's size (width 500, 3 hidden
+# layers, 32 states a step), float32; ground-truth data per training trajectory (Dopri8 at
+# 1e-11 over 10 s; 150,000 per seed at paper, one dataset per seed shared by the models); the
+# LNN's 40 test rollouts at paper; quick's 15 runs' summed wall_seconds (1 worker, campaign
+# running). paper-core per seed: 22 min of data + 7.4 (LNN) + 1.4 (NODE+SO) min of training
+# + about 1 min of evaluation, i.e. about 32 CPU minutes, 2.7 CPU hours for the five seeds.
+MEASURED = {
+    "ms_per_step_lnn_paper": 14.8,
+    "ms_per_step_node_so_paper": 2.7,
+    "ms_per_trajectory_data": 8.7,
+    "s_lnn_test_rollouts_paper": 17.6,
+    "s_quick_sweep_1_worker": 294.0,
+}
 PURE_LNN = (("kinetic_prior", 0.0), ("solve", "pinv"))
 LNN = {"model": "lnn"}
 BASELINE = {"model": "node_so"}
@@ -253,15 +268,18 @@ def section(results_dir) -> str:
         "|E(zhat) - E(z)| with the true E along 40 test rollouts of 100 points (dt 0.1 s), as % "
         "of the potential's range 6 g (the seed divides by 3 g: its scale is 2x ours, column "
         "'seed scale'); mean over time (the seed's text) and at the last step (its notebook). "
-        "Test loss: mean squared error of dz/dt at the test states. Protocol and where ours "
+        "Test loss: mean squared error of dz/dt at the test states (the seed's final loss is "
+        "its training loss, L1 in its notebook). Protocol and where ours "
         "differs: `bench/studies/paper/lnn_seed.py`.",
         "",
-        "| model | seeds | failed | energy %, mean over t | seed scale | seed's number | "
-        "energy %, last step | test loss dz/dt | seed's final loss | rollout error |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| model | seeds | failed | energy %, mean over t | median over seeds | seed scale | "
+        "seed's number | energy %, last step | test loss dz/dt | seed's final loss | "
+        "rollout error |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+    diag = _diagnosis(Path(results_dir))
     if not len(rows):
-        return "\n".join([*lines, "| (no runs) | | | | | | | | | |"])
+        return "\n".join([*lines, "| (no runs) | | | | | | | | | | |", *diag])
     for model, label in (
         ("lnn", "LNN (pure, pinv)"),
         ("node_so", "baseline (NODE+SO)"),
@@ -275,12 +293,21 @@ def section(results_dir) -> str:
         rng = f" [{_f(e.min())}, {_f(e.max())}]" if len(e) else ""
         lines.append(
             f"| {label} | {g['seed'].nunique()} | {len(g) - len(ok)} | {_f(_gm(e))}{rng} | "
+            f"{_f(float(e.median()) if len(e) else math.nan)} | "
             f"{_f(SEED_SCALE * _gm(e))} | {_f(SEED_NUMBERS['energy_pct'].get(model, math.nan))} | "
             f"{_f(_gm(ok['energy_pct_max_pe_last'] if 'energy_pct_max_pe_last' in ok else []))} | "
             f"{_f(_gm(ok['derivative_mse_test']))} | "
             f"{_f(SEED_NUMBERS['loss'].get(model, math.nan))} | {_f(_gm(ok['rollout_error']))} |"
         )
-    return "\n".join(lines)
+    return "\n".join([*lines, *diag])
+
+
+def _diagnosis(results_dir: Path) -> list[str]:
+    """The diagnosis table (``python -m bench diagnose-lnn``), where the folder has one."""
+    path = results_dir / _lnn_diagnosis.FILE
+    if not path.exists():
+        return ["", "(No LNN diagnosis in this folder: `python -m bench diagnose-lnn`.)"]
+    return ["", _lnn_diagnosis.summary(pd.read_csv(path))]
 
 
 def figure(results_dir) -> list[Path]:
