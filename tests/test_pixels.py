@@ -179,10 +179,13 @@ def test_pixel_smoke_sweep_through_the_store(tmp_path):
 
 
 # -------------------------------------------------------------------------- the verdicts
-def _tables(energy_ratio=100.0, loss_ratio=1.0, forecast_ratio=3.0, spread=0.1, static=1.0):
+def _tables(
+    energy_ratio=100.0, loss_ratio=1.0, forecast_ratio=3.0, spread=0.1, static=1.0, hnn_pixel=0.01
+):
     """Rows of both experiments at smoke on seeds 0-4: the MLP's decoded energy MSE
     ``energy_ratio`` x the HNN's, the HNN's test loss ``loss_ratio`` x the MLP's, the ResNet's
-    pixel MSE ``forecast_ratio`` x the VIN's (each per seed times exp(spread * SPREAD))."""
+    pixel MSE ``forecast_ratio`` x the VIN's (each per seed times exp(spread * SPREAD)); the
+    HNN's pixel MSE ``hnn_pixel`` (x the same jitter), holding the first frame ``static``."""
     rows = []
     for exp in P.EXPERIMENTS:
         for c0 in expand(exp, "smoke"):
@@ -190,7 +193,7 @@ def _tables(energy_ratio=100.0, loss_ratio=1.0, forecast_ratio=3.0, spread=0.1, 
                 c = RunConfig(**{**c0.to_dict(), "seed": s})
                 j = math.exp(spread * SPREAD[s])
                 energy, loss, pixel = {
-                    "hnn": (1e-4, 1e-3 * loss_ratio * j, 0.01),
+                    "hnn": (1e-4, 1e-3 * loss_ratio * j, hnn_pixel * j),
                     "node": (1e-4 * energy_ratio * j, 1e-3, 0.01),
                     "vin": (1e-3, 1e-3, 0.005),
                     "resnet": (1e-2, 1e-3, 0.005 * forecast_ratio * j),
@@ -230,11 +233,39 @@ def test_claim_11_passes_fails_and_stays_undecided():
     assert flat.verdict == "inconclusive" and "NOT DISCRIMINATING" in flat.detail
 
 
+def test_pixel_claims_are_judged_only_on_models_that_learned_the_motion():
+    # the HNN no better than holding the first frame (the MLP 100x better): inconclusive,
+    # whatever its energy says (here it would be "not reproduced", or "reproduced"), and the
+    # reason names the HNN only
+    for energy_ratio in (1.0, 100.0):
+        v = P.claim_11(_tables(energy_ratio=energy_ratio, hnn_pixel=0.96))
+        assert v.verdict == "inconclusive", v.detail
+        assert "MODEL DID NOT LEARN (HNN did not learn the motion" in v.detail
+        assert "MLP did not learn" not in v.detail
+        gate = {p.name: p for p in v.parts if p.name.startswith("learned:")}
+        assert gate["learned: log(pixel MSE hold-first-frame / HNN)"].status == "contradicts"
+        assert gate["learned: log(pixel MSE hold-first-frame / MLP)"].status == "holds"
+    # 1.5x better than the static predictor, but not the 2x margin: still not learned
+    v = P.claim_11(_tables(hnn_pixel=1 / 1.5))
+    assert v.verdict == "inconclusive" and "HNN did not learn" in v.detail
+    # both learned: the gate adds its parts and leaves the verdict alone
+    v = P.claim_11(_tables(hnn_pixel=0.3))
+    assert v.verdict == "reproduced" and len(v.parts) == 4
+    # claim 12: a ResNet that did not learn (the VIN did) makes it inconclusive too
+    v = P.claim_12(_tables(forecast_ratio=150.0))
+    assert v.verdict == "inconclusive" and "ResNet did not learn the motion" in v.detail
+    # a compared model without runs is named
+    r = _tables()
+    v = P.claim_12(r[r["model"] != "resnet"])
+    assert v.verdict == "inconclusive" and "ResNet has no runs" in v.detail
+
+
 def test_claim_12_passes_fails_and_stays_undecided():
     assert P.claim_12(_tables(forecast_ratio=3.0)).verdict == "reproduced"
     assert P.claim_12(_tables(forecast_ratio=0.3)).verdict == "not reproduced"
     v = P.claim_12(_tables(forecast_ratio=1.25, spread=1.0))
-    assert v.verdict == "inconclusive" and {p.status for p in v.parts} == {"undecided"}
+    claim_parts = [p for p in v.parts if not p.name.startswith("learned:")]
+    assert v.verdict == "inconclusive" and {p.status for p in claim_parts} == {"undecided"}
     # state runs of the same models are not the pixel claim's
     r = _tables().assign(observation="state")
     assert P.claim_12(r).verdict == "inconclusive"

@@ -33,7 +33,11 @@ VIN's forecasts from pixels beat the residual network's over long horizons): the
 MSE over (a) the whole test horizon and (b) its last third at least 1.25x the VIN's. Both:
 one-sided t tests at level 0.05 on paired per-seed log ratios, 5 seeds; discriminating when the
 best model's pixel MSE beats holding the first observation (the trivial predictor) by 2x on
-every seed.
+every seed. A claim is judged only on models that learned the motion: each compared model's
+``log(pixel MSE of holding the first frame / the model's)`` must exceed log
+:data:`LEARNED_FACTOR` (2x) by the same one-sided t test on paired per-seed values (a *greater*
+part, shown with the claim's parts); otherwise the verdict is "inconclusive", the detail naming
+the model that did not learn ("MODEL DID NOT LEARN ..."), whatever the claim's parts say.
 
 Budgets: ``paper`` the seed's (above; 4 x 5 runs of 10000 steps: about 2.4 CPU hours here, a
 few GPU minutes, see :data:`PAPER_CPU_S`); ``quick`` 40 trajectories of 4 s (50 frames), width
@@ -55,7 +59,18 @@ from ...core._store import read_rows
 from ...core._studies import Study, register_study
 from .._figure import save_figure
 from ._rules import CLAIM_TITLES, _Disc, _verdict
-from ._stats import DELTA, NOT_REPRODUCED, PARTLY, TRIVIAL_FACTOR, _at_most, _bad, _greater, _paired
+from ._stats import (
+    DELTA,
+    INCONCLUSIVE,
+    NOT_REPRODUCED,
+    PARTLY,
+    TRIVIAL_FACTOR,
+    _at_most,
+    _bad,
+    _greater,
+    _paired,
+    scored,
+)
 
 ENERGY_FACTOR = 10.0  # claim 11 (a): "far better", an order of magnitude (the seed's: 60x)
 LOSS_FACTOR = 3.0  # claim 11 (b): the HNN's test loss at most 3x the baseline's
@@ -64,6 +79,9 @@ FORECAST_FACTOR = math.exp(DELTA)  # claim 12: the ResNet's pixel MSE at least 1
 SEED_ENERGY_MSE = (9.27e-3, 1.53e-4)
 HNN, BASELINE = {"model": "hnn"}, {"model": "node"}
 VIN_CELL, RESNET = {"model": "vin"}, {"model": "resnet"}
+# A compared model *learned the motion* when its pixel MSE is below holding the first frame
+# (``pixel_mse_static``) by this factor: one-sided t at 0.05 on paired per-seed log ratios.
+LEARNED_FACTOR = TRIVIAL_FACTOR
 PAPER_CPU_S = 4 * 5 * 430.0  # 10000 steps at ~40 ms (width 200, batch 200) + evaluation
 
 _COMMON = {
@@ -155,6 +173,55 @@ def _disc(r: pd.DataFrame) -> list[_Disc]:
     return [_Disc("pixels", status, best, worst, float(np.exp(triv).mean()))]
 
 
+def _learned(r: pd.DataFrame, models: tuple[str, ...]) -> dict:
+    """{model: a *greater* part} for each compared model with runs: ``log(pixel MSE of
+    holding the first frame / the model's)`` per seed (failed runs at the worst pixel MSE)
+    against the margin :data:`LEARNED_FACTOR`. The hold-first-frame MSE is the test set's, the
+    same for every model of a seed: taken from any row of that seed."""
+    if not len(r):
+        return {}
+    static = pd.to_numeric(
+        r.get("pixel_mse_static", pd.Series(np.nan, index=r.index)), errors="coerce"
+    )
+    static = static[np.isfinite(static) & (static > 0)]
+    triv = np.log(static).groupby(r.loc[static.index, "seed"]).mean()
+    parts = {}
+    for m in models:
+        g = r[r["model"] == m]
+        if not len(g):
+            continue
+        own = np.log(scored(g, "pixel_mse")).groupby(g["seed"]).mean()
+        d = (triv - own).dropna()
+        parts[m] = _greater(
+            f"learned: log(pixel MSE hold-first-frame / {SHORT[m]})",
+            d[np.isfinite(d)].to_numpy(),
+            math.log(LEARNED_FACTOR),
+        )
+    return parts
+
+
+def _gate(v, learned: dict, models: tuple[str, ...]):
+    """A pixel claim is judged only on models that learned the motion: when a compared model's
+    :func:`_learned` part does not hold, the verdict is "inconclusive" and the detail names
+    the model. The gate parts join the verdict's parts (the report's parts table)."""
+    failing = [
+        f"{SHORT[m]} did not learn the motion ({p.text()}; needs its pixel MSE "
+        f"{LEARNED_FACTOR:g}x below holding the first frame)"
+        for m, p in learned.items()
+        if p.status != "holds"
+    ]
+    failing += [f"{SHORT[m]} has no runs" for m in models if m not in learned]
+    parts = (*v.parts, *learned.values())
+    if not failing:
+        return dataclasses.replace(v, parts=parts)
+    return dataclasses.replace(
+        v,
+        verdict=INCONCLUSIVE,
+        detail=f"MODEL DID NOT LEARN ({'; '.join(failing)}); {v.detail}",
+        parts=parts,
+    )
+
+
 def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 11 (HNN seed, Table 1's pixel pendulum): (a) *greater* on ``log(decoded energy MSE
     MLP / HNN)`` at the margin :data:`ENERGY_FACTOR`; (b) *at most* on ``log(test loss HNN /
@@ -184,7 +251,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     # (b) qualifies (a), it is no claim of its own: no energy gap is "not reproduced"
     if v.verdict == PARTLY and parts[0].status == "contradicts":
         v = dataclasses.replace(v, verdict=NOT_REPRODUCED)
-    return v
+    return _gate(v, _learned(r, ("hnn", "node")), ("hnn", "node"))
 
 
 def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
@@ -201,7 +268,7 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     ]
     drift = pd.to_numeric(r[r["model"] == "vin"]["latent_energy_drift"], errors="coerce")
     extra = f"VIN latent energy drift (range / spread over starts) {np.nanmean(drift):.3g}"
-    return _verdict(
+    v = _verdict(
         12,
         CLAIM_TITLES[12],
         parts,
@@ -212,6 +279,7 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         discs=_disc(r),
         n_failed=int(_bad(r, "pixel_mse").sum()),
     )
+    return _gate(v, _learned(r, ("vin", "resnet")), ("vin", "resnet"))
 
 
 # ------------------------------------------------------------------------ table and figure
@@ -311,7 +379,8 @@ def figure(results_dir) -> list[Path]:
     c0 = picked[0]["curves"]
     n = len(c0["frame_index"])
     fig = plt.figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
-    grid = fig.add_gridspec(len(picked) + 1, n + 1, width_ratios=[1] * n + [3.2])
+    # n frame columns, a spacer, the curves
+    grid = fig.add_gridspec(len(picked) + 1, n + 2, width_ratios=[1] * n + [0.3, 3.2])
     dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0
     panels = [("truth", c0["frames_true"])] + [
         (f"{SHORT[r['model']]} s{r['seed']}", r["curves"]["frames_pred"]) for r in picked
@@ -322,14 +391,13 @@ def figure(results_dir) -> list[Path]:
             ax.imshow(np.asarray(frames[j]), cmap="gray", vmin=0, vmax=1)
             ax.set_xticks([])
             ax.set_yticks([])
-            if j == 0:
-                ax.set_ylabel(label, fontsize=7)
+            if j == 0:  # one short horizontal label per row, left of its first frame
+                ax.set_ylabel(label, fontsize=8, rotation=0, ha="right", va="center", labelpad=6)
             if i == 0:
                 ax.set_title(f"t={c0['frame_index'][j] * dt:.1f}s", fontsize=7)
-    grid.update(wspace=0.08)
-    ax = fig.add_subplot(grid[:, n])
-    ax.yaxis.set_label_position("right")
-    ax.yaxis.tick_right()
+    grid.update(wspace=0.08, hspace=0.12)
+    ax = fig.add_subplot(grid[:, n + 1])
+    ax.set_yscale("log")  # before the ticks move: a scale change resets them
     for r in rows:
         c = r["curves"]
         color = f"C{order.get(r['model'], 4)}"
@@ -339,9 +407,12 @@ def figure(results_dir) -> list[Path]:
             ax.plot([], [], color=f"C{i}", label=LABELS[m])
     static = [_gm([r["pixel_mse_static"]]) for r in rows]
     ax.axhline(np.nanmean(static), color="k", ls=":", lw=1, label="hold first frame")
-    ax.set_yscale("log")
+    # ticks and their label on the right, clear of the frames on the left
+    ax.yaxis.tick_right()
+    ax.yaxis.set_label_position("right")
+    ax.tick_params(axis="y", which="both", left=False, labelleft=False, right=True, labelright=True)
     ax.set_xlabel("t (s)")
-    ax.set_ylabel("pixel MSE (per seed)")
+    ax.set_ylabel("pixel MSE (per seed)", rotation=270, va="bottom", labelpad=4)
     ax.legend(fontsize=6)
     fig.suptitle("Pixel pendulum: decoded latent rollouts against the true frames", fontsize=9)
     return save_figure(fig, Path(results_dir) / "figures", "fig_pixels")
