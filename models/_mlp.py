@@ -18,7 +18,9 @@ ACTIVATIONS = {
     "silu": jax.nn.silu,
     "sigmoid": jax.nn.sigmoid,
 }
-INITS = ("orthogonal", "lnn")
+INITS = ("orthogonal", "lnn", "lnn_notebook")
+# The LNN seed's notebook (DoublePendulum.ipynb) divides every appendix-B parameter by 200
+LNN_NOTEBOOK_SCALE = 1.0 / 200.0
 DTYPES = ("float32", "float64")
 
 
@@ -35,7 +37,8 @@ class MLP(eqx.Module):
     """y = W_D s(... s(W_1 x + b_1) ...) + b_D with ``depth`` hidden layers of ``width`` units.
 
     ``init="orthogonal"``: orthogonal weights with gain ``gain`` (0.5 in the paper), zero
-    biases. ``init="lnn"``: Gaussian weights with the LNN seed's per-layer sigma, zero biases.
+    biases. ``init="lnn"``: Gaussian weights with the LNN seed's per-layer sigma, zero biases;
+    ``init="lnn_notebook"``: the same divided by 200, as the seed's notebook ran it.
     """
 
     weights: tuple[Array, ...]
@@ -64,6 +67,8 @@ class MLP(eqx.Module):
                 w = jax.nn.initializers.orthogonal(scale=gain)(k, (a, b), dtype)
             else:
                 w = _lnn_sigma(i, n_layers, width) * jr.normal(k, (a, b), dtype)
+                if init == "lnn_notebook":
+                    w = w * LNN_NOTEBOOK_SCALE
             weights.append(w)
         self.weights = tuple(weights)
         self.biases = tuple(jnp.zeros((b,), dtype) for b in sizes[1:])

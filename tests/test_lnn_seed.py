@@ -67,6 +67,10 @@ def test_appendix_b_initialisation_has_the_seeds_scales():
     np.testing.assert_allclose(got, want, rtol=0.1)
     assert got[-1] == pytest.approx(n / math.sqrt(n), rel=0.1)
     assert all(float(jnp.abs(b).max()) == 0.0 for b in net.biases)  # biases zero
+    # the seed's notebook: the same draw divided by 200
+    nb = MLP(6, 1, n, 3, "softplus", "float32", key=jax.random.PRNGKey(0), init="lnn_notebook")
+    for w, w0 in zip(nb.weights, net.weights, strict=True):
+        np.testing.assert_allclose(np.asarray(w), np.asarray(w0) / 200, rtol=1e-6)
 
 
 # ------------------------------------------------------------------------ training

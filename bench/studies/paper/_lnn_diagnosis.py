@@ -14,7 +14,8 @@ diagnose-lnn --profile quick``):
 - ``trained``: trained LNNs (the rollout-trained one with the suite's kinetic prior 0.1 and the
   LU solve, the rollout-trained pure LNN with the seed's pseudo-inverse, and the seed's
   protocol's pure LNN trained on derivatives, ``lnn_seed_double_pendulum``, and the same
-  with the kinetic prior 0.1, an ablation), per test
+  with the kinetic prior 0.1 and with the notebook's initialisation, appendix B / 200:
+  ablations), per test
   trajectory along the model's own rollout: the smallest eigenvalue and the largest condition
   number of H, the first step at which H is indefinite or its condition exceeds
   :data:`COND_LIMIT` ("singular_step"), and the first step at which the energy error exceeds the
@@ -136,10 +137,14 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
 
     seeds, _, steps = SIZES[profile]
     rows = []
-    for kp in (0.0, 0.1):
+    variants = [(kp, "lnn") for kp in (0.0, 0.1)] + [(0.0, "lnn_notebook")]
+    for kp, init in variants:
         for solve in ("solve", "pinv", "regularised"):
             for act in ("softplus", "tanh"):
-                opts = tuple(sorted({"kinetic_prior": kp, "solve": solve}.items()))
+                opts = {"kinetic_prior": kp, "solve": solve}
+                if init != "lnn":
+                    opts["init"] = init
+                opts = tuple(sorted(opts.items()))
                 for seed in seeds:
                     cfg = dataclasses.replace(
                         _rollout_config(profile, seed, opts, steps), activation=act
@@ -163,6 +168,7 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
                         {
                             "part": "init",
                             "training": "none (fresh)",
+                            "init": init,
                             "kinetic_prior": kp,
                             "solve": solve,
                             "activation": act,
@@ -204,6 +210,14 @@ def _trained_models(profile: str, cache_root):
             (
                 "derivative (seed protocol), prior 0.1, pinv",
                 dataclasses.replace(c, model_options=(("kinetic_prior", 0.1), ("solve", "pinv"))),
+            )
+            for c in seed_cfgs
+        ]
+        # ablation: the seed's protocol with its notebook's initialisation (appendix B / 200)
+        out += [
+            (
+                "derivative (seed protocol), pure, pinv, init / 200",
+                dataclasses.replace(c, model_options=(*c.model_options, ("init", "lnn_notebook"))),
             )
             for c in seed_cfgs
         ]
@@ -251,6 +265,7 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
                 {
                     "part": "trained",
                     "training": label,
+                    "init": opts.get("init", "lnn"),
                     "kinetic_prior": opts.get("kinetic_prior", 0.1),
                     "solve": opts.get("solve", "solve"),
                     "activation": cfg.activation,
@@ -308,13 +323,15 @@ def summary(df: pd.DataFrame) -> str:
             "share of states with an indefinite d2L/dqdot2, median condition number, largest "
             "|qddot|, seeds whose step-0 rollout loss is finite.",
             "",
-            "| kinetic prior | solve | activation | indefinite | cond (median) | max abs qddot "
-            "| step-0 loss finite |",
-            "|---|---|---|---|---|---|---|",
+            "| init | kinetic prior | solve | activation | indefinite | cond (median) | "
+            "max abs qddot | step-0 loss finite |",
+            "|---|---|---|---|---|---|---|---|",
         ]
-        for (kp, solve, act), g in init.groupby(["kinetic_prior", "solve", "activation"]):
+        keys = ["init", "kinetic_prior", "solve", "activation"]
+        for (ini, kp, solve, act), g in init.groupby(keys):
+            name = {"lnn": "appendix B", "lnn_notebook": "appendix B / 200"}.get(ini, ini)
             lines.append(
-                f"| {kp:g} | {solve} | {act} | {g['frac_indefinite'].mean():.2f} | "
+                f"| {name} | {kp:g} | {solve} | {act} | {g['frac_indefinite'].mean():.2f} | "
                 f"{g['cond_median'].median():.3g} | {g['max_abs_qddot'].max():.3g} | "
                 f"{int(g['loss0_finite'].sum())}/{len(g)} |"
             )

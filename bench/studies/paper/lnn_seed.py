@@ -12,8 +12,10 @@ experiment, claim 9's verdict rule, its table beside the seed's numbers, and a f
   mean squared qddot error) at random states: ``paper`` 600,000 of them (the text's number; the
   notebook drew 1,024,000 fresh ones per epoch);
 - **the state distribution** (a decision): ours are the suite's chain-pendulum states, four
-  consecutive points 0.1 s apart (a chunk of four) at a random time of each of ``n_train``
-  (paper: 150,000) independent 10 s trajectories
+  consecutive points 0.1 s apart (a chunk of four: the dataset's shortest is two, and each
+  trajectory costs 8.7 ms of float64 ground truth, so four states per trajectory quarter the
+  data's cost) at a random time of each of ``n_train`` (paper: 150,000) independent 10 s
+  trajectories
   started from :meth:`systems.ChainPendulum.sample_initial` (angles and rates about N(0, 1),
   Cartesian jitter; energies mostly below the max potential energy). The notebook draws
   q uniform in [0, 2 pi)^2 and qdot uniform in [-10, 10]^2, a box in which most states spin
@@ -26,7 +28,8 @@ experiment, claim 9's verdict rule, its table beside the seed's numbers, and a f
 - the network: the text's "four-layer neural network model with 500 hidden units": four
   weight layers, i.e. three hidden layers of 500 (the notebook's ``layers 3``, 600 units),
   softplus in both models, the LNN initialised by appendix B (``init="lnn"``, its eq. 3 with
-  n = the width; the notebook then divides every parameter by 200, which we do not), the
+  n = the width; the notebook then divides every parameter by 200, ``init="lnn_notebook"``,
+  which the diagnosis runs as an ablation, ``python -m bench diagnose-lnn``), the
   baseline with the suite's orthogonal initialisation (gain 0.5);
 - models: the pure LNN (``lnn`` with ``kinetic_prior`` 0 and the pseudo-inverse solve, the
   text's "we use the pseudoinverse"), the baseline "that predicts qddot" (``node_so``: dq/dt =
@@ -47,7 +50,8 @@ Budgets: ``paper`` (and ``paper-core``) the seed's 600,000 states, 30,000 steps 
 the measured cost is in :data:`MEASURED`); ``quick`` 4,000 states (1,000 chunks), width 128,
 15,000 steps at 5 seeds (inside ``make bench``: :data:`MEASURED`); ``smoke`` tiny. At 3000
 steps and 10,000 states (quick's first try) neither model had learned the field (test losses
-6-450, every LNN rollout blew up): quick is about training length more than data.
+6-450, every LNN seed had test rollouts that blew up): quick is about training length more
+than data.
 """
 
 from __future__ import annotations
