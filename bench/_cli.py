@@ -151,11 +151,11 @@ def _parser() -> argparse.ArgumentParser:
     es.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
     es.add_argument("--workers", type=_int("workers"), default=2, help="for the wall hours")
 
-    dl = sub.add_parser(
-        "diagnose-lnn",
-        help="the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
-        "(issue 23): <results>/lnn_diagnosis.csv",
+    dl_help = (
+        "the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
+        "(issue 23): <results>/lnn_diagnosis.csv"
     )
+    dl = sub.add_parser("diagnose-lnn", help=dl_help, description=dl_help)
     dl.add_argument("--profile", default="quick", help="smoke, quick or paper")
 
     cp = sub.add_parser(

@@ -240,3 +240,34 @@ def test_section_and_figure_from_a_results_folder(tmp_path):
     assert "| 0.4 [0.4, 0.4] | 0.4 | 0.8 | 0.4 |" in line
     paths = S.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"}
+
+
+# ------------------------------------------------------------------------ the command line
+def test_cli_diagnose_and_seeds_options(capsys):
+    from bench._cli import _seed_list, main
+
+    with pytest.raises(SystemExit) as e:
+        main(["diagnose-lnn", "--help"])
+    assert e.value.code == 0 and "lnn_diagnosis.csv" in capsys.readouterr().out
+    assert _seed_list("5,6,7") == (5, 6, 7) and _seed_list(None) is None
+    for bad in ("5,x", "-1", ""):
+        with pytest.raises(ValueError, match="--seeds must be comma-separated integers >= 0"):
+            _seed_list(bad)
+    with pytest.raises(ValueError, match="profile must be one of"):
+        D.diagnose("huge", "/nonexistent")
+
+
+def test_diagnosis_summary_counts_blowups_after_a_singular_hessian():
+    base = {"part": "trained", "training": "t", "seed": 0, "min_eig": -1.0, "cond_at_blowup": 9.0}
+    rows = [
+        {**base, "traj": 0, "singular_step": 0, "blowup_step": 3, "coincide": True},
+        {**base, "traj": 1, "singular_step": 2, "blowup_step": -1, "coincide": False},
+        {**base, "traj": 2, "singular_step": -1, "blowup_step": -1, "coincide": False},
+    ]
+    df = pd.DataFrame(rows)
+    df["singular_before_blowup"] = (df["singular_step"] >= 0) & (
+        df["singular_step"] <= df["blowup_step"]
+    )
+    line = next(x for x in D.summary(df).splitlines() if x.startswith("| t |"))
+    # 3 trajectories, 2 near-singular, 1 at t = 0, 1 blow-up after it; P = 1/2 and 0/1
+    assert line.startswith("| t | 1 | 3 | 2 | 1 | 1 | 1 | 1 | 0.50 | 0.00 |")
