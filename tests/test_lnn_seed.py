@@ -271,3 +271,4 @@ def test_diagnosis_summary_counts_blowups_after_a_singular_hessian():
     line = next(x for x in D.summary(df).splitlines() if x.startswith("| t |"))
     # 3 trajectories, 2 near-singular, 1 at t = 0, 1 blow-up after it; P = 1/2 and 0/1
     assert line.startswith("| t | 1 | 3 | 2 | 1 | 1 | 1 | 1 | 0.50 | 0.00 |")
+    assert line.endswith("| - |")  # no adaptive rollouts in this table
