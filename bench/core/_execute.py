@@ -31,41 +31,19 @@ import numpy as np
 import systems
 
 from . import _metrics as M
-from . import _store
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig
 from ._provenance import provenance
+from ._rows import EVAL_MAX_STEPS, artifact_dir, base_row, eval_integrator  # noqa: F401 - re-exported
+from ._rows import write_json as _write_json
 
 TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends
-EVAL_MAX_STEPS = 4096  # adaptive steps per test trajectory (100 points): ~40 per interval
 # Test states used for the symplectic error (a Jacobian per state: keep it small).
 _SYMPLECTIC_STATES = 64
 
 
-def artifact_dir(config_hash: str, cache_root=None) -> Path:
-    """Per-run artifacts: ``<cache>/runs/<config_hash>/``."""
-    return Path(cache_root or systems.cache_root()) / "runs" / config_hash
-
-
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _write_json(path: Path, obj) -> None:
-    _store._atomic_write_bytes(path, json.dumps(_store._jsonable(obj), indent=1).encode())
-
-
-def base_row(config: RunConfig) -> dict:
-    """The row fields every run has, before any computation."""
-    row = config.to_dict()
-    row.update(
-        config_hash=config.config_hash,
-        train_hash=config.train_hash,
-        status="failed",
-        diverged_step=None,
-        error=None,
-    )
-    return row
 
 
 # -------------------------------------------------------------------------------- one run
@@ -305,18 +283,6 @@ def _predictor(model, system, roll):
         )
         return lambda z0s, ts, args: (fn(z0s, ts, args), {})
     return lambda z0s, ts, args: roll(model, z0s, ts, args)
-
-
-def eval_integrator(config: RunConfig):
-    """The test-rollout integrator of a run (adaptive: at most EVAL_MAX_STEPS steps)."""
-    import models
-
-    return models.Integrator(
-        config.eval_integrator,
-        substeps=config.eval_substeps,
-        rtol=config.eval_rtol,
-        max_steps=EVAL_MAX_STEPS,
-    )
 
 
 def _test_inputs(config: RunConfig, data):

@@ -303,7 +303,7 @@ def _train_cached(c: RunConfig, model, data, cache_root: Path, progress: bool):
     """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
     import equinox as eqx
 
-    from ._execute import _write_json
+    from ._rows import write_json as _write_json
 
     pdir = Path(cache_root) / "params" / c.train_hash
     pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
@@ -361,7 +361,7 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
 
     import models
 
-    from ._execute import eval_integrator
+    from ._rows import eval_integrator
 
     dtype = jnp.dtype(c.dtype)
     integ = eval_integrator(c)
@@ -445,8 +445,9 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
 def execute_pixels(c: RunConfig, cache_root=None, progress: bool = False) -> dict:
     """One pixel run end to end: its row, as ``bench.core._execute.execute_run`` writes rows
     (never raises, except for a storage error)."""
-    from ._execute import _write_json, artifact_dir, base_row
     from ._provenance import provenance
+    from ._rows import artifact_dir, base_row
+    from ._rows import write_json as _write_json
 
     cache_root = Path(cache_root or systems.cache_root())
     row = base_row(c)

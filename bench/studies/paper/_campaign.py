@@ -33,7 +33,7 @@ from ...core._experiments import available, expand, get
 from ._budget import run_seconds
 
 # The order in which a campaign settles the claims (issue 24).
-CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8)
+CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12)
 
 
 def campaign_experiments(profile: str = "paper-core") -> list[str]:
