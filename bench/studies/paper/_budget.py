@@ -88,6 +88,9 @@ SEED_TASKS_S = 237.0
 # The pixel experiments at quick (issue 22; claims 11 and 12): 20 runs, 300 s summed
 # wall_seconds at 1 worker with the paper-core campaign paused (2026-11-25), /2 workers
 PIXELS_S = 300.0 / 2
+# The LNN seed's double pendulum at quick (issue 23; claim 9): 15 runs, 294 s of run time at 1
+# worker under load (lnn_seed.MEASURED, 2026-11-25), /2 workers
+LNN_SEED_S = 294.0 / 2
 
 
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
@@ -172,4 +175,10 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
 
     extra = tuple(get(n) for n in ("learning_curves",) if n in available())
     paper = estimate_seconds(profile, workers=workers, experiments=PAPER_EXPERIMENTS + extra)
-    return (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO + STABILITY_S + SEED_TASKS_S + PIXELS_S
+    return (
+        (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO
+        + STABILITY_S
+        + SEED_TASKS_S
+        + PIXELS_S
+        + LNN_SEED_S
+    )
