@@ -75,10 +75,12 @@ class Comparison:
         claims = f"{self.n_claims - len(moved)} of {self.n_claims} claim verdicts the same" + (
             f" (differ: {', '.join(moved)})" if moved else ""
         )
+        n_spread = int(c["spread"].sum()) if len(c) else 0
+        lone = f" ({len(c) - n_spread} one-seed cells have no spread)" if len(c) > n_spread else ""
         return (
-            f"compare {self.b} against {self.a}: {claims}; {len(c) - n_flag} of {len(c)} cells "
-            f"inside the reference's seed spread; {ident} of {shared} shared runs bit-identical, "
-            f"median relative difference {med:.2g}"
+            f"compare {self.b} against {self.a}: {claims}; {n_spread - n_flag} of {n_spread} "
+            f"cells inside the reference's seed spread{lone}; {ident} of {shared} shared runs "
+            f"bit-identical, median relative difference {med:.2g}"
         )
 
     # ------------------------------------------------------------------ text
@@ -117,7 +119,7 @@ class Comparison:
             "",
             "Geometric-mean rollout error over each cell's seeds (failed and diverged runs "
             "scored 1), B / A; *flagged* when B's lies outside the reference's seed spread "
-            "[min, max].",
+            "[min, max] (a cell with one reference seed has no spread: shown, not flagged).",
             "",
         ]
         if len(c):
@@ -135,7 +137,8 @@ class Comparison:
                 lines.append(
                     f"| {row.experiment} | {row.cell} | {row.n_a} | {row.n_b} | "
                     f"{row.error_a:.4g} | {row.error_b:.4g} | {row.ratio:.3g} | "
-                    f"[{row.lo_a:.4g}, {row.hi_a:.4g}] | {'**yes**' if row.flagged else 'no'} |"
+                    f"{f'[{row.lo_a:.4g}, {row.hi_a:.4g}]' if row.spread else '- (1 seed)'} | "
+                    f"{'**yes**' if row.flagged else 'no'} |"
                 )
         else:
             lines.append("No cell is in both folders.")
@@ -205,10 +208,13 @@ def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
         index=both.index,
     )
     out["ratio"] = out["error_b"] / out["error_a"]
-    # a tiny tolerance: a cell whose only seed is bit-identical is inside its own spread
+    # a tiny tolerance: round-off of the geometric mean itself stays inside the spread
     tol = 1e-12
-    out["flagged"] = (out["error_b"] < out["lo_a"] * (1 - tol)) | (
-        out["error_b"] > out["hi_a"] * (1 + tol)
+    # a cell with one reference seed has no seed spread to lie outside of (its [min, max] is a
+    # point, which round-off on another CPU type always leaves): it is shown, never flagged
+    out["spread"] = out["n_a"] >= 2
+    out["flagged"] = out["spread"] & (
+        (out["error_b"] < out["lo_a"] * (1 - tol)) | (out["error_b"] > out["hi_a"] * (1 + tol))
     )
     return out.reset_index(drop=True)
 

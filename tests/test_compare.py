@@ -122,3 +122,18 @@ def test_compare_folders_lists_references_then_subfolders_not_itself(tmp_path):
     assert compare_folders(own, refs) == [refs / "paper", refs / "quick", own / "paper_gpu"]
     # a reference folder is not compared with itself
     assert compare_folders(refs / "quick", refs) == [refs / "paper"]
+
+
+def test_a_one_seed_cell_has_no_spread_and_is_never_flagged(tmp_path, tables):
+    runs, curves = tables
+    one = runs[(runs["seed"] == runs["seed"].min())]
+    b = one.copy()
+    b["rollout_error"] *= 1.001  # round-off on another CPU type
+    c = compare(_folder(tmp_path / "a", one, curves), _folder(tmp_path / "b", b, curves))
+    assert len(c.cells) and not c.cells["spread"].any() and not c.cells["flagged"].any()
+    assert "one-seed cells have no spread" in c.summary and "- (1 seed)" in c.markdown()
+    # ... while a cell with a spread is still judged against it
+    b2 = runs.copy()
+    b2["rollout_error"] *= 3
+    c = compare(_folder(tmp_path / "a2", runs, curves), _folder(tmp_path / "b2", b2, curves))
+    assert c.cells["flagged"].any()
