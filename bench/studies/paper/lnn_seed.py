@@ -344,6 +344,7 @@ def figure(results_dir) -> list[Path]:
     fig.suptitle(
         "LNN seed, double pendulum: ours (bars, seeds as dots), seed's numbers (marks)", fontsize=9
     )
+    fig.tight_layout()
     return save_figure(fig, Path(results_dir) / "figures", "fig_lnn_seed")
 
 
