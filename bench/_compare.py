@@ -240,8 +240,8 @@ def _runs(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
 def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
     from .studies.paper._replication import judge
 
-    ja = judge(ra, ca, pa, loso=False)
-    jb = judge(rb, cb, pb, loso=False)
+    ja = judge(ra, ca, pa)
+    jb = judge(rb, cb, pb)
     fa = {v.key: v for v in ja.final}
     fb = {v.key: v for v in jb.final}
     rows = []

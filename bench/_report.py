@@ -381,7 +381,7 @@ def _pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list
 
 def _load_other(d: Path):
     runs, curves, profile = load_tables(d)
-    verdicts = judge(runs, curves, profile, loso=False).final
+    verdicts = judge(runs, curves, profile).final
     return d, profile, _pending(d, runs, profile, verdicts)
 
 
@@ -487,8 +487,9 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "Replication: every claim is judged on the profile's seeds and again on a disjoint set "
         "(stored by `make replicate`); a verdict that differs between them is *inconclusive "
         "(does not replicate)*, with both readings shown. *Leave one seed out* judges the "
-        "profile's seeds without each one in turn (one seed fewer required) and names the "
-        "seeds without which the verdict changes.",
+        "profile's seeds without each one in turn (one seed fewer required); a verdict that "
+        "changes when any one seed is dropped is *inconclusive (changes without a seed)*, and the "
+        "table names the seed and what the verdict becomes without it.",
         "",
         *_claims_table(j),
         "",

@@ -14,6 +14,7 @@ from bench.core._experiments import PROFILES, REPLICATION_SEEDS
 from bench.studies.paper import _stats as R
 from bench.studies.paper import evaluate_claims
 from bench.studies.paper._replication import (
+    CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
     _span,
     judge,
@@ -54,6 +55,7 @@ def test_seed_sets_of_the_profiles():
     assert _span(REPLICATION) == "5-9" and _span((0, 2)) == "0, 2"
     assert settled(R.REPRODUCED) and settled(R.NOT_REPRODUCED) and settled(R.PARTLY)
     assert not settled(R.INCONCLUSIVE) and not settled(DOES_NOT_REPLICATE)
+    assert not settled(CHANGES_WITHOUT_A_SEED)
 
 
 @pytest.fixture(scope="module")
@@ -185,12 +187,39 @@ def test_leave_one_seed_out_names_the_seed_a_verdict_rests_on(
     changes = j.loso_changes("3")
     assert [s for s, _ in changes] == [3], [(s, w.verdict) for s, w in j.loso["3"]]
     assert changes[0][1].verdict == without_3
-    # the leave-one-out reading is reported beside the verdict, not folded into it
+    # an inconclusive verdict stays what it is, whatever the seeds' subsets say
     assert _final(j)["3"].verdict == all_seeds
     # every claim is judged without each seed; one inconclusive for want of runs stays so
     assert set(j.loso) == set(j.primary)
     assert all(len(got) == 5 for got in j.loso.values())
     assert j.loso_changes("5") == []
+
+
+@pytest.mark.parametrize(
+    ("factors", "final", "moved"),
+    [
+        # a clear gain on every seed: reproduced with five and with any four
+        ((3.3, 3.3, 3.3, 3.3, 3.3), R.REPRODUCED, []),
+        # reproduced with five, but seed 3's 2x gain is so close to the margin that without
+        # seed 1, 2 or 4 the four left do not clear the test: the verdict is not signed
+        ((5.0, 3.3, 3.3, 2.0, 3.3), CHANGES_WITHOUT_A_SEED, [1, 2, 4]),
+    ],
+)
+def test_a_verdict_that_changes_without_a_seed_is_inconclusive(
+    reproduce_primary, factors, final, moved
+):
+    runs, curves = reproduce_primary
+    runs = _so_gain(runs, factors)
+    j = judge(runs, curves, PROFILE)
+    assert j.primary["3"].verdict == R.REPRODUCED
+    assert [s for s, _ in j.loso_changes("3")] == moved
+    v = _final(j)["3"]
+    assert v.verdict == final
+    if moved:  # the detail keeps the five-seed reading and names each seed and its reading
+        assert v.detail.startswith("seeds 0-4: reproduced; without seed 1: inconclusive;")
+        assert not settled(v.verdict)
+    # without the leave-one-out check nothing is demoted
+    assert _final(judge(runs, curves, PROFILE, loso=False))["3"].verdict == R.REPRODUCED
 
 
 def test_leave_one_seed_out_needs_more_than_one_seed(reproduce_primary):
