@@ -76,7 +76,7 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     assert total["runs"] == len(runs) and total["stored"] == 0
     assert total["wall_hours_left"] == pytest.approx(total["cpu_hours_left"] / 2)
     # store the first claim's hnn_so runs as if they had taken twice the estimate
-    from bench.studies.paper._budget import run_seconds
+    from bench.studies.paper._budget import run_seconds, total_seconds
 
     done = [c for n, c in runs if n == "loss" and c.model == "hnn_so"]
     for c in done:
@@ -102,9 +102,37 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     )
     left = [c for _, c in runs if c.config_hash not in {d.config_hash for d in done}]
     # the estimate, not rescaled by the stored runs (a niced run's seconds include waiting)
-    assert df.loc["total", "cpu_hours_left"] == pytest.approx(
-        sum(run_seconds(c) for c in left) / 3600
-    )
+    assert df.loc["total", "cpu_hours_left"] == pytest.approx(total_seconds(left) / 3600)
     assert hnn_left
     text = C.format_plan(df.reset_index(), "paper-core", 2)
     assert "total" in text and "loss" in text
+
+
+def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
+    """Claim 9 at paper-core: per seed, one dataset of 150,000 ten-second trajectories (shared
+    by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at
+    the cost lnn_seed.MEASURED records (the rollout-trained scaling said 0.5 h, not 2.6)."""
+    from bench.studies.paper import lnn_seed
+    from bench.studies.paper._budget import data_seconds, run_seconds, total_seconds
+
+    m = lnn_seed.MEASURED
+    cfgs = E.expand("lnn_seed_double_pendulum", "paper-core")
+    assert len({c.seed for c in cfgs}) == 5 and len({c.dataset_config() for c in cfgs}) == 5
+    lnn = next(c for c in cfgs if c.model == "lnn")
+    assert data_seconds(lnn) == pytest.approx(150_000 * m["ms_per_trajectory_data"] / 1000)
+    assert run_seconds(lnn) == pytest.approx(
+        30_000 * m["ms_per_step_lnn_paper"] / 1000, abs=m["s_lnn_test_rollouts_paper"] + 5
+    )
+    # each seed's dataset once, not once per run
+    assert total_seconds(cfgs) == pytest.approx(
+        sum(run_seconds(c) for c in cfgs) + 5 * data_seconds(lnn)
+    )
+    plan = C.plan("paper-core", tmp_path, workers=2).set_index("claim")
+    assert plan.loc[9, "cpu_hours"] == pytest.approx(total_seconds(cfgs) / 3600)
+    assert 2.0 < plan.loc[9, "cpu_hours"] < 3.5
+    # a stored run of seed 0 means its dataset was made: the hours left drop its data too
+    _store.write_row(tmp_path, {**lnn.to_dict(), "config_hash": lnn.config_hash, "status": "ok"})
+    left = C.plan("paper-core", tmp_path, workers=2).set_index("claim").loc[9, "cpu_hours_left"]
+    assert left == pytest.approx(
+        (total_seconds(cfgs) - run_seconds(lnn) - data_seconds(lnn)) / 3600
+    )

@@ -93,6 +93,36 @@ PIXELS_S = 300.0 / 2
 LNN_SEED_S = 294.0 / 2
 
 
+# Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
+# seed, claim 9) and pixel frames (claims 11 and 12). (ms per training step, seconds of
+# everything else but the data) at the sizes the profiles run, keyed (kind, model, width, batch),
+# kind "pixels" or "derivative". Pixels at paper-core (batch 200, width 200): the difference of
+# 200- and 600-step runs of `expand(..., "paper-core")`'s configs, one process, the campaign
+# paused (2026-11-25); at quick (batch 64, width 128): the quick rows' train_seconds / steps.
+# The LNN seed: lnn_seed.MEASURED at paper (width 500, 8 chunks of 4 states), the quick rows at
+# quick. Other sizes fall back to WALL_S's scaling (the HNN seed's tasks, whose estimate was
+# 0.14 CPU h against 0.19 h measured at paper-core).
+STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
+    ("pixels", "hnn", 200, 200): (15.0, 4.7),
+    ("pixels", "node", 200, 200): (14.4, 3.9),
+    ("pixels", "vin", 200, 200): (12.9, 4.4),
+    ("pixels", "resnet", 200, 200): (12.0, 3.2),
+    ("pixels", "hnn", 128, 64): (6.2, 6.6),
+    ("pixels", "node", 128, 64): (5.8, 5.0),
+    ("pixels", "vin", 128, 64): (5.5, 5.0),
+    ("pixels", "resnet", 128, 64): (5.1, 4.5),
+    ("derivative", "lnn", 500, 8): (14.8, 20.0),
+    ("derivative", "node_so", 500, 8): (2.7, 5.0),
+    ("derivative", "lnn", 128, 8): (1.9, 16.7),
+    ("derivative", "node_so", 128, 8): (0.4, 4.4),
+}
+# Ground truth of a derivative-target dataset, ms per simulated second of one trajectory (the
+# double pendulum at Dopri8 and 1e-11: 8.7 ms per 10 s trajectory, lnn_seed.MEASURED), keyed
+# (system, k); charged once per dataset (the models of a seed share it), see data_seconds.
+# Elsewhere the data is inside WALL_S's "everything else" (1000 trajectories at most).
+DATA_MS_PER_S: dict[tuple[str, int | None], float] = {("chain_pendulum", 2): 0.87}
+
+
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
 # of bb0a68e, one pool per experiment (since then one pool for all, longest runs first).
 SWEEP_RATIO = 25.2 / 23.4
@@ -117,9 +147,18 @@ def _wall(c: RunConfig) -> tuple[float, float]:
     return WALL_S.get((c.model, c.system)) or WALL_S.get((c.model, None)) or (20.0, 12.0)
 
 
+def _kind(c: RunConfig) -> str:
+    return "pixels" if c.observation == "pixels" else c.train_target
+
+
 def run_seconds(c: RunConfig) -> float:
-    """Estimated run time of one run (see :func:`estimate_seconds`); the sweep starts the
-    longest runs first with it (``bench.core._runner.sweep(order=...)``)."""
+    """Estimated run time of one run, its dataset aside where :func:`data_seconds` charges it
+    (see :func:`estimate_seconds`); the sweep starts the longest runs first with it
+    (``bench.core._runner.sweep(order=...)``)."""
+    measured = STEP_COST.get((_kind(c), c.model, c.width, c.batch))
+    if measured is not None:
+        ms, other = measured
+        return c.steps * ms / 1000 + other
     train, other = _wall(c)
     # the dof at which WALL_S was measured: chain-2 / spring-2 (6), k = 1, the particle
     dof_quick = {"spring_pendulum": 6, "chain_pendulum": min(2, _dof(c))}.get(c.system, 1)
@@ -132,6 +171,33 @@ def run_seconds(c: RunConfig) -> float:
     return train * s + other
 
 
+def data_seconds(c: RunConfig) -> float:
+    """Seconds to generate the ground truth of ``c``'s dataset, where it is charged apart from
+    the runs (:data:`DATA_MS_PER_S`: derivative-target datasets), else 0. Charge it once per
+    ``c.dataset_config()``: :func:`total_seconds`."""
+    if c.train_target != "derivative":
+        return 0.0
+    ms = DATA_MS_PER_S.get((c.system, c.k))
+    return 0.0 if ms is None else c.n_generated * c.duration * ms / 1000
+
+
+def total_seconds(cfgs, charged=None) -> float:
+    """Run time of ``cfgs``: every run's :func:`run_seconds` plus each dataset's
+    :func:`data_seconds` once (datasets in ``charged``, a set of ``dataset_config()``s that is
+    updated, are taken as paid already)."""
+    charged = set() if charged is None else charged
+    total = 0.0
+    for c in cfgs:
+        total += run_seconds(c)
+        extra = data_seconds(c)
+        if extra:
+            d = c.dataset_config()
+            if d not in charged:
+                charged.add(d)
+                total += extra
+    return total
+
+
 def estimate_seconds(
     profile: str = "quick",
     *,
@@ -140,7 +206,9 @@ def estimate_seconds(
 ) -> dict:
     """Wall-time estimate of the paper experiments of a profile: the sum over the unique runs of
 
-    ``t = train(model, system) * s + other(model, system)``,
+    ``t = train(model, system) * s + other(model, system)``
+    (or ``steps * ms + other`` where :data:`STEP_COST` has the run's kind, model and size; plus
+    each derivative-target dataset's :func:`data_seconds` once),
     ``s = (steps / 1000) * (batch / 100) * (width / 128) * g(dof)``
 
     divided by ``workers``, with :data:`WALL_S`'s measured quick costs (``s = 1`` at quick for
@@ -156,7 +224,7 @@ def estimate_seconds(
         per[exp.name] = len(cfgs)
         for c in cfgs:
             seen.setdefault(c.config_hash, c)
-    total = sum(run_seconds(c) for c in seen.values())
+    total = total_seconds(seen.values())
     return {
         "runs": len(seen),
         "trivial_runs": sum(c.model in TRIVIAL_MODELS for c in seen.values()),

@@ -16,7 +16,9 @@ first of them. Runs are content-addressed, so a campaign killed at any moment lo
 runs in flight; run it again to resume.
 
 Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
-costs scaled to the profile's steps, batch and width. The stored runs' own seconds are shown
+costs scaled to the profile's steps, batch and width, or from costs measured at the run's own
+size for derivative-target and pixel runs (``_budget.STEP_COST``), plus the LNN seed's datasets
+once each (``_budget.data_seconds``). The stored runs' own seconds are shown
 beside it but not used to rescale the estimate: a run at nice 19 measures the time it waited for
 the CPU as well (the first runs of 2026-11-23 took 13x their estimate while quick sweeps ran).
 """
@@ -30,7 +32,7 @@ import pandas as pd
 
 from ...core import _store
 from ...core._experiments import available, expand, get
-from ._budget import run_seconds
+from ._budget import run_seconds, total_seconds
 
 # The order in which a campaign settles the claims (issue 24).
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12)
@@ -95,6 +97,10 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         else {}
     )
     table = []
+    # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose
+    # runs need it, and is left to pay while none of its runs is stored
+    charged = set()
+    paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done}
     for name in campaign_experiments(profile):
         cells = expand(name, profile)  # every run the claim reads, shared ones included
         mine = [c for n, c in runs if n == name]  # the runs it brings first
@@ -106,10 +112,10 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "runs": len(cells),
                 "stored": sum(c.config_hash in done for c in cells),
                 "new_runs": len(mine),
-                "cpu_hours": sum(run_seconds(c) for c in mine) / 3600,
+                "cpu_hours": total_seconds(mine, charged) / 3600,
                 "cpu_hours_done": float(np.nansum([walls.get(c.config_hash, np.nan) for c in mine]))
                 / 3600,
-                "cpu_hours_left": sum(run_seconds(c) for c in left) / 3600,
+                "cpu_hours_left": total_seconds(left, paid) / 3600,
             }
         )
     df = pd.DataFrame(table)
