@@ -437,6 +437,45 @@ def test_resume_after_kill(tmp_path):
     assert _store.unread_rows(res) == []  # and no row was left damaged
 
 
+def test_a_row_rewritten_under_its_hash_marks_every_table_stale(stored, monkeypatch, capsys):
+    """A rerun that replaces a row (same config_hash, new numbers) leaves the hash sets equal;
+    the row files' digest recorded at the last rebuild tells the tables are stale, and the
+    report rebuilds them with the new numbers (the curves too)."""
+    import bench._report
+
+    res, configs = stored
+    monkeypatch.setattr(bench._report, "write_report", lambda d: None)
+    assert _store.stale_tables(res) == []
+    row = _fake_row(configs[0])
+    row.update(experiment="faults_resume", profile="smoke", rollout_error=0.5)
+    row["curves"]["rel_error"] = [0.0, 0.5]
+    _store.write_row(res, row)
+    stale = dict(_store.stale_tables(res))
+    assert set(stale) == set(_store.TABLES)
+    assert stale["curves.parquet"].startswith("built from other row files")
+    assert main(["--results", str(res), "report"]) == 0
+    assert "warning: rebuilt from the row files: runs.parquet (built from other row" in (
+        capsys.readouterr().err
+    )
+    runs = pd.read_parquet(res / "runs.parquet").set_index("config_hash")
+    assert runs.loc[configs[0].config_hash, "rollout_error"] == 0.5
+    curves = pd.read_parquet(res / "curves.parquet")
+    assert curves["rel_error"].max() == 0.5
+    assert _store.stale_tables(res) == []
+
+
+def test_a_folder_without_a_recorded_digest_is_checked_by_its_runs(stored):
+    """Folders built before digests were recorded (no ``rows_digest`` in bench_meta.json) are
+    not all flagged: the hash-set check still runs."""
+    res, configs = stored
+    meta = json.loads((res / _store.META).read_text())
+    del meta["rows_digest"]
+    (res / _store.META).write_text(json.dumps(meta))
+    assert _store.stale_tables(res) == []
+    (res / _store.ROWS / f"{configs[0].config_hash}.json").unlink()
+    assert [n for n, _ in _store.stale_tables(res)] == ["runs.parquet", "runs.csv"]
+
+
 @pytest.mark.parametrize("verb", ["report", "figures"])
 def test_report_and_figures_rebuild_a_damaged_runs_table_and_name_it(
     stored, monkeypatch, capsys, verb

@@ -305,3 +305,25 @@ def test_schedule_starts_one_run_of_every_cell_before_the_other_seeds():
         ("hnn_so", 1),
         ("hnn_so", 2),
     ]
+
+
+def test_compiled_programs_are_dropped_when_the_memory_maps_near_the_limit():
+    """Every compiled XLA program holds memory maps until jax's caches drop it; a worker that
+    runs run after run reaches vm.max_map_count and segfaults (bench.core._env). Past the
+    threshold the runner's hook clears the caches and the maps fall; below it, nothing."""
+    import jax
+    import jax.numpy as jnp
+
+    from bench.core import _env
+
+    counts = _env._map_count()
+    if counts is None:
+        pytest.skip("no /proc maps on this OS")
+    for i in range(12):  # twelve programs of different shapes, each compiled and kept
+        jax.jit(lambda x: jnp.sin(x) * 2 + 1)(jnp.ones(i + 1)).block_until_ready()
+    before, limit = _env._map_count()
+    assert not _env.bound_compiled_programs(fraction=1.0)  # far below the kernel's limit
+    assert _env._map_count()[0] >= before - 5
+    assert _env.bound_compiled_programs(fraction=1 / limit)  # past any threshold
+    after = _env._map_count()[0]
+    assert after < before - 12, (before, after)  # at least one map per program went

@@ -82,3 +82,39 @@ def setup_process(n: int | None = None, cores: list[int] | None = None) -> int:
     count = configure_threads(n, cores)
     configure_compilation_cache()
     return count
+
+
+# XLA's CPU backend maps every compiled program's code into memory regions of its own, and jax's
+# caches keep every program of the process alive. A sweep worker runs run after run in one
+# process: measured 2026-11-25, about 1200 maps per smoke run of a new model/system cell (24
+# runs: 3300 -> 30,200 maps) and 8,000-8,600 after 7 paper-core runs per worker. At the
+# kernel's vm.max_map_count (65530 here) LLVM fails with "Cannot allocate memory" and the
+# process segfaults (it did: the 60th run of tests/test_runner.py's all-models smoke sweep in
+# one process); in a pool that loses the run in flight and stalls the sweep. With
+# ``jax.clear_caches()`` after each run the same 24 runs stayed at 1480 maps.
+MAPS_FRACTION = 0.5
+
+
+def _map_count() -> tuple[int, int] | None:
+    """(memory maps of this process, the kernel's limit), or None where /proc does not say."""
+    try:
+        with open("/proc/self/maps", "rb") as f:
+            n = sum(1 for _ in f)
+        with open("/proc/sys/vm/max_map_count") as f:
+            return n, int(f.read())
+    except (OSError, ValueError):
+        return None
+
+
+def bound_compiled_programs(fraction: float = MAPS_FRACTION) -> bool:
+    """Drop jax's caches of compiled programs when this process's memory maps pass
+    ``fraction`` of the kernel's limit (see :data:`MAPS_FRACTION`); the runner calls it after
+    every run. Programs recompile on their next use (from the persistent compilation cache where
+    it is on). Returns whether it cleared them."""
+    counts = _map_count()
+    if counts is None or counts[0] < fraction * counts[1]:
+        return False
+    import jax
+
+    jax.clear_caches()
+    return True

@@ -18,7 +18,7 @@ from pathlib import Path
 import systems
 
 from . import _store
-from ._env import cpu_count
+from ._env import bound_compiled_programs, cpu_count
 from ._errors import StorageError, one_line, storage_error
 from ._execute import (
     EVAL_MAX_STEPS,
@@ -196,6 +196,7 @@ def sweep(
                     else:
                         for row in _ensemble.execute_group(g, cache_root=cache_root):
                             finish(row)
+                    bound_compiled_programs()
             else:
                 _sweep_pool(groups, finish, cache_root, workers, cores)
         _store.rebuild_tables(results_dir)
@@ -259,10 +260,13 @@ def _star_execute(job):
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
     dicts, cache_root = job
     if len(dicts) == 1:
-        return [_execute_dict(dicts[0], cache_root)]
-    from ._ensemble import _execute_group_dicts
+        rows = [_execute_dict(dicts[0], cache_root)]
+    else:
+        from ._ensemble import _execute_group_dicts
 
-    return _execute_group_dicts(dicts, cache_root)
+        rows = _execute_group_dicts(dicts, cache_root)
+    bound_compiled_programs()  # a worker runs many runs: keep its memory maps bounded
+    return rows
 
 
 def _sweep_ray(groups, finish, cache_root, address, cores):

@@ -390,6 +390,7 @@ def rebuild_tables(results_dir) -> pd.DataFrame:
     """Rewrite runs.parquet, runs.csv, curves.parquet, checkpoints.parquet and
     checkpoint_curves.parquet from ``.rows/`` (atomically)."""
     results_dir = Path(results_dir)
+    digest = rows_digest(results_dir)  # before reading: a row written meanwhile shows as stale
     rows = read_rows(results_dir)
     df = rows_frame(rows)
     results_dir.mkdir(parents=True, exist_ok=True)
@@ -410,27 +411,50 @@ def rebuild_tables(results_dir) -> pd.DataFrame:
             os.replace(tmp, results_dir / name)
         finally:
             Path(tmp).unlink(missing_ok=True)
-    record_schema(results_dir)
+    record_schema(results_dir, rows_digest=digest)
     return df
+
+
+def rows_digest(results_dir) -> str:
+    """sha256 over the row files' names and bytes: what the tables were built from. Recorded
+    by :func:`rebuild_tables` in ``bench_meta.json``; :func:`stale_tables` compares it, so a row
+    rewritten under the same hash (a rerun) marks the tables stale too."""
+    h = hashlib.sha256()
+    rows_dir = Path(results_dir) / ROWS
+    for p in sorted(rows_dir.glob("*.json")) if rows_dir.is_dir() else ():
+        try:
+            data = p.read_bytes()
+        except OSError:
+            continue
+        h.update(p.name.encode() + b"\0" + hashlib.sha256(data).digest())
+    return h.hexdigest()
 
 
 META = "bench_meta.json"
 
 
-def record_schema(results_dir) -> None:
+def _read_meta(results_dir) -> dict:
+    try:
+        meta = json.loads((Path(results_dir) / META).read_text())
+    except (OSError, ValueError):
+        return {}
+    return meta if isinstance(meta, dict) else {}
+
+
+def record_schema(results_dir, rows_digest: str | None = None) -> None:
     """Record the tables' schema version (:data:`bench.core._schema.SCHEMA_VERSION`) in
-    ``bench_meta.json`` (other keys kept; ``python -m bench compare`` checks it)."""
+    ``bench_meta.json`` (other keys kept; ``python -m bench compare`` checks it), and the
+    :func:`rows_digest` the tables were built from, where given."""
     from ._schema import SCHEMA_VERSION
 
     path = Path(results_dir) / META
-    try:
-        meta = json.loads(path.read_text())
-        meta = meta if isinstance(meta, dict) else {}
-    except (OSError, ValueError):
-        meta = {}
-    if meta.get("schema_version") == SCHEMA_VERSION:
+    meta = _read_meta(results_dir)
+    want = {"schema_version": SCHEMA_VERSION}
+    if rows_digest is not None:
+        want["rows_digest"] = rows_digest
+    if all(meta.get(a) == b for a, b in want.items()):
         return
-    meta["schema_version"] = SCHEMA_VERSION
+    meta.update(want)
     _atomic_write_bytes(path, json.dumps(meta, indent=1).encode())
 
 
@@ -445,8 +469,11 @@ TABLES = (
 
 def stale_tables(results_dir) -> list[tuple[str, str]]:
     """The tables of ``results_dir`` that do not match ``.rows/`` (the truth), as
-    ``(file name, why)``: missing, unreadable (truncated, not a table) or, for the runs tables,
-    holding other runs than the row files. Empty without ``.rows/`` (nothing to rebuild from)."""
+    ``(file name, why)``: missing, unreadable (truncated, not a table), for the runs tables
+    holding other runs than the row files, or built from other row files than those stored now
+    (the :func:`rows_digest` recorded at the last rebuild differs: a row rewritten under its
+    hash; folders built before digests were recorded skip this check). Empty without
+    ``.rows/`` (nothing to rebuild from)."""
     results_dir = Path(results_dir)
     if not (results_dir / ROWS).is_dir():
         return []
@@ -465,6 +492,14 @@ def stale_tables(results_dir) -> list[tuple[str, str]]:
             continue
         if name.startswith("runs.") and set(df.get("config_hash", pd.Series(dtype=str))) != rows:
             out.append((name, "other runs than the row files"))
+    recorded = _read_meta(results_dir).get("rows_digest")
+    if recorded is not None and recorded != rows_digest(results_dir):
+        flagged = {name for name, _ in out}
+        out += [
+            (name, "built from other row files (a row changed since)")
+            for name in TABLES
+            if name not in flagged
+        ]
     return out
 
 

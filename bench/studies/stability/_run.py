@@ -57,7 +57,7 @@ _ORDER = ("long_horizon", "stiffness", "dt_sweep", "precision", "lnn_singular", 
 
 def _run_job(job) -> list[tuple[str, int, list[Row], float]]:
     """A pool task: ``(case, part, size)`` triples run in order, each inside :func:`guard`."""
-    from ...core._env import configure_compilation_cache
+    from ...core._env import bound_compiled_programs, configure_compilation_cache
 
     configure_compilation_cache()
     out = []
@@ -65,6 +65,7 @@ def _run_job(job) -> list[tuple[str, int, list[Row], float]]:
         start = time.perf_counter()
         rows = guard(name, lambda name=name, size=size: CASES[name](size))
         out.append((name, part, rows, time.perf_counter() - start))
+        bound_compiled_programs()
     return out
 
 
