@@ -661,7 +661,7 @@ _show_warning = warnings.showwarning
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (2 for bad input, 1 for no runs or a failed write)."""
     from .core._env import setup_process
-    from .core._errors import StorageError
+    from .core._errors import StorageError, WorkerDied
 
     setup_process()
     if hasattr(signal, "SIGXFSZ"):  # a file-size limit: an OSError (EFBIG), not a core dump
@@ -673,7 +673,7 @@ def main(argv: list[str] | None = None) -> int:
     except (UsageError, ValueError) as e:
         print(f"error: {str(e).splitlines()[0] if str(e) else type(e).__name__}", file=sys.stderr)
         return 2
-    except (NoRuns, StorageError) as e:
+    except (NoRuns, StorageError, WorkerDied) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
     except OSError as e:  # any other failed read or write: one line, no traceback

@@ -5,6 +5,8 @@ tests/test_faults.py.
 """
 
 import json
+import os
+import signal
 import time
 from pathlib import Path
 
@@ -327,3 +329,27 @@ def test_compiled_programs_are_dropped_when_the_memory_maps_near_the_limit():
     assert _env.bound_compiled_programs(fraction=1 / limit)  # past any threshold
     after = _env._map_count()[0]
     assert after < before - 12, (before, after)  # at least one map per program went
+
+
+def _die_on_2(job):
+    """A pool task (importable by the spawned workers) whose worker is killed on job 2."""
+    if job == 2:
+        os.kill(os.getpid(), signal.SIGKILL)  # the OOM killer, a segfault in native code
+    time.sleep(0.2)
+    return job
+
+
+def test_a_pool_worker_that_dies_raises_instead_of_hanging():
+    """multiprocessing.Pool replaced a dead worker and waited forever for its task (a niced
+    campaign would have hung unseen); the sweep's pool raises WorkerDied, one line, and
+    cancels what had not started."""
+    from bench.core._errors import WorkerDied
+    from bench.core._runner import imap_unordered, worker_pool
+
+    with worker_pool(2) as pool:
+        assert sorted(imap_unordered(pool, _die_on_2, [0, 1, 3])) == [0, 1, 3]
+    got = []
+    with worker_pool(2) as pool, pytest.raises(WorkerDied, match="a worker process died"):
+        for r in imap_unordered(pool, _die_on_2, range(8)):
+            got.append(r)
+    assert 2 not in got and len(got) < 8

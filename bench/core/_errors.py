@@ -23,6 +23,12 @@ class StorageError(RuntimeError):
     """
 
 
+class WorkerDied(RuntimeError):
+    """A worker process of a sweep's pool died (killed by the OS, out of memory, a crash in
+    native code): the sweep stopped. Every row stored before it is whole; running it again
+    resumes with the runs not stored (the run in flight is lost)."""
+
+
 def storage_error(err: BaseException) -> OSError | None:
     """The storage OSError (errno in :data:`STORAGE_ERRNOS`) behind ``err``, if any.
 

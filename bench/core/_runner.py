@@ -19,7 +19,7 @@ import systems
 
 from . import _store
 from ._env import bound_compiled_programs, cpu_count
-from ._errors import StorageError, one_line, storage_error
+from ._errors import StorageError, WorkerDied, one_line, storage_error
 from ._execute import (
     EVAL_MAX_STEPS,
     artifact_dir,
@@ -223,8 +223,12 @@ def sweep(
 def worker_pool(workers: int):
     """A pool of ``workers`` spawned processes, each pinned to its own share of the cores (an
     affinity mask, which sizes XLA's thread pools) in its initializer, before it imports jax:
-    no oversubscription. The sweep's pool, and the stability study's."""
+    no oversubscription. The sweep's pool, and the stability study's; use it with
+    :func:`imap_unordered`. A ``concurrent.futures`` pool, not ``multiprocessing.Pool``: when a
+    worker dies, ``multiprocessing.Pool`` replaces it and waits forever for the lost task (a
+    campaign would hang at nice 19, unseen), where this one raises."""
     import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
 
     ctx = mp.get_context("spawn")
     available = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
@@ -232,14 +236,50 @@ def worker_pool(workers: int):
     slots = ctx.Queue()
     for i in range(workers):
         slots.put(available[i * share : (i + 1) * share] or None)
-    return ctx.Pool(workers, initializer=_pin_worker, initargs=(slots,))
+    return ProcessPoolExecutor(workers, mp_context=ctx, initializer=_pin_worker, initargs=(slots,))
+
+
+def imap_unordered(pool, fn, jobs):
+    """``fn(job)`` for every job on ``pool`` (:func:`worker_pool`), started in the order given,
+    yielded as they finish. A worker that dies raises :class:`WorkerDied` (one line) instead of
+    leaving the caller waiting; the jobs not started are cancelled."""
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    futures = [pool.submit(fn, job) for job in jobs]
+    done = 0
+    try:
+        for f in as_completed(futures):
+            result = f.result()
+            done += 1
+            yield result
+    except BrokenProcessPool:
+        _stop(pool, futures)
+        raise WorkerDied(
+            f"a worker process died (killed by the OS: out of memory? or a crash in native "
+            f"code) after {done} of {len(futures)} jobs finished; what finished is stored: "
+            "run it again to resume"
+        ) from None
+    except BaseException:  # a failed write, an interrupt, the caller stopping: stop at once
+        _stop(pool, futures)
+        raise
+
+
+def _stop(pool, futures) -> None:
+    """Cancel the jobs not started and end the workers, as ``multiprocessing.Pool``'s exit did
+    (``ProcessPoolExecutor`` would otherwise finish the runs in flight first)."""
+    for f in futures:
+        f.cancel()
+    processes = getattr(pool, "_processes", None) or {}  # private, but stable since 3.2
+    for p in list(processes.values()):
+        p.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _sweep_pool(groups, finish, cache_root, workers, cores):
-    pool = worker_pool(workers)
-    with pool:
-        jobs = [([c.to_dict() for c in g], str(cache_root)) for g in groups]
-        for rows in pool.imap_unordered(_star_execute, jobs):
+    jobs = [([c.to_dict() for c in g], str(cache_root)) for g in groups]
+    with worker_pool(workers) as pool:
+        for rows in imap_unordered(pool, _star_execute, jobs):
             for row in rows:
                 finish(row)
 

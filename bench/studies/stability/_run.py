@@ -112,10 +112,10 @@ def run_cases(profile="quick", cases=None, progress: bool = True, workers: int =
         for job in jobs:
             report(_run_job(job))
     else:
-        from ...core._runner import worker_pool
+        from ...core._runner import imap_unordered, worker_pool
 
         with worker_pool(workers) as pool:
-            for done in pool.imap_unordered(_run_job, jobs):
+            for done in imap_unordered(pool, _run_job, jobs):
                 report(done)
     return [row for n in names for part in sorted(got[n]) for row in got[n][part]]
 
