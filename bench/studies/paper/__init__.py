@@ -26,49 +26,16 @@ cells share their hashes with the trade-off experiment and with older results) a
 profile. The trade-off's plain NODE on the spring (default start) no longer shares its training
 with Fig. 2 (about 10 s of run time more in the trade-off).
 
-Quick-profile budget (``make bench`` <= 30 min on 2 cores, 2 workers). The quick sweep of
-2026-11-22 took 25.8 min for 180 runs (120 paper runs, 60 trade-off evaluations) plus 4.1 min
-of stability study. The per-run ``wall_seconds`` summed over runs / 2 workers predicts that
-sweep at 27.0 min (0.96x measured), so the budget is that sum, from the measured per-model costs
-of :data:`WALL_S` (models not measured yet: guesses, marked there). Check: the old declarations
-give 1990 s with :func:`estimate_seconds`, the measured sum was 1990 s. Runs per experiment at
-quick (3 seeds unless stated; shared cells counted once, where first declared):
-
-============================  =====  ========================================================
-experiment                    runs   cells
-============================  =====  ========================================================
-energy (Fig. 2)               30     {node, node_so, hnn, hnn_so, const. velocity} x {chain,
-                                     spring (paper init)} x k=2 (k = 1..4 only in paper)
-second_order (Fig. 4)         0 new  all 30 shared with energy
-coordinates (Fig. 5)          9 new  node_so, hnn_so, const. velocity on spring-2 from the
-                                     physical equilibrium (18 shared with energy)
-loss (Fig. 8)                 12 new L1 for the four models (15 L2 cells shared with energy)
-symplectic (Fig. 3)           18     node_so_symreg (q, p) x w in {0, 1e-6, 1e-3, 1, 1e3},
-                                     const. velocity (q, p); chain-2
-damped (Fig. 6)               32     {node_so, hnn_so plain, mixture_hnn, const. velocity,
-                                     at rest} x 3 seeds, hnn_so + Rayleigh x seed 0; chain-2
-                                     and spring-2, friction 0.4 (plain NODE: paper only)
-relativistic (LNN seed)       12     {naive hnn (q, qdot), hnn (q, p), pure lnn, const.
-                                     velocity} x 3 seeds (learned-map HNN, prior LNN: paper)
-double_pendulum_energy (LNN)  3      node, lnn, const. velocity, seed 0 only (no verdict)
-vin (VIN seed)                27     {vin, resnet} x n_train {8, 32} noise 0; {vin, resnet}
-                                     x n_train 8 x noise {0.01, 0.05}; const. velocity at
-                                     n_train 8 (n_train 128 and node_so: paper only)
-============================  =====  ========================================================
-
-Unique runs at quick: 30 + 9 + 12 + 18 + 32 + 12 + 3 + 27 = 143, of which 31 are trivial
-predictors (about 4 s each: dataset and one rollout compile). ``estimate_seconds("quick")``:
-2080 s of run time, 17.3 min at 2 workers (the old declarations: 1990 s, 16.6 min). With the
-trade-off experiment (1248 s of run time, 10.4 min) the sweep is predicted at 27.7 min, i.e.
-about 26.5 min at the measured 0.96 ratio, plus 4.1 min of stability study: ``make bench`` at
-about 30.6 min (:func:`make_bench_seconds`), at the limit (today's cells: 29.9 min measured),
-resting on guessed costs for node_so_symreg, mixture_hnn and the trivial predictors (remeasure
-them after the first sweep and update :data:`WALL_S`). Cut to get there: k = 3 at quick for
-claim 4 (chain-3 and spring-3 would add about 250 s of run time), the plain NODE + penalty on
-(q, p) (node_symreg: paper only), the symplectic grid to 5 weights, one seed for the Rayleigh
-HNN and the double-pendulum demonstration, the plain NODE in Fig. 6, the learned-map HNN and
-prior LNN extras, node_so and n_train 128 in the VIN experiment and the noisy VIN cells at
-n_train 32. The largest remaining lever is the trade-off experiment (60 evaluations, 10.4 min).
+Budgets. ``make bench`` must finish in 30 min on 2 cores (install included), so ``quick`` keeps
+5 seeds on the cells each verdict reads and moves the rest to ``paper`` (k = 1..4, every
+symplectic weight, the extras no verdict reads) or to the ``paper-core`` campaign (claim 2,
+since 2026-11-25). The estimate lives in :mod:`._budget`: per-run costs measured at quick
+(:data:`WALL_S`), scaled to a profile's steps, batch and width, costs measured at their own
+sizes for derivative-target and pixel runs (:data:`STEP_COST`), and the measured shares of the
+stability study, the trade-off and the seed tasks (:func:`make_bench_seconds`: 33.8 min on
+2026-11-25, against 26.5 min measured on a fresh clone on a Zen 4 CPU; the costs were measured
+on a slower Zen 3). ``python -m bench estimate --profile <profile>`` prints runs and hours per
+claim; each experiment's module says what it cut at quick and why.
 """
 
 import matplotlib
