@@ -420,7 +420,8 @@ def test_resume_after_kill(tmp_path):
         time.sleep(0.05)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
-    killed_rows = {p.stem for p in rows_dir.glob("*.json")}
+    # pathlib's glob matches dotfiles: a kill during a row's write leaves a .tmp-*.json
+    killed_rows = {p.stem for p in rows_dir.glob("*.json") if not p.name.startswith(".")}
     assert 1 <= len(killed_rows) < 6, "kill landed outside the sweep"
     out = subprocess.run(
         _sweep_cmd(res), cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
@@ -501,3 +502,12 @@ def test_report_and_figures_rebuild_a_damaged_runs_table_and_name_it(
     assert _store.stale_tables(res) == []
     assert main(["--results", str(res), verb]) == 0  # nothing to rebuild the second time
     assert "rebuilt" not in capsys.readouterr().err
+
+
+def test_a_temporary_left_by_a_kill_is_not_a_row(stored):
+    """A kill between a row's temporary write and its rename leaves ``.rows/.tmp-*.json``:
+    neither the staleness check nor the digest counts it as a row."""
+    res, _ = stored
+    assert _store.stale_tables(res) == []
+    (res / _store.ROWS / ".tmp-abc123.json").write_text('{"config_hash": "half')
+    assert _store.stale_tables(res) == []

@@ -422,6 +422,8 @@ def rows_digest(results_dir) -> str:
     h = hashlib.sha256()
     rows_dir = Path(results_dir) / ROWS
     for p in sorted(rows_dir.glob("*.json")) if rows_dir.is_dir() else ():
+        if p.name.startswith("."):  # a temporary being written (see scan_rows)
+            continue
         try:
             data = p.read_bytes()
         except OSError:
@@ -477,7 +479,7 @@ def stale_tables(results_dir) -> list[tuple[str, str]]:
     results_dir = Path(results_dir)
     if not (results_dir / ROWS).is_dir():
         return []
-    rows = {p.stem for p in (results_dir / ROWS).glob("*.json")}
+    rows = {p.stem for p in (results_dir / ROWS).glob("*.json") if not p.name.startswith(".")}
     out = []
     for name in TABLES:
         path = results_dir / name
