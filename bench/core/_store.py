@@ -498,7 +498,7 @@ def stale_tables(results_dir) -> list[tuple[str, str]]:
     if recorded is not None and recorded != rows_digest(results_dir):
         flagged = {name for name, _ in out}
         out += [
-            (name, "built from other row files (a row changed since)")
+            (name, "built from other row files (rows added or rewritten since)")
             for name in TABLES
             if name not in flagged
         ]
