@@ -87,6 +87,10 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
                 "config_hash": c.config_hash,
                 "status": "ok",
                 "wall_seconds": 2 * run_seconds(c),
+                "train_seconds": run_seconds(c),
+                "rollout_seconds": 3.0,
+                "checkpoint_seconds": float("nan"),  # absent parts count 0
+                **({"cpu_seconds": 100.0} if c.seed < 2 else {}),  # older rows lack it
             },
         )
     df = C.plan("paper-core", tmp_path, workers=2).set_index("claim")
@@ -100,12 +104,20 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     assert df.loc["total", "cpu_hours_done"] == pytest.approx(
         sum(2 * run_seconds(c) for c in done) / 3600
     )
+    assert df.loc["total", "train_eval_hours"] == pytest.approx(
+        sum(run_seconds(c) + 3.0 for c in done) / 3600
+    )
+    assert df.loc[6, "train_eval_hours"] == df.loc["total", "train_eval_hours"]
+    with_cpu = [c for c in done if c.seed < 2]
+    assert df.loc["total", "measured_cpu_runs"] == len(with_cpu) > 0
+    assert df.loc["total", "measured_cpu_hours"] == pytest.approx(100.0 * len(with_cpu) / 3600)
     left = [c for _, c in runs if c.config_hash not in {d.config_hash for d in done}]
     # the estimate, not rescaled by the stored runs (a niced run's seconds include waiting)
     assert df.loc["total", "cpu_hours_left"] == pytest.approx(total_seconds(left) / 3600)
     assert hnn_left
     text = C.format_plan(df.reset_index(), "paper-core", 2)
     assert "total" in text and "loss" in text
+    assert f"on {len(with_cpu)} of {len(done)} stored runs" in text
 
 
 def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):

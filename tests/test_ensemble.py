@@ -163,6 +163,8 @@ def test_ensemble_sweep_rows_match_single_runs(tmp_path, capsys):
     )
     assert list(a.index) == list(b.index) and list(a["train_hash"]) == list(b["train_hash"])
     assert sorted(r["ensemble_size"] for r in ens) == [2, 2]
+    # CPU time: every row, an ensemble member's with its share of the shared training
+    assert (a["cpu_seconds"] > 0).all() and (b["cpu_seconds"] > 0).all()
     assert sorted(r["ensemble_size"] for r in one) == [1, 1]
     for h in a.index:
         assert a.loc[h, "status"] == b.loc[h, "status"]

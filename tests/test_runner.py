@@ -17,6 +17,7 @@ import pytest
 import bench.core._runner as runner
 import models
 from bench.core import _store
+from bench.core._env import cpu_count
 from bench.core._experiments import Experiment, RunConfig, expand, register
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -175,6 +176,8 @@ def test_smoke_sweep_end_to_end(smoke):
         assert r["status"] == "ok", r["error"]
         assert 0 < r["rollout_error"] < 1 and 0 <= r["energy_violation"] <= 1
         assert r["n_params"] > 0 and r["rollout_seconds"] > 0 and r["nfe"] == 4 * 19
+        # process CPU time: positive, and a run cannot use more than its cores' worth of it
+        assert 0 < r["cpu_seconds"] <= r["wall_seconds"] * cpu_count() + 0.5
         assert r["experiment"] == "test_two" and r["profile"] == "smoke"
         assert r["floor"] < r["rollout_error"]
     # The diverging run is recorded as such, without stopping the others.

@@ -352,6 +352,7 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     configs = list(configs)
     trained: list = [None] * len(configs)
     rolled: list = [None] * len(configs)
+    c_start = time.process_time()
     if len(configs) > 1:
         try:
             models, datasets = [], []
@@ -383,10 +384,12 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
                     f"ensemble rollouts fell back to single ones: {one_line(e, 300)}",
                     file=sys.stderr,
                 )
+    shared = (time.process_time() - c_start) / len(configs)  # training and rollouts, split
     rows = []
     for c, t, r in zip(configs, trained, rolled, strict=True):
         row = R.execute_run(c, cache_root=cache_root, trained=t, rolled=r)
         row["ensemble_size"] = 1 if t is None else len(configs)
+        row["cpu_seconds"] = row.get("cpu_seconds", 0.0) + shared
         rows.append(row)
     return rows
 

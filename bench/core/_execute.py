@@ -562,7 +562,7 @@ def execute_run(
     cache_root = Path(cache_root or systems.cache_root())
     row = base_row(config)
     art = artifact_dir(config.config_hash, cache_root)
-    t_start = time.perf_counter()
+    t_start, c_start = time.perf_counter(), time.process_time()
     try:
         art.mkdir(parents=True, exist_ok=True)
         _write_json(art / "config.json", config.to_dict())
@@ -603,6 +603,7 @@ def execute_run(
         row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
+    row["cpu_seconds"] = time.process_time() - c_start  # every thread of the process
     row.update(provenance())  # versions, device and commit: bench.core._provenance
     _write_json(
         art / "metrics.json", {a: b for a, b in row.items() if a not in ("curves", "checkpoints")}

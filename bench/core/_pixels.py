@@ -452,7 +452,7 @@ def execute_pixels(c: RunConfig, cache_root=None, progress: bool = False) -> dic
     cache_root = Path(cache_root or systems.cache_root())
     row = base_row(c)
     art = artifact_dir(c.config_hash, cache_root)
-    t_start = time.perf_counter()
+    t_start, c_start = time.perf_counter(), time.process_time()
     try:
         art.mkdir(parents=True, exist_ok=True)
         _write_json(art / "config.json", c.to_dict())
@@ -480,6 +480,7 @@ def execute_pixels(c: RunConfig, cache_root=None, progress: bool = False) -> dic
         row["error"] = one_line(e, 500)
         (art / "traceback.txt").write_text(traceback.format_exc())
     row["wall_seconds"] = time.perf_counter() - t_start
+    row["cpu_seconds"] = time.process_time() - c_start  # every thread of the process
     row.update(provenance())
     _write_json(art / "metrics.json", {a: b for a, b in row.items() if a != "curves"})
     return row

@@ -155,6 +155,12 @@ _RUN = {
     "rollout_seconds_per_traj": ("s", "rollout_seconds / n_test"),
     "checkpoint_seconds": ("s", "wall time of scoring the learning-curve checkpoints"),
     "wall_seconds": ("s", "wall time of the whole run: data, compile, training, evaluation"),
+    "cpu_seconds": (
+        "s (CPU)",
+        "CPU time of the run's process over the run, every thread (an ensemble member: its "
+        "own evaluation plus its share of the ensemble's); unlike the wall times it excludes "
+        "time spent waiting for the CPU (a niced campaign); empty before 2026-11-25",
+    ),
     "ensemble_size": ("count", "runs trained together as one vmapped ensemble (1: alone)"),
     # pixel runs (observation "pixels", bench.core._pixels); empty for state runs
     "pixel_mse": ("1 (intensity^2)", "pixels: mean over t >= 1 of (decoded - true frames)^2"),

@@ -34,6 +34,16 @@ from ...core import _store
 from ...core._experiments import available, expand, get
 from ._budget import run_seconds, total_seconds
 
+# The row columns summed as the campaign's training and evaluation time (issue 24's "CPU
+# hours the campaign took"; wall seconds of each part: at nice 19 they include waiting).
+TRAIN_EVAL_COLUMNS = (
+    "train_seconds",
+    "compile_seconds",
+    "rollout_seconds",
+    "eval_compile_seconds",
+    "checkpoint_seconds",
+)
+
 # The order in which a campaign settles the claims (issue 24).
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12)
 
@@ -81,7 +91,10 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
     ``cpu_hours`` (estimated, its new runs), ``cpu_hours_left`` (estimated, its new runs not
     stored), ``wall_hours_left`` (at ``workers`` processes on an idle machine) and
     ``cpu_hours_done`` (the stored runs' measured ``wall_seconds``: data, compilation,
-    training, evaluation and, for a niced run, time spent waiting); a last row ``total``."""
+    training, evaluation and, for a niced run, time spent waiting), ``train_eval_hours`` (of
+    those, the :data:`TRAIN_EVAL_COLUMNS`: training and evaluation only),
+    ``measured_cpu_hours`` and ``measured_cpu_runs`` (the process CPU time, ``cpu_seconds``, of
+    the stored runs that record it, and how many do); a last row ``total``."""
     runs = campaign_runs(profile)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
@@ -96,6 +109,25 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         if len(stored) and "wall_seconds" in stored
         else {}
     )
+    # training and evaluation: the steps, their compilation, the test rollouts and the
+    # learning-curve checkpoints (wall_seconds less the data and setup)
+    parts = [c for c in TRAIN_EVAL_COLUMNS if c in stored]
+    train_eval = (
+        dict(
+            zip(
+                stored["config_hash"],
+                stored[parts].apply(pd.to_numeric, errors="coerce").fillna(0.0).sum(axis=1),
+                strict=True,
+            )
+        )
+        if len(stored) and parts
+        else {}
+    )
+    # the process CPU time of the runs that record it (cpu_seconds, since 2026-11-25)
+    cpu = {}
+    if len(stored) and "cpu_seconds" in stored:
+        secs = pd.to_numeric(stored["cpu_seconds"], errors="coerce")
+        cpu = {h: float(v) for h, v in zip(stored["config_hash"], secs, strict=True) if v == v}
     table = []
     # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose
     # runs need it, and is left to pay while none of its runs is stored
@@ -116,6 +148,9 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "cpu_hours_done": float(np.nansum([walls.get(c.config_hash, np.nan) for c in mine]))
                 / 3600,
                 "cpu_hours_left": total_seconds(left, paid) / 3600,
+                "train_eval_hours": sum(train_eval.get(c.config_hash, 0.0) for c in mine) / 3600,
+                "measured_cpu_hours": sum(cpu.get(c.config_hash, 0.0) for c in mine) / 3600,
+                "measured_cpu_runs": sum(c.config_hash in cpu for c in mine),
             }
         )
     df = pd.DataFrame(table)
@@ -129,6 +164,9 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "cpu_hours": "sum",
                 "cpu_hours_done": "sum",
                 "cpu_hours_left": "sum",
+                "train_eval_hours": "sum",
+                "measured_cpu_hours": "sum",
+                "measured_cpu_runs": "sum",
             }
         )
         total = df.sum(numeric_only=True).to_dict()
@@ -149,16 +187,22 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
         return f"{profile}: no runs"
     lines = [
         f"{profile}: runs and hours per claim, in campaign order (hours: the estimator's; done: "
-        f"the stored runs' wall seconds, waiting included; wall hours left at {workers} idle "
-        "workers)",
+        "the stored runs' wall seconds, waiting included; t+e: of those, training and "
+        f"evaluation; wall hours left at {workers} idle workers)",
         f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "
-        f"{'left h':>6} {'wall h':>6}  experiments",
+        f"{'t+e h':>6} {'left h':>6} {'wall h':>6}  experiments",
     ]
     for r in df.to_dict("records"):
         lines.append(
             f"{r['claim']!s:>6} {int(r['runs']):>5} {int(r['stored']):>6} {int(r['new_runs']):>5} "
             f"{r['cpu_hours']:>6.2f} "
-            f"{r['cpu_hours_done']:>6.2f} {r['cpu_hours_left']:>6.2f} "
+            f"{r['cpu_hours_done']:>6.2f} {r['train_eval_hours']:>6.2f} "
+            f"{r['cpu_hours_left']:>6.2f} "
             f"{r['wall_hours_left']:>6.2f}  {r['experiments']}"
         )
+    t = df.iloc[-1]
+    lines.append(
+        f"CPU time measured (cpu_seconds, no waiting) on {int(t['measured_cpu_runs'])} of "
+        f"{int(t['stored'])} stored runs: {t['measured_cpu_hours']:.2f} h"
+    )
     return "\n".join(lines)
