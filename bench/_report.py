@@ -440,6 +440,8 @@ def write_report(results_dir: Path, compare=None) -> Path:
     results_dir.mkdir(parents=True, exist_ok=True)
     runs, curves, profile = load_tables(results_dir)
     j = judge(runs, curves, profile)
+    # a campaign's folder states a verdict only where its claim's runs are all stored
+    j.final = _pending(results_dir, runs, profile, j.final)
     verdicts = j.final
     others, other_errors = [], []
     for d in compare_folders(results_dir) if compare is None else [Path(c) for c in compare]:

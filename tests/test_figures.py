@@ -112,3 +112,28 @@ def test_a_registered_study_is_drawn_and_reported(tmp_path, monkeypatch):
     text = "\n".join(report._extra_sections(tmp_path))
     assert "## Toy\n\nhi" in text
     assert "## Broken\n\n(section failed: division by zero)" in text
+
+
+def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_stored(tmp_path):
+    """A paper-core folder under way: claim 6 (every run of the loss experiment stored) has its
+    verdict; claims that read other experiments say pending (n of m runs), in the folder's own
+    claims table; one run fewer makes claim 6 pending too."""
+    from bench.core._experiments import expand
+
+    runs, curves = synthetic_tables("paper-core", experiments=("loss",))
+    assert set(runs["profile"]) == {"paper-core"}
+    want = {c.config_hash for c in expand("loss", "paper-core")}
+    assert set(runs["config_hash"]) == want
+
+    def claims(text):
+        return text.split("## Claims")[1].split("## Verdicts at both budgets")[0]
+
+    _store(tmp_path / "a", runs, curves)
+    text = claims(write_report(tmp_path / "a", compare=[]).read_text())
+    row6 = re.search(r"^\| 6 \|.*$", text, re.M).group(0)
+    assert "pending" not in row6 and re.search(VERDICT, row6)
+    row1 = re.search(r"^\| 1 \|.*$", text, re.M).group(0)
+    assert re.search(r"\*\*pending \(\d+ of 50 runs\)\*\*", row1), row1
+    _store(tmp_path / "b", runs.iloc[1:], curves)
+    text = claims(write_report(tmp_path / "b", compare=[]).read_text())
+    assert "**pending (44 of 45 runs)**" in re.search(r"^\| 6 \|.*$", text, re.M).group(0)
