@@ -235,7 +235,10 @@ def _cell_text(v) -> str:
 def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> str:
     """The likely cause of two verdicts of one claim disagreeing."""
     if _no_runs(a) or _no_runs(b):
-        return f"no runs or missing cells at {label_a if _no_runs(a) else label_b}: not comparable"
+        v, label = (a, label_a) if _no_runs(a) else (b, label_b)
+        if v is not None and v.verdict.startswith("pending"):
+            return f"{v.verdict} at {label}: not comparable yet"
+        return f"no runs or missing cells at {label}: not comparable"
     causes = []
     if a.discriminating != b.discriminating:
         causes.append(
@@ -305,18 +308,18 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         agree = (
             "-" if len(real) < 2 else ("yes" if len({v.verdict for v in real}) == 1 else "**no**")
         )
+        # Causes against the first folder with a comparable verdict (here, unless here is
+        # pending or has no runs: then the others' disagreement is still explained).
+        base = next((i for i, v in enumerate(vs) if not _no_runs(v)), 0)
         causes = []
-        for i in range(1, len(vs)):
-            if (
-                vs[0] is None
-                or vs[i] is None
-                or vs[0].verdict != vs[i].verdict
-                or _no_runs(vs[0]) != _no_runs(vs[i])
-            ):
-                if _no_runs(vs[0]) and _no_runs(vs[i]):
-                    continue
-                note = metric_note(maps[0], key) or metric_note(maps[i], key)
-                causes.append(_cause(vs[0], vs[i], labels[0], labels[i], note))
+        for i in range(len(vs)):
+            a, b = vs[base], vs[i]
+            if i == base or (_no_runs(a) and _no_runs(b)):
+                continue
+            if a is None or b is None or a.verdict != b.verdict or _no_runs(a) != _no_runs(b):
+                note = metric_note(maps[base], key) or metric_note(maps[i], key)
+                causes.append(_cause(a, b, labels[base], labels[i], note))
+        causes = list(dict.fromkeys(causes))
         out.append(
             "| "
             + " | ".join([_md_escape(key), *cells, agree, _md_escape("; ".join(causes)) or "-"])

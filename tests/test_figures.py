@@ -137,3 +137,20 @@ def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_st
     _store(tmp_path / "b", runs.iloc[1:], curves)
     text = claims(write_report(tmp_path / "b", compare=[]).read_text())
     assert "**pending (44 of 45 runs)**" in re.search(r"^\| 6 \|.*$", text, re.M).group(0)
+
+
+def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(results, tmp_path):
+    """Here pending (a campaign with only claim 6's runs), the two other folders disagreeing on
+    claim 3: the row says it disagrees, why the other two differ (the budget), and that here
+    is pending, each once."""
+    d, _, _ = results
+    runs, curves = synthetic_tables("paper-core", experiments=("loss",))
+    _store(tmp_path / "camp", runs, curves)
+    text = write_report(tmp_path / "camp", compare=[d, d / "paper"]).read_text()
+    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
+    row3 = next(line for line in section.splitlines() if line.startswith("| 3 |"))
+    cells = [c.strip() for c in row3.strip("|").split("|")]
+    assert cells[1].startswith("pending (") and cells[4] == "**no**", row3
+    assert "budget" in cells[5] and "not comparable yet" in cells[5], row3
+    parts = cells[5].split("; ")
+    assert len(parts) == len(set(parts)), row3
