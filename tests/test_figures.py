@@ -154,3 +154,17 @@ def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(res
     assert "budget" in cells[5] and "not comparable yet" in cells[5], row3
     parts = cells[5].split("; ")
     assert len(parts) == len(set(parts)), row3
+
+
+def test_symplectic_figure_draws_from_weight_zero_runs_only(tmp_path):
+    """A campaign under way may hold only the unregularised runs of the symplectic sweep; its
+    figure is drawn (it failed on the empty log axis of the weight panel before)."""
+    from bench.studies.paper.symplectic import fig_symplectic
+
+    runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2, 3, 4), experiments=("symplectic",))
+    from bench.core._query import option
+
+    zero = runs[option(runs, "weight").astype(float) == 0]
+    assert len(zero) and len(zero) < len(runs)
+    written = fig_symplectic(zero, curves, tmp_path)
+    assert written and all(p.stat().st_size > 1000 for p in written)

@@ -188,6 +188,9 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
                 s=20,
                 label=f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}",
             )
+    if not (df["weight"] > 0).any():  # e.g. a campaign under way: a log axis needs a range
+        a.set_xlim(1e-7, 1e3)
+        a.text(0.5, 0.5, "no run with weight > 0 stored yet", transform=a.transAxes, ha="center")
     a.set(
         xscale="log",
         yscale="log",
