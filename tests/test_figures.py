@@ -168,3 +168,22 @@ def test_symplectic_figure_draws_from_weight_zero_runs_only(tmp_path):
     assert len(zero) and len(zero) < len(runs)
     written = fig_symplectic(zero, curves, tmp_path)
     assert written and all(p.stat().st_size > 1000 for p in written)
+
+
+def test_a_figure_saved_twice_has_the_same_bytes(tmp_path):
+    """Regenerating an unchanged figure must not change its files (the PDF used to carry its
+    creation date, so every report rebuild dirtied git)."""
+    import time
+
+    import matplotlib.pyplot as plt
+
+    from bench.studies._figure import save_figure
+
+    def draw(d):
+        fig, ax = plt.subplots()
+        ax.plot([1, 2, 3], [3, 1, 2])
+        return [p.read_bytes() for p in save_figure(fig, tmp_path / d, "f")]
+
+    first = draw("a")
+    time.sleep(1.1)  # the PDF's date has a resolution of one second
+    assert draw("b") == first
