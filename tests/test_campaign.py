@@ -115,6 +115,18 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     # the estimate, not rescaled by the stored runs (a niced run's seconds include waiting)
     assert df.loc["total", "cpu_hours_left"] == pytest.approx(total_seconds(left) / 3600)
     assert hnn_left
+    # calibrated: claim 6 by its own measured runs (100 s each against their estimate); the
+    # claims without one by the campaign's ratio, here the same runs'
+    ratio = 100.0 * len(with_cpu) / sum(run_seconds(c) for c in with_cpu)
+    assert df.loc[6, "calibration"] == pytest.approx(ratio)
+    assert df.loc[5, "calibration"] == pytest.approx(ratio)
+    assert df.loc["total", "cpu_hours_left_calibrated"] == pytest.approx(
+        df.loc["total", "cpu_hours_left"] * ratio
+    )
+    assert df.loc["total", "wall_hours_left_calibrated"] == pytest.approx(
+        df.loc["total", "cpu_hours_left"] * ratio / 2
+    )
+    assert C.plan("paper-core", tmp_path / "none", workers=2)["calibration"].eq(1.0).all()
     text = C.format_plan(df.reset_index(), "paper-core", 2)
     assert "total" in text and "loss" in text
     assert f"on {len(with_cpu)} of {len(done)} stored runs" in text
@@ -148,3 +160,20 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
     assert left == pytest.approx(
         (total_seconds(cfgs) - run_seconds(lnn) - data_seconds(lnn)) / 3600
     )
+
+
+def test_symplectic_runs_are_costed_as_measured_with_and_without_the_penalty():
+    """Claim 2's paper-core runs: 112 ms a step with the penalty, 34 ms at weight 0 (which
+    skips it), measured on the campaign's rows; the quick-to-paper scaling said 550 s for each."""
+    from bench.studies.paper._budget import run_seconds
+
+    cfgs = E.expand("symplectic", "paper-core")
+    by_w = {}
+    for c in cfgs:
+        if c.model == "node_so_symreg":
+            by_w.setdefault(float(dict(c.model_options)["weight"]), []).append(run_seconds(c))
+    assert sorted(by_w) == sorted(SYMREG_WEIGHTS_CORE) and 0.0 in by_w
+    assert by_w[0.0] == pytest.approx([8000 * 0.034 + 12.0] * 5)
+    for w, secs in by_w.items():
+        if w > 0:
+            assert secs == pytest.approx([8000 * 0.112 + 12.0] * 5), w

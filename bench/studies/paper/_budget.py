@@ -115,6 +115,12 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("derivative", "node_so", 500, 8): (2.7, 5.0),
     ("derivative", "lnn", 128, 8): (1.9, 16.7),
     ("derivative", "node_so", 128, 8): (0.4, 4.4),
+    # Claim 2 at paper-core (chain-2, width 256, batch 200): the campaign's stored rows of
+    # 2026-11-25, (cpu_seconds - 12 s of evaluation) / 8000 steps; the penalty's Jacobian, and
+    # its gradient, cost more than the quick-to-paper scaling assumed (550 s a run), and at
+    # weight 0 the model skips the penalty (280 s a run)
+    ("rollout", "node_so_symreg", 256, 200): (112.0, 12.0),
+    ("rollout", "node_so_symreg (weight 0)", 256, 200): (34.0, 12.0),
 }
 # Ground truth of a derivative-target dataset, ms per simulated second of one trajectory (the
 # double pendulum at Dopri8 and 1e-11: 8.7 ms per 10 s trajectory, lnn_seed.MEASURED), keyed
@@ -151,11 +157,20 @@ def _kind(c: RunConfig) -> str:
     return "pixels" if c.observation == "pixels" else c.train_target
 
 
+def _cost_name(c: RunConfig) -> str:
+    """The model as :data:`STEP_COST` keys it: a penalised model at weight 0 apart (it skips
+    the penalty: ``penalty`` in ``models/_node.py``)."""
+    if c.model in ("node_symreg", "node_so_symreg"):
+        if float(dict(c.model_options).get("weight", 1.0)) == 0.0:
+            return f"{c.model} (weight 0)"
+    return c.model
+
+
 def run_seconds(c: RunConfig) -> float:
     """Estimated run time of one run, its dataset aside where :func:`data_seconds` charges it
     (see :func:`estimate_seconds`); the sweep starts the longest runs first with it
     (``bench.core._runner.sweep(order=...)``)."""
-    measured = STEP_COST.get((_kind(c), c.model, c.width, c.batch))
+    measured = STEP_COST.get((_kind(c), _cost_name(c), c.width, c.batch))
     if measured is not None:
         ms, other = measured
         return c.steps * ms / 1000 + other

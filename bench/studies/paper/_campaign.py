@@ -18,9 +18,14 @@ runs in flight; run it again to resume.
 Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
 costs scaled to the profile's steps, batch and width, or from costs measured at the run's own
 size for derivative-target and pixel runs (``_budget.STEP_COST``), plus the LNN seed's datasets
-once each (``_budget.data_seconds``). The stored runs' own seconds are shown
-beside it but not used to rescale the estimate: a run at nice 19 measures the time it waited for
-the CPU as well (the first runs of 2026-11-23 took 13x their estimate while quick sweeps ran).
+once each (``_budget.data_seconds``). The stored runs' wall seconds are shown beside it but
+not used to rescale it: a run at nice 19 measures the time it waited for the CPU as well (the
+first runs of 2026-11-23 took 13x their estimate while quick sweeps ran). Their CPU time
+(``cpu_seconds``, no waiting) is: the ``cal`` columns rescale the hours left by the measured CPU
+time over the estimate of the stored runs that record it, per claim (the campaign's ratio for a
+claim with none). On 2026-11-25 it was 1.25x over 36 runs, the symplectic runs with a penalty
+1.65x and the one at weight 0 half the estimate; their costs are now measured at paper-core
+(``_budget.STEP_COST``), which brought it to 1.06x.
 """
 
 from __future__ import annotations
@@ -94,7 +99,10 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
     training, evaluation and, for a niced run, time spent waiting), ``train_eval_hours`` (of
     those, the :data:`TRAIN_EVAL_COLUMNS`: training and evaluation only),
     ``measured_cpu_hours`` and ``measured_cpu_runs`` (the process CPU time, ``cpu_seconds``, of
-    the stored runs that record it, and how many do); a last row ``total``."""
+    the stored runs that record it, and how many do), ``measured_estimate_hours`` (the
+    estimate of those runs), ``calibration`` (measured over estimated: the claim's, or the
+    campaign's where the claim has no such run) and ``cpu_hours_left_calibrated`` /
+    ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``."""
     runs = campaign_runs(profile)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
@@ -151,6 +159,8 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "train_eval_hours": sum(train_eval.get(c.config_hash, 0.0) for c in mine) / 3600,
                 "measured_cpu_hours": sum(cpu.get(c.config_hash, 0.0) for c in mine) / 3600,
                 "measured_cpu_runs": sum(c.config_hash in cpu for c in mine),
+                "measured_estimate_hours": sum(run_seconds(c) for c in mine if c.config_hash in cpu)
+                / 3600,
             }
         )
     df = pd.DataFrame(table)
@@ -167,8 +177,18 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "train_eval_hours": "sum",
                 "measured_cpu_hours": "sum",
                 "measured_cpu_runs": "sum",
+                "measured_estimate_hours": "sum",
             }
         )
+        # The estimate of the runs left, rescaled by what the stored runs really cost: the
+        # claim's measured CPU time over its estimate, or the campaign's where the claim has no
+        # run that records cpu_seconds (1 where none has)
+        overall = _ratio(df["measured_cpu_hours"].sum(), df["measured_estimate_hours"].sum())
+        df["calibration"] = [
+            _ratio(a, b, overall)
+            for a, b in zip(df["measured_cpu_hours"], df["measured_estimate_hours"], strict=True)
+        ]
+        df["cpu_hours_left_calibrated"] = df["cpu_hours_left"] * df["calibration"]
         total = df.sum(numeric_only=True).to_dict()
         total.update(
             claim="total",
@@ -176,9 +196,16 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
             runs=len(runs),
             stored=sum(h in done for h in cfgs),
         )
+        total["calibration"] = overall
         df = pd.concat([df, pd.DataFrame([total])], ignore_index=True)
         df["wall_hours_left"] = df["cpu_hours_left"] / max(1, workers)
+        df["wall_hours_left_calibrated"] = df["cpu_hours_left_calibrated"] / max(1, workers)
     return df
+
+
+def _ratio(measured: float, estimated: float, default: float = 1.0) -> float:
+    """``measured / estimated``, or ``default`` where nothing was measured."""
+    return measured / estimated if estimated > 0 else default
 
 
 def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
@@ -190,7 +217,8 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
         "the stored runs' wall seconds, waiting included; t+e: of those, training and "
         f"evaluation; wall hours left at {workers} idle workers)",
         f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "
-        f"{'t+e h':>6} {'left h':>6} {'wall h':>6}  experiments",
+        f"{'t+e h':>6} {'left h':>6} {'wall h':>6} {'cal':>5} {'cal h':>6} {'cal wh':>6}  "
+        "experiments",
     ]
     for r in df.to_dict("records"):
         lines.append(
@@ -198,11 +226,19 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
             f"{r['cpu_hours']:>6.2f} "
             f"{r['cpu_hours_done']:>6.2f} {r['train_eval_hours']:>6.2f} "
             f"{r['cpu_hours_left']:>6.2f} "
-            f"{r['wall_hours_left']:>6.2f}  {r['experiments']}"
+            f"{r['wall_hours_left']:>6.2f} {r['calibration']:>5.2f} "
+            f"{r['cpu_hours_left_calibrated']:>6.2f} {r['wall_hours_left_calibrated']:>6.2f}  "
+            f"{r['experiments']}"
         )
     t = df.iloc[-1]
     lines.append(
         f"CPU time measured (cpu_seconds, no waiting) on {int(t['measured_cpu_runs'])} of "
-        f"{int(t['stored'])} stored runs: {t['measured_cpu_hours']:.2f} h"
+        f"{int(t['stored'])} stored runs: {t['measured_cpu_hours']:.2f} h, "
+        f"{t['calibration']:.2f}x their estimate"
+    )
+    lines.append(
+        "cal: measured CPU time over the estimate of the claim's stored runs that record it "
+        "(the campaign's where it has none); cal h, cal wh: the CPU and wall hours left "
+        "rescaled by it"
     )
     return "\n".join(lines)
