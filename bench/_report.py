@@ -219,13 +219,23 @@ def _folder_label(d: Path) -> str:
 def _no_runs(v) -> bool:
     """No comparable verdict: no runs at all, a cell the claim needs is missing, or the
     claim's runs are still being computed (``pending``)."""
-    return v is None or v.n_seeds == 0 or v.verdict.startswith("pending")
+    return v is None or v.n_seeds == 0 or _is_pending(v)
+
+
+def _is_pending(v) -> bool:
+    """The claim's campaign has not stored all its runs yet (:func:`_pending`)."""
+    return v is not None and v.pending is not None
+
+
+def _absent(v) -> bool:
+    """The folder has none of the claim's runs (its cell reads *no runs*)."""
+    return v is None or (v.detail == "no runs" and not _is_pending(v))
 
 
 def _cell_text(v) -> str:
-    if v is not None and v.verdict.startswith("pending"):
+    if _is_pending(v):
         return v.verdict
-    if v is None or v.detail == "no runs":
+    if _absent(v):
         return "no runs"
     if v.n_seeds == 0:
         return f"**{v.verdict}** (cells missing)"
@@ -235,8 +245,10 @@ def _cell_text(v) -> str:
 def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> str:
     """The likely cause of two verdicts of one claim disagreeing."""
     if _no_runs(a) or _no_runs(b):
-        v, label = (a, label_a) if _no_runs(a) else (b, label_b)
-        if v is not None and v.verdict.startswith("pending"):
+        # name the side that has some runs (pending or cells missing) before one with none
+        sides = [(v, lab) for v, lab in ((a, label_a), (b, label_b)) if _no_runs(v)]
+        v, label = next(((v, lab) for v, lab in sides if not _absent(v)), sides[0])
+        if _is_pending(v):
             return f"{v.verdict} at {label}: not comparable yet"
         return f"no runs or missing cells at {label}: not comparable"
     causes = []
@@ -300,7 +312,7 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         for i, m in enumerate(maps):  # a key its pending campaign has no rows for yet
             if vs[i] is None:
                 vs[i] = next(
-                    (v for v in m.values() if v.claim == claim and v.verdict.startswith("pending")),
+                    (v for v in m.values() if v.claim == claim and _is_pending(v)),
                     None,
                 )
         cells = [_cell_text(v) for v in vs]
@@ -314,7 +326,8 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         causes = []
         for i in range(len(vs)):
             a, b = vs[base], vs[i]
-            if i == base or (_no_runs(a) and _no_runs(b)):
+            # a folder without the claim's runs says so in its cell: no cause to name
+            if i == base or (_no_runs(a) and _no_runs(b)) or _absent(b):
                 continue
             if a is None or b is None or a.verdict != b.verdict or _no_runs(a) != _no_runs(b):
                 note = metric_note(maps[base], key) or metric_note(maps[i], key)
@@ -377,7 +390,7 @@ def _pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list
     for v in verdicts:
         n, m = want.get(v.claim, (0, 0))
         if m and n < m:
-            v = dataclasses.replace(v, verdict=f"pending ({n} of {m} runs)")
+            v = dataclasses.replace(v, verdict=f"pending ({n} of {m} runs)", pending=(n, m))
         out.append(v)
     return out
 

@@ -65,6 +65,18 @@ def test_report_sets_both_budgets_side_by_side(results):
     assert "**reproduced**" in row3 and "**not reproduced**" in row3 and "budget" in row3
 
 
+def test_a_claim_judged_in_one_folder_only_names_no_cause(results):
+    """Claim 7 has no runs here (no relativistic rows) and a verdict in the other folder: the
+    cell says *no runs*, nothing disagrees, and the cause column stays empty (it used to repeat
+    "no runs or missing cells ... not comparable")."""
+    _, _, text = results
+    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
+    row7 = next(line for line in section.splitlines() if line.startswith("| 7 |"))
+    cells = [c.strip() for c in row7.strip("|").split("|")]
+    assert cells[1] == "no runs" and re.search(VERDICT, cells[2]), row7
+    assert cells[3] == "-" and cells[4] == "-", row7
+
+
 def test_every_experiment_table_has_trivial_row_and_discriminating_mark(results):
     _, _, text = results
     for name in FIGURES:

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from ...core import _store
@@ -112,30 +111,12 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         stored = pd.DataFrame(rows)
     else:
         done = set()
-    walls = (
-        dict(zip(stored["config_hash"], stored["wall_seconds"], strict=True))
-        if len(stored) and "wall_seconds" in stored
-        else {}
-    )
+    walls = _per_run(stored, ("wall_seconds",))
     # training and evaluation: the steps, their compilation, the test rollouts and the
     # learning-curve checkpoints (wall_seconds less the data and setup)
-    parts = [c for c in TRAIN_EVAL_COLUMNS if c in stored]
-    train_eval = (
-        dict(
-            zip(
-                stored["config_hash"],
-                stored[parts].apply(pd.to_numeric, errors="coerce").fillna(0.0).sum(axis=1),
-                strict=True,
-            )
-        )
-        if len(stored) and parts
-        else {}
-    )
+    train_eval = _per_run(stored, TRAIN_EVAL_COLUMNS)
     # the process CPU time of the runs that record it (cpu_seconds, since 2026-11-25)
-    cpu = {}
-    if len(stored) and "cpu_seconds" in stored:
-        secs = pd.to_numeric(stored["cpu_seconds"], errors="coerce")
-        cpu = {h: float(v) for h, v in zip(stored["config_hash"], secs, strict=True) if v == v}
+    cpu = _per_run(stored, ("cpu_seconds",))
     table = []
     # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose
     # runs need it, and is left to pay while none of its runs is stored
@@ -153,8 +134,7 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
                 "stored": sum(c.config_hash in done for c in cells),
                 "new_runs": len(mine),
                 "cpu_hours": total_seconds(mine, charged) / 3600,
-                "cpu_hours_done": float(np.nansum([walls.get(c.config_hash, np.nan) for c in mine]))
-                / 3600,
+                "cpu_hours_done": sum(walls.get(c.config_hash, 0.0) for c in mine) / 3600,
                 "cpu_hours_left": total_seconds(left, paid) / 3600,
                 "train_eval_hours": sum(train_eval.get(c.config_hash, 0.0) for c in mine) / 3600,
                 "measured_cpu_hours": sum(cpu.get(c.config_hash, 0.0) for c in mine) / 3600,
@@ -201,6 +181,16 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         df["wall_hours_left"] = df["cpu_hours_left"] / max(1, workers)
         df["wall_hours_left_calibrated"] = df["cpu_hours_left_calibrated"] / max(1, workers)
     return df
+
+
+def _per_run(stored: pd.DataFrame, columns) -> dict[str, float]:
+    """``{config_hash: sum of the row's columns}`` over the stored rows, skipping a missing
+    value; a run with none of them recorded (older rows) is left out."""
+    cols = [c for c in columns if c in stored]
+    if not len(stored) or not cols:
+        return {}
+    total = stored[cols].apply(pd.to_numeric, errors="coerce").sum(axis=1, min_count=1)
+    return {h: float(v) for h, v in zip(stored["config_hash"], total, strict=True) if v == v}
 
 
 def _ratio(measured: float, estimated: float, default: float = 1.0) -> float:

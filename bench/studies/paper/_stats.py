@@ -131,7 +131,8 @@ class Verdict:
 
     ``variant`` names a sub-verdict (claim 4: metric and spring initial state); ``discriminating``
     is True/False, or None when no trivial-predictor runs exist; ``n_failed`` counts the runs
-    scored as the worst error."""
+    scored as the worst error; ``pending`` is ``(stored, declared)`` runs of the claim while a
+    campaign (a selection such as ``paper-core``) has not stored them all, else None."""
 
     claim: int
     title: str
@@ -147,6 +148,7 @@ class Verdict:
     n_failed: int = 0
     discriminating: bool | None = None
     parts: tuple = ()  # the tested parts (``_Part``), for the report's parts table
+    pending: tuple[int, int] | None = None
 
     @property
     def key(self) -> str:
