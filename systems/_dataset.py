@@ -16,14 +16,18 @@ Protocol (Gruver et al. 2022, with the reference's defects fixed, see REFERENCE.
   ``args_*`` either way; the default parameters otherwise).
 
 Cache: ``<cache_dir>/datasets/<config.hash()>.npz``; the npz holds the arrays, the canonical
-config JSON and a sha256 of the arrays. It is written to a temporary file and moved into place
-with ``os.replace``; a file that does not load, or whose checksum or config disagrees, is rebuilt.
+config JSON, a sha256 of the arrays and the :func:`source_fingerprint` of the ``systems``
+package that generated them. It is written to a temporary file and moved into place with
+``os.replace``; a file that does not load, or whose checksum, config or code disagrees (the
+physics was edited since: any change to a file of ``systems/``), is rebuilt.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
+import importlib.util
 import json
 import math
 import numbers
@@ -115,6 +119,26 @@ class DatasetConfig:
     def hash(self) -> str:
         """sha256 of the canonical JSON of the config and the cache format version."""
         return hashlib.sha256(self.canonical_json().encode()).hexdigest()
+
+
+@functools.cache
+def source_fingerprint(*packages: str) -> str:
+    """A short sha256 of the Python source of the importable ``packages`` (``"systems"``,
+    ``"bench.core"``): their ``.py`` files by relative path and bytes. Caches store it beside
+    what the code computed and discard an entry written by other code, since their keys (the
+    configuration's hash) do not cover the code."""
+    h = hashlib.sha256()
+    for name in packages:
+        spec = importlib.util.find_spec(name)
+        if spec is None:
+            raise ValueError(f"no importable package {name!r} to fingerprint")
+        for root in map(Path, spec.submodule_search_locations or [spec.origin]):
+            files = sorted(root.rglob("*.py")) if root.is_dir() else [root]
+            for f in files:
+                rel = f.relative_to(root) if root.is_dir() else f.name
+                h.update(f"{name}/{rel}\0".encode())
+                h.update(f.read_bytes())
+    return h.hexdigest()[:16]
 
 
 def _is_real(x) -> bool:
@@ -239,9 +263,14 @@ def _load(path: Path, config: DatasetConfig):
             arrays = {name: np.array(f[name]) for name in _ARRAYS}
             stored_sum = str(f["checksum"])
             stored_config = str(f["config"])
+            stored_code = str(f["code"])
     except Exception:  # noqa: BLE001 - any unreadable file is rebuilt, never trusted
         return None
-    if stored_config != config.canonical_json() or stored_sum != _checksum(arrays):
+    if (
+        stored_config != config.canonical_json()
+        or stored_code != source_fingerprint("systems")
+        or stored_sum != _checksum(arrays)
+    ):
         return None
     return arrays
 
@@ -257,6 +286,7 @@ def _save(path: Path, config: DatasetConfig, arrays) -> None:
                 f,
                 checksum=np.array(_checksum(arrays)),
                 config=np.array(config.canonical_json()),
+                code=np.array(source_fingerprint("systems")),
                 **arrays,
             )
             f.flush()

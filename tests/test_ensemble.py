@@ -2,6 +2,7 @@
 grouping, and the rows of an ensemble sweep."""
 
 import dataclasses
+import json
 
 import jax
 import numpy as np
@@ -9,7 +10,7 @@ import pytest
 
 import bench.core._runner as runner
 import models
-from bench.core import _store
+from bench.core import _rows, _store
 from bench.core._ensemble import enabled, group_key, plan_groups, train_ensemble
 from bench.core._experiments import RunConfig
 from bench.core._train import TrainConfig, train
@@ -107,8 +108,11 @@ def test_grouping_puts_exactly_the_shape_compatible_runs_together(tmp_path):
     other = [_run(width=16), _run(model="hnn"), _run(loss="l1"), _run(batch=2)]
     again = _run(seed=1, eval_substeps=2)  # same training as same[1]
     cached = _run(seed=7)
-    (tmp_path / "params" / cached.train_hash).mkdir(parents=True)
-    (tmp_path / "params" / cached.train_hash / "model.eqx").write_bytes(b"x")
+    pdir = tmp_path / "params" / cached.train_hash
+    pdir.mkdir(parents=True)
+    (pdir / "model.eqx").write_bytes(b"x")
+    meta = {"sha256": _rows.sha256_file(pdir / "model.eqx"), "code": _rows.code_fingerprint()}
+    (pdir / "train.json").write_text(json.dumps(meta))
     groups = plan_groups(same + other + [again, cached], tmp_path, max_size=20)
     as_sets = [{c.config_hash for c in g} for g in groups]
     assert {c.config_hash for c in same} in as_sets

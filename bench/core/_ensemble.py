@@ -38,6 +38,7 @@ import systems
 
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig, check_choice
+from ._rows import cached_params_meta
 
 MODES = ("auto", "on", "off")
 # RunConfig fields that may differ between the members of one ensemble (no shape changes).
@@ -276,7 +277,7 @@ def plan_groups(
     for c in configs:
         cached = (
             cache_root is not None
-            and (Path(cache_root) / "params" / c.train_hash / "model.eqx").exists()
+            and cached_params_meta(Path(cache_root) / "params" / c.train_hash) is not None
         )
         # pixel runs train their own way (bench.core._pixels): alone
         pixels = c.observation != "state"

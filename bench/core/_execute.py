@@ -6,12 +6,14 @@ exception's message, the traceback is in the run's artifact directory).
 
 Caches under ``$DECON_CACHE`` (default ``./.cache/decon-bench``, git-ignored):
 
-- ``params/<train_hash>/model.eqx`` + ``train.json`` (with the sha256 of ``model.eqx``): runs
-  that differ only in evaluation settings train once; a params file whose checksum does not
-  match is ignored and the model retrained;
+- ``params/<train_hash>/model.eqx`` + ``train.json`` (with the sha256 of ``model.eqx`` and
+  the ``_rows.TRAIN_CODE`` fingerprint): runs that differ only in evaluation settings train once;
+  a params file whose checksum does not match, or that other code trained (``train_hash``
+  covers the configuration, not the code), is ignored and the model retrained;
 - ``runs/<config_hash>/``: ``config.json``, ``metrics.json``, ``curves.npz`` (per trajectory
   and time), ``traceback.txt`` for failures;
-- ``floors/<dataset hash>.json``: the perturbed-ground-truth floor of a test set.
+- ``floors/<dataset hash>.json``: the perturbed-ground-truth floor of a test set (with the
+  same fingerprint; recomputed when it differs).
 
 Sweeps over many runs are :mod:`bench.core._runner`'s.
 """
@@ -19,7 +21,6 @@ Sweeps over many runs are :mod:`bench.core._runner`'s.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import os
 import time
@@ -34,16 +35,20 @@ from . import _metrics as M
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig
 from ._provenance import provenance
-from ._rows import EVAL_MAX_STEPS, artifact_dir, base_row, eval_integrator  # noqa: F401 - re-exported
+from ._rows import (  # noqa: F401 - re-exported
+    EVAL_MAX_STEPS,
+    artifact_dir,
+    base_row,
+    cached_params_meta,
+    code_fingerprint,
+    eval_integrator,
+)
+from ._rows import sha256_file as _sha256
 from ._rows import write_json as _write_json
 
 TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends
 # Test states used for the symplectic error (a Jacobian per state: keep it small).
 _SYMPLECTIC_STATES = 64
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 # -------------------------------------------------------------------------------- one run
@@ -124,15 +129,13 @@ def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
         return model, meta
     tcfg = train_config(config)
     pdir = Path(cache_root) / "params" / config.train_hash
-    pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
-    if pfile.exists() and meta_file.exists():
+    meta = cached_params_meta(pdir)
+    if meta is not None:
         try:
-            meta = json.loads(meta_file.read_text())
-            if meta.get("sha256") == _sha256(pfile):
-                loaded = eqx.tree_deserialise_leaves(pfile, like=model)
-                meta["_snapshots"] = _load_snapshots(pdir, meta, tcfg, model, loaded)
-                meta["train_cached"] = True
-                return loaded, meta
+            loaded = eqx.tree_deserialise_leaves(pdir / "model.eqx", like=model)
+            meta["_snapshots"] = _load_snapshots(pdir, meta, tcfg, model, loaded)
+            meta["train_cached"] = True
+            return loaded, meta
         except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
             pass
     res = train(model, data, tcfg, progress=progress)
@@ -198,6 +201,7 @@ def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
         "steps_done": int(res.steps_done),
         "flops_per_step": float(res.flops_per_step),
         "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
+        "code": code_fingerprint(),
     }
     pdir.mkdir(parents=True, exist_ok=True)
     tmp = pdir / f".tmp-{os.getpid()}.eqx"
@@ -223,7 +227,9 @@ def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
 def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
     path = Path(cache_root) / "floors" / f"{data.config.hash()}.json"
     try:
-        return float(json.loads(path.read_text())["floor"])
+        stored = json.loads(path.read_text())
+        if stored["code"] == code_fingerprint():
+            return float(stored["floor"])
     except (OSError, ValueError, KeyError, TypeError):
         pass
     args = data.args_test if config.random_args else None
@@ -236,7 +242,7 @@ def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
         coordinates=config.coordinates,
         sim_points=getattr(data.config, "n_points", None),
     )
-    _write_json(path, {"floor": value})
+    _write_json(path, {"floor": value, "code": code_fingerprint()})
     return value
 
 

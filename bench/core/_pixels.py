@@ -38,7 +38,6 @@ first test trajectory (``frames_true``, ``frames_pred``, at ``frame_index``) for
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
@@ -293,26 +292,21 @@ def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
     return eqx.combine(params, static), meta
 
 
-def _sha256(path: Path) -> str:
-    import hashlib
-
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 def _train_cached(c: RunConfig, model, data, cache_root: Path, progress: bool):
-    """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
+    """Train, or load the parameters cached under ``train_hash`` when their checksum and code
+    hold (:func:`bench.core._rows.cached_params_meta`)."""
     import equinox as eqx
 
+    from ._rows import cached_params_meta, code_fingerprint, sha256_file
     from ._rows import write_json as _write_json
 
     pdir = Path(cache_root) / "params" / c.train_hash
     pfile, meta_file = pdir / "model.eqx", pdir / "train.json"
-    if pfile.exists() and meta_file.exists():
+    meta = cached_params_meta(pdir)
+    if meta is not None:
         try:
-            meta = json.loads(meta_file.read_text())
-            if meta.get("sha256") == _sha256(pfile):
-                meta["train_cached"] = True
-                return eqx.tree_deserialise_leaves(pfile, like=model), meta
+            meta["train_cached"] = True
+            return eqx.tree_deserialise_leaves(pfile, like=model), meta
         except Exception:  # a damaged cache entry: retrain
             pass
     trained, meta = train_pixels(c, model, data, progress)
@@ -320,7 +314,8 @@ def _train_cached(c: RunConfig, model, data, cache_root: Path, progress: bool):
     tmp = pdir / f".tmp-{os.getpid()}.eqx"
     eqx.tree_serialise_leaves(tmp, trained)
     os.replace(tmp, pfile)
-    meta["sha256"] = _sha256(pfile)
+    meta["sha256"] = sha256_file(pfile)
+    meta["code"] = code_fingerprint()
     _write_json(meta_file, meta)
     meta["train_cached"] = False
     return trained, meta
