@@ -250,7 +250,8 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> s
         v, label = next(((v, lab) for v, lab in sides if not _absent(v)), sides[0])
         if _is_pending(v):
             return f"{v.verdict} at {label}: not comparable yet"
-        return f"no runs or missing cells at {label}: not comparable"
+        what = "no runs" if _absent(v) else "cells missing"
+        return f"{what} at {label}: not comparable"
     causes = []
     if a.discriminating != b.discriminating:
         causes.append(
