@@ -227,6 +227,12 @@ def _is_pending(v) -> bool:
     return v is not None and v.pending is not None
 
 
+def _outcome(v) -> str:
+    """The verdict without the reason of an inconclusive one: *inconclusive (does not
+    replicate)* and *inconclusive* agree (neither signs the claim)."""
+    return v.verdict.split(" (")[0]
+
+
 def _absent(v) -> bool:
     """The folder has none of the claim's runs (its cell reads *no runs*)."""
     return v is None or (v.detail == "no runs" and not _is_pending(v))
@@ -286,7 +292,9 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "is named: missing runs, a test set that does not discriminate, failed runs, the metric "
         "(claim 4: geometric-mean error vs MSE), or the budget (the paper profile trains 8000 "
         "steps on 800 trajectories at width 256 with 5 seeds; quick 1000 steps on 200 at width "
-        "128 with 5).",
+        "128 with 5). *agree* compares the verdicts (reproduced, partly reproduced, not "
+        "reproduced, inconclusive), not an inconclusive verdict's reason: neither "
+        "*inconclusive* nor *inconclusive (does not replicate)* signs the claim.",
         "",
         "| " + " | ".join(head) + " |",
         "|" + " --- |" * len(head),
@@ -303,7 +311,7 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
             else key.replace("MSE", "geometric-mean error")
         )
         a, b = m.get(key), m.get(other)
-        if a and b and a.verdict != b.verdict and not (_no_runs(a) or _no_runs(b)):
+        if a and b and _outcome(a) != _outcome(b) and not (_no_runs(a) or _no_runs(b)):
             return "metric: geometric-mean error and MSE disagree within a profile"
         return ""
 
@@ -319,7 +327,7 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         cells = [_cell_text(v) for v in vs]
         real = [v for v in vs if not _no_runs(v)]
         agree = (
-            "-" if len(real) < 2 else ("yes" if len({v.verdict for v in real}) == 1 else "**no**")
+            "-" if len(real) < 2 else ("yes" if len({_outcome(v) for v in real}) == 1 else "**no**")
         )
         # Causes against the first folder with a comparable verdict (here, unless here is
         # pending or has no runs: then the others' disagreement is still explained).
@@ -330,7 +338,7 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
             # a folder without the claim's runs says so in its cell: no cause to name
             if i == base or (_no_runs(a) and _no_runs(b)) or _absent(b):
                 continue
-            if a is None or b is None or a.verdict != b.verdict or _no_runs(a) != _no_runs(b):
+            if a is None or b is None or _outcome(a) != _outcome(b) or _no_runs(a) != _no_runs(b):
                 note = metric_note(maps[base], key) or metric_note(maps[i], key)
                 causes.append(_cause(a, b, labels[base], labels[i], note))
         causes = list(dict.fromkeys(causes))

@@ -199,3 +199,20 @@ def test_a_figure_saved_twice_has_the_same_bytes(tmp_path):
     first = draw("a")
     time.sleep(1.1)  # the PDF's date has a resolution of one second
     assert draw("b") == first
+
+
+def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
+    """*inconclusive* here and *inconclusive (does not replicate)* there agree (neither signs
+    the claim, no cause to name); *partly reproduced* against either does not."""
+    from bench._report import _comparison_section
+    from bench.studies.paper._stats import Verdict
+
+    def v(verdict, claim=3):
+        return Verdict(claim, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p")
+
+    others = [("a", "quick", [v("inconclusive (does not replicate)"), v("inconclusive", 1)])]
+    rows = _comparison_section([v("inconclusive"), v("partly reproduced", 1)], "paper", others)
+    row3 = next(r for r in rows if r.startswith("| 3 |"))
+    row1 = next(r for r in rows if r.startswith("| 1 |"))
+    assert row3.endswith("| yes | - |"), row3
+    assert "| **no** |" in row1 and "budget" in row1, row1
