@@ -167,7 +167,8 @@ def _parser() -> argparse.ArgumentParser:
     cp.add_argument(
         "--replication",
         action="store_true",
-        help="on the profile's replication seeds instead of its own (quick: 5-9; issue 20)",
+        help="on the profile's replication seeds instead of its own "
+        "(quick, paper, paper-core: 5-9; issue 20)",
     )
 
     da = sub.add_parser("data", help="export a profile's datasets with a card; verify a folder")
@@ -409,6 +410,7 @@ def _run_experiments(args, names, *, order, seeds=None) -> dict:
 
 
 def _cmd_estimate(args) -> int:
+    from .core._experiments import SELECTIONS, replication_seeds
     from .studies.paper._campaign import format_plan, plan
 
     check_choice("profile", args.profile, list(PROFILES))
@@ -417,11 +419,16 @@ def _cmd_estimate(args) -> int:
     df = plan(args.profile, args.results, workers=args.workers)
     print(f"results: {args.results}")
     print(format_plan(df, args.profile, args.workers))
+    seeds = replication_seeds(args.profile)
+    if args.profile in SELECTIONS and seeds:  # a campaign's second phase (make paper-core)
+        rep = plan(args.profile, args.results, workers=args.workers, seeds=seeds, prior=df)
+        print()
+        print(format_plan(rep, args.profile, args.workers, seeds=seeds))
     return 0
 
 
 def _cmd_campaign(args) -> int:
-    from .core._experiments import REPLICATION_SEEDS
+    from .core._experiments import replication_seeds
     from .studies.paper._campaign import campaign_experiments, priority
 
     _check_sweep_args(args)
@@ -430,14 +437,15 @@ def _cmd_campaign(args) -> int:
         raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
     seeds = None
     if args.replication:
-        if args.profile not in REPLICATION_SEEDS:
-            check_choice("profile with replication seeds", args.profile, list(REPLICATION_SEEDS))
-        seeds = REPLICATION_SEEDS[args.profile]
+        seeds = replication_seeds(args.profile) or None
+        if seeds is None:
+            allowed = [p for p in PROFILES if replication_seeds(p)]
+            check_choice("profile with replication seeds", args.profile, allowed)
     _usable_results(args)
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
     print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
     # claim by claim, longest runs first within a claim
-    res = _run_experiments(args, names, order=priority(args.profile), seeds=seeds)
+    res = _run_experiments(args, names, order=priority(args.profile, seeds), seeds=seeds)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0

@@ -163,6 +163,8 @@ def _claims_table(j) -> list[str]:
         p = j.primary[v.key]
         r = j.replication.get(v.key)
         rep = {True: "yes", False: "**no**", None: "not run"}[j.replicates(v.key)]
+        if v.key in j.replication_pending:
+            rep = "pending ({} of {} runs)".format(*j.replication_pending[v.key])
         effect = f"{_fmt(p.effect)} ({p.effect_name})" if p.effect_name else _fmt(p.effect)
         out.append(
             f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | {p.verdict} "
@@ -385,16 +387,12 @@ def _pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list
     declares (a campaign under way)."""
     import dataclasses
 
-    from .core._experiments import SELECTIONS, expand
-    from .studies.paper._rules import claim_studies
+    from .core._experiments import SELECTIONS
+    from .studies.paper._replication import stored_counts
 
     if profile not in SELECTIONS or not len(runs):  # only a campaign's selection is pending
         return verdicts
-    done = set(runs["config_hash"])
-    want = {}
-    for study in claim_studies():
-        hashes = {c.config_hash for e in study.experiments for c in expand(e, profile)}
-        want[study.claim] = (len(hashes & done), len(hashes))
+    want = stored_counts(runs, profile)
     out = []
     for v in verdicts:
         n, m = want.get(v.claim, (0, 0))

@@ -177,3 +177,33 @@ def test_symplectic_runs_are_costed_as_measured_with_and_without_the_penalty():
     for w, secs in by_w.items():
         if w > 0:
             assert secs == pytest.approx([8000 * 0.112 + 12.0] * 5), w
+
+
+def test_the_replication_phase_runs_the_same_cells_on_seeds_5_to_9(tmp_path):
+    """The campaign's second phase: the selection's cells on its replication seeds, in the same
+    claim order, counted apart from the first phase, with the first phase's calibration where
+    it has measured none of its own."""
+    seeds = E.replication_seeds("paper-core")
+    assert seeds == (5, 6, 7, 8, 9) == E.replication_seeds("paper")
+    assert E.replication_seeds("smoke") == () and E.replication_seeds(None) == ()
+    own, rep = C.campaign_runs("paper-core"), C.campaign_runs("paper-core", seeds)
+    assert len(rep) == len(own) and {c.seed for _, c in rep} == set(seeds)
+    assert not {c.config_hash for _, c in own} & {c.config_hash for _, c in rep}
+    strip = [(n, c.to_dict() | {"seed": 0}) for n, c in rep]
+    assert sorted(map(str, strip)) == sorted(str((n, c.to_dict() | {"seed": 0})) for n, c in own)
+    key = C.priority("paper-core", seeds)
+    ordered = sorted((c for _, c in rep), key=key, reverse=True)
+    first = {c.config_hash for c in E.expand("loss", "paper-core", seeds=seeds)}
+    assert all(c.config_hash in first for c in ordered[: len(first)])
+    # a stored run of the first phase counts there only; its calibration carries over
+    (_, c), *_ = own
+    _store.write_row(
+        tmp_path,
+        {**c.to_dict(), "config_hash": c.config_hash, "status": "ok", "cpu_seconds": 1.0},
+    )
+    prior = C.plan("paper-core", tmp_path, workers=2)
+    df = C.plan("paper-core", tmp_path, workers=2, seeds=seeds, prior=prior)
+    assert prior.iloc[-1]["stored"] == 1 and df.iloc[-1]["stored"] == 0
+    assert list(df["calibration"]) == pytest.approx(list(prior["calibration"]))
+    assert prior.iloc[-1]["calibration"] != 1.0
+    assert "replication seeds 5, 6, 7, 8, 9" in C.format_plan(df, "paper-core", 2, seeds)

@@ -47,8 +47,8 @@ def _final(j):
 def test_seed_sets_of_the_profiles():
     assert PROFILES[PROFILE]["seeds"] == PRIMARY and REPLICATION_SEEDS[PROFILE] == REPLICATION
     assert seed_sets(PROFILE) == (PRIMARY, REPLICATION)
-    assert seed_sets("paper") == (PRIMARY, ())
-    assert seed_sets("paper-core") == (PRIMARY, ())  # a selection: its base profile's seeds
+    assert seed_sets("paper") == (PRIMARY, REPLICATION)
+    assert seed_sets("paper-core") == (PRIMARY, REPLICATION)  # a selection: its base's seeds
     assert seed_sets("smoke") == ((0,), ())
     assert seed_sets(None) == ((), ())
     assert seed_sets("no-such-profile") == ((), ())
@@ -114,6 +114,24 @@ def test_disagreeing_seed_sets_do_not_replicate(
     assert final["3"].n_seeds == 5
     # claims that agree (inconclusive for want of runs on both sets) are left alone
     assert final["5"].verdict == R.INCONCLUSIVE and j.replicates("5") is None
+
+
+def test_partly_stored_replication_is_pending_not_a_failure_to_replicate(
+    reproduce_primary, contradict_replication
+):
+    """A campaign under way has stored some replication runs of a claim: its replication is
+    pending (n of m runs) and the primary verdict stands, even where the partial reading
+    disagrees; once every run is stored it is judged (and here does not replicate)."""
+    runs, curves = _join(reproduce_primary, contradict_replication)
+    full = judge(runs, curves, PROFILE, loso=False)
+    assert _final(full)["3"].verdict == DOES_NOT_REPLICATE and "3" not in full.replication_pending
+    rep = runs["seed"].isin(REPLICATION)
+    dropped = runs[rep].iloc[0]["config_hash"]
+    part = judge(runs[runs["config_hash"] != dropped], curves, PROFILE, loso=False)
+    m = int(rep.sum())
+    assert part.replication_pending["3"] == (m - 1, m)
+    assert "3" not in part.replication and part.replicates("3") is None
+    assert _final(part)["3"].verdict == R.REPRODUCED
 
 
 def test_without_replication_runs_the_primary_verdicts_stand(reproduce_primary):

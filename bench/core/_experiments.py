@@ -311,8 +311,16 @@ SELECTIONS: dict[str, str] = {"paper-core": "paper"}
 for _sel, _base in SELECTIONS.items():
     PROFILES[_sel] = dict(PROFILES[_base])
 # A verdict counts when it replicates (issue 20): each profile's claims are judged again on a
-# disjoint seed set, stored beside the profile's own runs (`make replicate`).
-REPLICATION_SEEDS: dict[str, tuple[int, ...]] = {"quick": (5, 6, 7, 8, 9)}
+# disjoint seed set, stored beside the profile's own runs (`make replicate` at quick; the
+# paper-core campaign runs them after its own seeds). A selection has its base profile's.
+REPLICATION_SEEDS: dict[str, tuple[int, ...]] = {"quick": (5, 6, 7, 8, 9), "paper": (5, 6, 7, 8, 9)}
+
+
+def replication_seeds(profile: str | None) -> tuple[int, ...]:
+    """The replication seeds of ``profile`` (a selection: its base profile's); () if none."""
+    if profile is None:
+        return ()
+    return REPLICATION_SEEDS.get(SELECTIONS.get(profile, profile), ())
 
 
 # ----------------------------------------------------------------------------- experiments

@@ -13,7 +13,9 @@ Order (:data:`CAMPAIGN_CLAIMS`): the claims that the learning-curve study found 
 quick first (6, 4, 1, 3), then the HNN seed's cheap tasks (10), then 2, 5, 9, 7, 8; within a
 claim, the longest runs first. A run that several claims share is counted, and run, with the
 first of them. Runs are content-addressed, so a campaign killed at any moment loses only the
-runs in flight; run it again to resume.
+runs in flight; run it again to resume. ``make paper-core`` then runs the same cells on the
+profile's replication seeds (``seeds=``: 5-9), so that each verdict is judged again on a
+disjoint seed set; :func:`plan` counts that phase apart.
 
 Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
 costs scaled to the profile's steps, batch and width, or from costs measured at the run's own
@@ -63,24 +65,25 @@ def campaign_experiments(profile: str = "paper-core") -> list[str]:
     return sorted(names, key=rank)
 
 
-def campaign_runs(profile: str = "paper-core") -> list[tuple[str, object]]:
+def campaign_runs(profile: str = "paper-core", seeds=None) -> list[tuple[str, object]]:
     """``(experiment, RunConfig)`` of every unique run of the campaign, in the order they start:
-    by claim (:data:`CAMPAIGN_CLAIMS`), then longest first (the estimate)."""
+    by claim (:data:`CAMPAIGN_CLAIMS`), then longest first (the estimate); on ``seeds`` instead
+    of the profile's (its replication seeds)."""
     out, seen = [], set()
     for name in campaign_experiments(profile):
-        cfgs = [c for c in expand(name, profile) if c.config_hash not in seen]
+        cfgs = [c for c in expand(name, profile, seeds=seeds) if c.config_hash not in seen]
         seen.update(c.config_hash for c in cfgs)
         cfgs.sort(key=run_seconds, reverse=True)
         out += [(name, c) for c in cfgs]
     return out
 
 
-def priority(profile: str = "paper-core"):
+def priority(profile: str = "paper-core", seeds=None):
     """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
     first): earlier claims first, longest runs first within a claim."""
     rank = {}
     for i, name in enumerate(campaign_experiments(profile)):
-        for c in expand(name, profile):
+        for c in expand(name, profile, seeds=seeds):
             rank.setdefault(c.config_hash, i)
 
     def key(c):
@@ -89,7 +92,9 @@ def priority(profile: str = "paper-core"):
     return key
 
 
-def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.DataFrame:
+def plan(
+    profile: str = "paper-core", results_dir=None, workers: int = 2, seeds=None, prior=None
+) -> pd.DataFrame:
     """One row per claim of the campaign: ``claim, experiments, runs`` (every run its verdict
     reads), ``stored`` (of those), ``new_runs`` (those no earlier claim brings),
     ``cpu_hours`` (estimated, its new runs), ``cpu_hours_left`` (estimated, its new runs not
@@ -101,8 +106,10 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
     the stored runs that record it, and how many do), ``measured_estimate_hours`` (the
     estimate of those runs), ``calibration`` (measured over estimated: the claim's, or the
     campaign's where the claim has no such run) and ``cpu_hours_left_calibrated`` /
-    ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``."""
-    runs = campaign_runs(profile)
+    ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``. On
+    ``seeds`` instead of the profile's: the campaign's replication phase, whose claims without
+    a measured run take their calibration from ``prior`` (the plan of the profile's seeds)."""
+    runs = campaign_runs(profile, seeds)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
@@ -123,7 +130,7 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
     charged = set()
     paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done}
     for name in campaign_experiments(profile):
-        cells = expand(name, profile)  # every run the claim reads, shared ones included
+        cells = expand(name, profile, seeds=seeds)  # every run the claim reads, shared too
         mine = [c for n, c in runs if n == name]  # the runs it brings first
         left = [c for c in mine if c.config_hash not in done]
         table.append(
@@ -163,10 +170,19 @@ def plan(profile: str = "paper-core", results_dir=None, workers: int = 2) -> pd.
         # The estimate of the runs left, rescaled by what the stored runs really cost: the
         # claim's measured CPU time over its estimate, or the campaign's where the claim has no
         # run that records cpu_seconds (1 where none has)
-        overall = _ratio(df["measured_cpu_hours"].sum(), df["measured_estimate_hours"].sum())
+        known = {}
+        if prior is not None:
+            known = dict(zip(prior["claim"], prior["calibration"], strict=True))
+        overall = _ratio(
+            df["measured_cpu_hours"].sum(),
+            df["measured_estimate_hours"].sum(),
+            known.get("total", 1.0),
+        )
         df["calibration"] = [
-            _ratio(a, b, overall)
-            for a, b in zip(df["measured_cpu_hours"], df["measured_estimate_hours"], strict=True)
+            _ratio(a, b, known.get(c, overall))
+            for c, a, b in zip(
+                df["claim"], df["measured_cpu_hours"], df["measured_estimate_hours"], strict=True
+            )
         ]
         df["cpu_hours_left_calibrated"] = df["cpu_hours_left"] * df["calibration"]
         total = df.sum(numeric_only=True).to_dict()
@@ -198,12 +214,14 @@ def _ratio(measured: float, estimated: float, default: float = 1.0) -> float:
     return measured / estimated if estimated > 0 else default
 
 
-def format_plan(df: pd.DataFrame, profile: str, workers: int) -> str:
-    """The plan as a fixed-width text table (``python -m bench estimate``)."""
+def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None) -> str:
+    """The plan as a fixed-width text table (``python -m bench estimate``); ``seeds``: the
+    replication phase's, named in the title."""
+    which = f"{profile}, replication seeds {', '.join(map(str, seeds))}" if seeds else profile
     if not len(df):
-        return f"{profile}: no runs"
+        return f"{which}: no runs"
     lines = [
-        f"{profile}: runs and hours per claim, in campaign order (hours: the estimator's; done: "
+        f"{which}: runs and hours per claim, in campaign order (hours: the estimator's; done: "
         "the stored runs' wall seconds, waiting included; t+e: of those, training and "
         f"evaluation; wall hours left at {workers} idle workers)",
         f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "

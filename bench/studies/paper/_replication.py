@@ -3,10 +3,13 @@ disjoint seed set, and without each of its seeds.
 
 - *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4; for a profile that declares
   fewer than a verdict needs, ``smoke``, every stored seed outside the replication set).
-- *Replication*: :data:`bench.core._experiments.REPLICATION_SEEDS` (``quick``: 5-9), stored
-  beside the primary runs by ``make replicate`` (``python -m bench campaign --profile quick
-  --replication``). Where both exist and the verdicts differ, the claim's verdict is
-  *inconclusive (does not replicate)*, and both readings are shown.
+- *Replication*: :data:`bench.core._experiments.REPLICATION_SEEDS` (``quick`` and ``paper``,
+  hence ``paper-core``: 5-9), stored beside the primary runs by ``make replicate``
+  (``python -m bench campaign --profile quick --replication``) or by the paper-core campaign
+  after its own seeds. Where both exist and the verdicts differ, the claim's verdict is
+  *inconclusive (does not replicate)*, and both readings are shown. A claim whose replication
+  runs are only partly stored (a campaign under way) is not judged on them until all are:
+  its replication reads *pending (n of m runs)*.
 - *Leave one seed out*: the primary seeds without each one in turn, judged by the same rules
   with one seed fewer required (:func:`bench.studies.paper._stats.min_seeds`); a verdict that
   changes when one seed is dropped rests on that seed, and the report says which.
@@ -28,8 +31,8 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ...core._experiments import REPLICATION_SEEDS, SELECTIONS, profile_defaults
-from ._rules import evaluate_claims
+from ...core._experiments import PROFILES, SELECTIONS, expand, profile_defaults, replication_seeds
+from ._rules import claim_studies, evaluate_claims
 from ._stats import INCONCLUSIVE, Verdict, min_seeds, required_seeds
 
 DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
@@ -48,6 +51,9 @@ class Judgement:
     loso: dict[str, list[tuple[int, Verdict]]] = field(default_factory=dict)
     primary_seeds: tuple[int, ...] = ()
     replication_seeds: tuple[int, ...] = ()
+    # key -> (stored, declared) replication runs of a claim whose replication is under way:
+    # not judged until all are stored (a partial reading is not a replication)
+    replication_pending: dict[str, tuple[int, int]] = field(default_factory=dict)
 
     def replicates(self, key: str) -> bool | None:
         r = self.replication.get(key)
@@ -69,7 +75,21 @@ def seed_sets(profile: str | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
         primary = profile_defaults(base)[1]
     except ValueError:
         return (), ()
-    return tuple(primary), tuple(REPLICATION_SEEDS.get(base, ()))
+    return tuple(primary), replication_seeds(base)
+
+
+def stored_counts(runs: pd.DataFrame, profile: str | None, seeds=None) -> dict[int, tuple]:
+    """``{claim: (stored, declared)}``: how many of the runs each claim's experiments declare
+    at ``profile`` (on ``seeds`` instead of its own) are in ``runs``; {} for an unknown
+    profile."""
+    if profile not in PROFILES:
+        return {}
+    done = set(runs["config_hash"]) if len(runs) and "config_hash" in runs else set()
+    out = {}
+    for study in claim_studies():
+        hashes = {c.config_hash for e in study.experiments for c in expand(e, profile, seeds=seeds)}
+        out[study.claim] = (len(hashes & done), len(hashes))
+    return out
 
 
 def _on(runs: pd.DataFrame, seeds) -> pd.DataFrame:
@@ -100,9 +120,17 @@ def judge(
         primary_seeds = tuple(s for s in stored if s not in rep_seeds)
     prim = evaluate_claims(_on(runs, primary_seeds), curves, profile)
     primary = {v.key: v for v in prim}
-    replication = {}
+    replication, rep_pending = {}, {}
     if rep_seeds and len(_on(runs, rep_seeds)):
         replication = {v.key: v for v in evaluate_claims(_on(runs, rep_seeds), curves, profile)}
+        # a claim whose replication runs are partly stored (a campaign under way) is not
+        # judged on them yet: fewer seeds would read as a verdict that does not replicate
+        counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
+        for key, r in list(replication.items()):
+            n, m = counts.get(r.claim, (0, 0))
+            if 0 < n < m:
+                rep_pending[key] = (n, m)
+                del replication[key]
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
     present = sorted(set(_on(runs, primary_seeds)["seed"])) if len(runs) else []
     if loso and len(present) > 1:
@@ -132,7 +160,7 @@ def judge(
                 detail=f"seeds {_span(primary_seeds)}: {v.verdict}; {without}. {v.detail}",
             )
         final.append(v)
-    return Judgement(final, primary, replication, out_loso, primary_seeds, rep_seeds)
+    return Judgement(final, primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending)
 
 
 def _span(seeds) -> str:
