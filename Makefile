@@ -21,7 +21,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
 .PHONY: install lock upgrade test test-slow lint format bench compare replicate stability perf figures report clean \
-	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-stop paper-core-report
+	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report
 
 install: $(STAMP)
 
@@ -115,6 +115,7 @@ report: $(STAMP)
 CAMPAIGN_DIR ?= results/reference/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
+CAMPAIGN_DRAIN := $(abspath .cache/paper-core.drain)
 CAMPAIGN_WORKERS ?= 2
 campaign_pid = $$(cat $(CAMPAIGN_PID) 2>/dev/null)
 campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
@@ -122,7 +123,8 @@ campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
 paper-core: $(STAMP)
 	@mkdir -p .cache
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
-	else setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
+	else rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) \
+		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
 		nice -n 19 "$$@" && exec nice -n 19 "$$@" --replication' sh \
 		$(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
 		--profile paper-core --workers $(CAMPAIGN_WORKERS) > $(CAMPAIGN_LOG) 2>&1 & \
@@ -141,6 +143,12 @@ paper-core-pause:
 
 paper-core-resume:
 	@$(campaign_alive) && env kill -s CONT -- -$(campaign_pid) && echo "paper-core: resumed" || echo "paper-core: not running"
+
+# Let the runs in flight finish (they are stored), start no new one; then the campaign ends.
+paper-core-drain:
+	@$(campaign_alive) && touch $(CAMPAIGN_DRAIN) && env kill -s CONT -- -$(campaign_pid) && \
+		echo "paper-core: draining: the runs in flight finish, none starts (make paper-core-status says when it has ended)" || \
+		echo "paper-core: not running"
 
 paper-core-stop:
 	@$(campaign_alive) && env kill -s CONT -- -$(campaign_pid) && env kill -s TERM -- -$(campaign_pid) && \

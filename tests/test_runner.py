@@ -234,6 +234,36 @@ def test_failed_run_recorded_with_traceback(tmp_path):
     )
 
 
+def test_a_drained_sweep_stores_the_runs_in_flight_and_starts_no_other(tmp_path, monkeypatch):
+    """``$DECON_DRAIN`` (``make paper-core-drain``): once its file exists, the run in flight is
+    stored and no other starts, in process or in a pool worker; without it the sweep resumes."""
+    drain = tmp_path / "drain"
+    monkeypatch.setenv(runner.DRAIN_ENV, str(drain))
+    configs = expand("test_two", "smoke", seeds=[0, 1])
+    assert len(configs) == 4
+    started = []
+
+    def fake(c, cache_root=None, progress=False):
+        started.append(c.config_hash)
+        if len(started) == 1:
+            drain.touch()  # drained while the first run is in flight
+        return {**runner.base_row(c), "status": "ok"}
+
+    monkeypatch.setattr(runner, "execute_run", fake)
+
+    def sweep():
+        return runner.sweep(configs, tmp_path / "res", workers=1, progress=False, ensemble="off")
+
+    rows = sweep()
+    assert len(started) == 1 and [r["config_hash"] for r in rows] == started
+    assert _store.done_hashes(tmp_path / "res") == set(started)
+    assert sweep() == [] and len(started) == 1  # still draining: nothing starts
+    assert runner._star_execute(([configs[0].to_dict()], str(tmp_path))) == []  # a pool job
+    drain.unlink()
+    assert len(sweep()) == 3 and len(set(started)) == 4
+    assert _store.done_hashes(tmp_path / "res") == {c.config_hash for c in configs}
+
+
 # Kill and resume, damaged rows, a full disk: tests/test_faults.py
 
 

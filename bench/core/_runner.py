@@ -3,7 +3,8 @@
 ``sweep(configs, results_dir, ...)`` skips the config hashes already stored, executes the rest
 with the local executor (in-process, or a spawn pool whose workers each get cores / workers
 XLA threads) or Ray, and writes each row as it arrives (see ``bench.core._store``). One run is
-executed by :func:`bench.core._execute.execute_run` (re-exported here).
+executed by :func:`bench.core._execute.execute_run` (re-exported here). A local sweep whose
+``$DECON_DRAIN`` file exists starts no new run and ends once the runs in flight are stored.
 """
 
 from __future__ import annotations
@@ -44,6 +45,15 @@ __all__ = [
 
 EXECUTORS = ("local", "ray")
 REBUILD_SECONDS = 20.0  # a sweep rebuilds the tables from the rows at most this often
+# A file whose existence drains a local sweep: the runs in flight finish and are stored, no new
+# one starts (``make paper-core-drain``, before a machine is handed back).
+DRAIN_ENV = "DECON_DRAIN"
+
+
+def draining() -> bool:
+    """Whether ``$DECON_DRAIN`` names a file that exists: start no new run."""
+    path = os.environ.get(DRAIN_ENV)
+    return bool(path) and Path(path).exists()
 
 
 def _execute_dict(d: dict, cache_root: str | None = None) -> dict:
@@ -153,6 +163,10 @@ def sweep(
         _store.rebuild_tables(results_dir)
         return new_rows
 
+    if draining():
+        print(f"{label}: draining (${DRAIN_ENV} exists): no run started", file=sys.stderr)
+        return new_rows
+
     from tqdm.auto import tqdm
 
     bar = tqdm(total=len(todo), desc=f"{label} [{profile}]", unit="run", disable=not progress)
@@ -190,6 +204,8 @@ def sweep(
             workers = min(workers, len(groups))
             if workers == 1:
                 for g in groups:
+                    if draining():
+                        break
                     bar.set_postfix_str(_label(g[0]) + (f" +{len(g) - 1}" if len(g) > 1 else ""))
                     if len(g) == 1:
                         finish(execute_run(g[0], cache_root=cache_root, progress=False))
@@ -299,6 +315,8 @@ def _star_execute(job):
 
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
     dicts, cache_root = job
+    if draining():  # the sweep is being drained: this job ends without running
+        return []
     if len(dicts) == 1:
         rows = [_execute_dict(dicts[0], cache_root)]
     else:
