@@ -32,6 +32,10 @@ BAD = [
     (["sweep", "--all", "--workers", "x"], "workers must be an integer"),
     (["sweep"], "experiment name or --all"),
     (["frobnicate"], "invalid choice"),
+    (
+        ["campaign", "--profile", "smoke", "--replication"],
+        "profile with replication seeds 'smoke'; allowed: quick, paper, paper-core",
+    ),
 ]
 
 
@@ -109,3 +113,12 @@ def test_env_pins_cores_and_compilation_cache():
     assert (n, mask) == ("1", "1"), out.stderr
     assert in_jax == cache, "jax was not told where the cache is"
     assert cache.endswith(os.path.join("decon-bench", "jax"))
+
+
+def test_estimate_of_a_campaign_prints_both_phases(capsys, tmp_path):
+    """paper-core's status: its own seeds, then the replication seeds' phase."""
+    assert main(["--results", str(tmp_path), "estimate", "--profile", "paper-core"]) == 0
+    out = capsys.readouterr().out
+    assert "paper-core: runs and hours per claim" in out
+    assert "paper-core, replication seeds 5, 6, 7, 8, 9: runs and hours per claim" in out
+    assert out.count(" total ") == 2
