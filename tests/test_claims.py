@@ -625,6 +625,23 @@ def test_claim_2_no_gain_at_any_weight(tables):
     assert _status(v, "w=1") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
+def test_claim_2_one_weight_with_a_gain_refutes_it_whatever_the_others_do():
+    """At paper-core's weights: the strong weights hurt (their parts hold: no gain), one
+    moderate weight gains 1.6x. The claim is about the best weight: *not reproduced*, not
+    *partly reproduced* (the generic mix of holding and contradicting parts)."""
+    runs, curves = synthetic_tables("paper-core", experiments=("symplectic",))
+    w = option(runs, "weight").astype(float)
+    sr = runs["model"] == "node_so_symreg"
+    assert sorted(set(w[sr])) == [0.0, 1e-6, 1e-3, 1.0, 1e3]
+    base = sr & (w == 0.0)
+    runs = _set_ratio(runs, sr & (w == 1.0), base, 4.0)  # hurts
+    v = C.CLAIMS[2](runs, curves)
+    assert _status(v, "w=1:") == _status(v, "w=1000") == "holds" and v.verdict == R.REPRODUCED
+    v = C.CLAIMS[2](_set_ratio(runs, sr & (w == 1e-3), base, 1 / 1.6), curves)
+    assert _status(v, "w=0.001") == "contradicts" and _status(v, "w=1:") == "holds"
+    assert v.verdict == R.NOT_REPRODUCED
+
+
 def test_claim_2_ignores_velocity_space_regularisation(tables):
     runs, curves = tables
     runs = runs.copy()

@@ -140,7 +140,13 @@ def _verdict(
     discs: Iterable[_Disc] = (),
     n_failed: int = 0,
     variant: str = "",
+    universal: bool = False,
 ) -> Verdict:
+    """Combine a claim's parts: *reproduced* when every part holds, *not reproduced* when some
+    contradict and none holds, *partly reproduced* when some hold and some contradict (the
+    claim's separate statements), else *inconclusive*. ``universal``: the parts are instances
+    of one statement over a grid ("no gain at any weight"), so one contradicting instance
+    refutes it (*not reproduced*, never *partly*)."""
     discs = list(discs)
     need = required_seeds()
     for p in parts:  # a part tested on fewer seeds than a verdict needs decides nothing
@@ -160,7 +166,7 @@ def _verdict(
     elif all(s == "holds" for s in statuses):
         verdict = REPRODUCED
     elif "contradicts" in statuses:
-        verdict = PARTLY if "holds" in statuses else NOT_REPRODUCED
+        verdict = PARTLY if "holds" in statuses and not universal else NOT_REPRODUCED
     else:
         verdict = INCONCLUSIVE
     detail = "; ".join(p.text() for p in parts) or "no runs"
