@@ -158,6 +158,16 @@ def _parser() -> argparse.ArgumentParser:
     dl = sub.add_parser("diagnose-lnn", help=dl_help, description=dl_help)
     dl.add_argument("--profile", default="quick", help="smoke, quick or paper")
 
+    dh_help = (
+        "the first training steps of the plain HNN on the spring, replayed and probed "
+        "(claims 1 and 3): <results>/hnn_diagnosis.csv"
+    )
+    dh = sub.add_parser("diagnose-hnn", help=dh_help, description=dh_help)
+    dh.add_argument("--profile", default="paper-core", help="smoke, quick, paper or paper-core")
+    dh.add_argument(
+        "--steps", type=_int("steps"), default=None, help="probe steps (default: by profile)"
+    )
+
     cp = sub.add_parser(
         "campaign",
         help="sweep a profile's claim experiments claim by claim (make paper-core runs it niced "
@@ -371,6 +381,17 @@ def _cmd_diagnose_lnn(args) -> int:
     results = _usable_results(args)
     df = diagnose(args.profile, results)
     print(summary(df))
+    print(f"wrote {results / FILE} ({len(df)} rows)")
+    return 0
+
+
+def _cmd_diagnose_hnn(args) -> int:
+    from .core._store import read_rows, rows_frame
+    from .studies.paper._hnn_diagnosis import FILE, diagnose, summary
+
+    results = _usable_results(args)
+    df = diagnose(args.profile, results, steps=args.steps)
+    print(summary(df, rows_frame(read_rows(results))))
     print(f"wrote {results / FILE} ({len(df)} rows)")
     return 0
 
@@ -721,4 +742,5 @@ def _main(argv) -> int:
         "compare": _cmd_compare,
         "data": _cmd_data,
         "diagnose-lnn": _cmd_diagnose_lnn,
+        "diagnose-hnn": _cmd_diagnose_hnn,
     }[args.verb](args)

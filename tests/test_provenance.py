@@ -38,6 +38,10 @@ def test_provenance_matches_the_running_environment():
     assert prov["backend"] == jax.default_backend()
     assert prov["device"] and prov["device"] != P.UNKNOWN
     assert P.provenance() is prov  # computed once per process
+    # the cores of this process's affinity mask (an independent route: os, not _env)
+    import os
+
+    assert prov["cpu_cores"] == str(len(os.sched_getaffinity(0)))
 
 
 def test_git_commit_is_this_checkout():

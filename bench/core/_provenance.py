@@ -9,9 +9,14 @@ Every run row (and ``bench_meta.json``) carries :data:`PROVENANCE_COLUMNS`:
 - the arithmetic: ``cpu_vendor`` (e.g. ``AuthenticAMD``), ``cpu_family_model`` (``family/model``
   from ``/proc/cpuinfo``, e.g. ``25/1``), ``cpu_simd`` (the SIMD extensions of the CPU that XLA's
   CPU code generator may use, from :data:`SIMD_FLAGS`, space-separated) and ``xla_flags`` (the
-  ``XLA_FLAGS`` environment variable, empty when unset): float32 round-off differs between CPU
-  types (another vector width, another fused reduction), so rows from two CPUs agree to
-  round-off only, while rows from one CPU type with one lock file are bit-identical;
+  ``XLA_FLAGS`` environment variable, empty when unset) and ``cpu_cores`` (the cores the process
+  may run on, its affinity mask, which sizes XLA's CPU thread pools: a sweep worker is pinned
+  to its own): float32 round-off differs between CPU types (another vector width, another fused
+  reduction) and between core counts (XLA splits a reduction over its threads), so rows from
+  two CPUs, or from one CPU on 1 and on 2 cores, agree to round-off only, while rows from one
+  CPU type on one core count with one lock file are bit-identical. Round-off can decide a
+  training run's fate: ``bench.studies.paper._hnn_diagnosis`` replays a plain-HNN spring run
+  that stalls on one core and learns on two;
 - ``git_commit`` (the full hash of this checkout's ``HEAD``) and ``git_dirty`` (whether the
   working tree differs from it outside ``results/``; ``None`` when not known).
 
@@ -43,7 +48,7 @@ import numpy as np
 PACKAGES = ("jax", "jaxlib", "equinox", "diffrax", "optax", "optimistix", "numpy")
 VERSION_COLUMNS = ("python_version", *(f"{p}_version" for p in PACKAGES))
 DEVICE_COLUMNS = ("backend", "device")
-CPU_COLUMNS = ("cpu_vendor", "cpu_family_model", "cpu_simd", "xla_flags")
+CPU_COLUMNS = ("cpu_vendor", "cpu_family_model", "cpu_simd", "xla_flags", "cpu_cores")
 GIT_COLUMNS = ("git_commit", "git_dirty")
 PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *CPU_COLUMNS, *GIT_COLUMNS)
 # x86 and Arm vector extensions LLVM can target from XLA's CPU backend (``/proc/cpuinfo`` names)
@@ -92,9 +97,11 @@ def _cpu_name() -> str:
 
 
 def _cpu() -> dict[str, str]:
-    """``cpu_vendor``, ``cpu_family_model``, ``cpu_simd`` (see :data:`SIMD_FLAGS`) and
-    ``xla_flags`` of this machine and process."""
+    """``cpu_vendor``, ``cpu_family_model``, ``cpu_simd`` (see :data:`SIMD_FLAGS`),
+    ``xla_flags`` and ``cpu_cores`` of this machine and process."""
     import os
+
+    from ._env import cpu_count
 
     info: dict[str, str] = {}
     try:
@@ -117,6 +124,7 @@ def _cpu() -> dict[str, str]:
         "cpu_family_model": family_model or UNKNOWN,
         "cpu_simd": " ".join(f for f in SIMD_FLAGS if f in flags) if flags else UNKNOWN,
         "xla_flags": os.environ.get("XLA_FLAGS", ""),
+        "cpu_cores": str(cpu_count()),
     }
 
 

@@ -195,6 +195,7 @@ _PROVENANCE = {
     "cpu_family_model": ("-", "CPU family/model"),
     "cpu_simd": ("-", "SIMD extensions XLA may use (e.g. avx2, avx512f)"),
     "xla_flags": ("-", "XLA_FLAGS of the process"),
+    "cpu_cores": ("-", "cores the process ran on (its affinity mask: XLA's thread pools)"),
     "git_commit": ("-", "commit of the suite that ran it"),
     "git_dirty": ("-", "uncommitted changes outside results/ when it ran"),
 }

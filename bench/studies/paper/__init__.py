@@ -46,7 +46,7 @@ matplotlib.use("Agg")
 # The import order is the registration order: the report's and the figures' order.
 from . import energy, symplectic, second_order, coordinates, damped, loss  # noqa: E402
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: E402, F401
-from . import pixels  # noqa: E402, F401
+from . import pixels, _hnn_diagnosis  # noqa: E402, F401
 
 # isort: on
 from ._budget import (  # noqa: E402
