@@ -406,6 +406,23 @@ def test_full_disk_real_sweep_dataset_then_resume(tmp_path):
 
 
 # ------------------------------------------------------------------------- kill and resume
+def test_orphan_temporaries_of_dead_writers_are_cleared(tmp_path):
+    """A kill mid-write leaves ``.tmp-<pid>-*``; the next sweep removes a dead writer's only."""
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    rows = tmp_path / _store.ROWS
+    rows.mkdir(parents=True)
+    orphan = rows / f".tmp-{dead.pid}-abc.json"
+    live = rows / f".tmp-{os.getpid()}-def.json"
+    unnamed = rows / ".tmp-ghi.json"
+    for p in (orphan, live, unnamed):
+        p.write_text("{")
+    assert _store.clear_orphans(rows) == [orphan]
+    assert not orphan.exists() and live.exists() and unnamed.exists()
+    # this process's own temporaries carry its pid
+    assert _store._tmp_prefix() == f".tmp-{os.getpid()}-"
+
+
 def test_resume_after_kill(tmp_path):
     """SIGKILL in the middle of a sweep: the next sweep stores exactly the missing rows."""
     log = tmp_path / "executed.log"

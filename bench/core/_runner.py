@@ -141,6 +141,8 @@ def sweep(
     check_choice("executor", executor, EXECUTORS)
     results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
     cache_root = Path(cache_root or systems.cache_root()).resolve()
+    for d in (results_dir, results_dir / _store.ROWS):  # a killed sweep's half-written files
+        _store.clear_orphans(d)
     done = _store.done_hashes(results_dir)
     todo, seen = [], set()
     for c in configs:

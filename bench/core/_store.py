@@ -103,11 +103,42 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
+TMP_PREFIX = ".tmp-"
+
+
+def _tmp_prefix() -> str:
+    """Temporaries are named ``.tmp-<pid>-*``: :func:`clear_orphans` can tell a dead writer's."""
+    return f"{TMP_PREFIX}{os.getpid()}-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):  # another user's process, or no way to ask: keep
+        return True
+    return True
+
+
+def clear_orphans(directory) -> list[Path]:
+    """Remove the temporaries in ``directory`` whose writer no longer runs (a kill mid-write
+    leaves its ``.tmp-<pid>-*`` behind; a killed sweep's next run calls this). A live
+    process's temporaries, and names without a pid, stay. Returns the removed paths."""
+    removed = []
+    for p in Path(directory).glob(f"{TMP_PREFIX}*"):
+        pid = p.name[len(TMP_PREFIX) :].split("-", 1)[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            p.unlink(missing_ok=True)
+            removed.append(p)
+    return removed
+
+
 def _atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write to a temporary file, fsync, rename: ``path`` holds all of ``data`` or its old
     content, never a prefix (a full disk leaves no partial file; the temporary is removed)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=path.suffix)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=_tmp_prefix(), suffix=path.suffix)
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -404,7 +435,7 @@ def rebuild_tables(results_dir) -> pd.DataFrame:
             lambda p: checkpoint_curves_frame(rows).to_parquet(p, index=False),
         ),
     ):
-        fd, tmp = tempfile.mkstemp(dir=results_dir, prefix=".tmp-", suffix=name)
+        fd, tmp = tempfile.mkstemp(dir=results_dir, prefix=_tmp_prefix(), suffix=name)
         os.close(fd)
         try:
             writer(tmp)
