@@ -250,16 +250,16 @@ def _cell_text(v) -> str:
     return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
 
 
-def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> str:
-    """The likely cause of two verdicts of one claim disagreeing."""
+def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> list[str]:
+    """The likely causes of two verdicts of one claim disagreeing."""
     if _no_runs(a) or _no_runs(b):
         # name the side that has some runs (pending or cells missing) before one with none
         sides = [(v, lab) for v, lab in ((a, label_a), (b, label_b)) if _no_runs(v)]
         v, label = next(((v, lab) for v, lab in sides if not _absent(v)), sides[0])
         if _is_pending(v):
-            return f"{v.verdict} at {label}: not comparable yet"
+            return [f"{v.verdict} at {label}: not comparable yet"]
         what = "no runs" if _absent(v) else "cells missing"
-        return f"{what} at {label}: not comparable"
+        return [f"{what} at {label}: not comparable"]
     causes = []
     if a.discriminating != b.discriminating:
         causes.append(
@@ -275,7 +275,7 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> s
         "budget (training steps, data, width and seeds differ between the profiles: "
         "effects that need the longer training show only at the paper profile)"
     )
-    return "; ".join(causes)
+    return causes
 
 
 def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
@@ -342,8 +342,8 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
                 continue
             if a is None or b is None or _outcome(a) != _outcome(b) or _no_runs(a) != _no_runs(b):
                 note = metric_note(maps[base], key) or metric_note(maps[i], key)
-                causes.append(_cause(a, b, labels[base], labels[i], note))
-        causes = list(dict.fromkeys(causes))
+                causes += _cause(a, b, labels[base], labels[i], note)
+        causes = list(dict.fromkeys(causes))  # each cause once, whichever folders share it
         out.append(
             "| "
             + " | ".join([_md_escape(key), *cells, agree, _md_escape("; ".join(causes)) or "-"])

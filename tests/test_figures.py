@@ -216,3 +216,20 @@ def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
     row1 = next(r for r in rows if r.startswith("| 1 |"))
     assert row3.endswith("| yes | - |"), row3
     assert "| **no** |" in row1 and "budget" in row1, row1
+
+
+def test_a_cause_shared_by_two_compared_folders_is_named_once():
+    """Here against two folders that disagree with it for the same reason: the budget cause
+    appears once, a failed-run count only where it differs."""
+    from bench._report import _comparison_section
+    from bench.studies.paper._stats import Verdict
+
+    def v(verdict, n_failed=0):
+        return Verdict(3, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p", n_failed=n_failed)
+
+    others = [("a", "paper", [v("partly reproduced", 1)]), ("b", "paper", [v("partly reproduced")])]
+    rows = _comparison_section([v("inconclusive")], "quick", others)
+    row3 = next(r for r in rows if r.startswith("| 3 |"))
+    cause = row3.rstrip(" |").rsplit(" | ", 1)[1]
+    assert cause.count("budget (") == 1, row3
+    assert cause.count("failed runs (0 vs 1)") == 1, row3

@@ -173,3 +173,31 @@ def test_claim_4_is_judged_again_on_the_longer_learning_runs(scenarios):
     first = dict(got[got["position"] == 0][["key", "verdict"]].to_numpy())
     last = dict(got[got["position"] == 1][["key", "verdict"]].to_numpy())
     assert first != last  # the scenarios disagree: the test can fail
+
+
+def test_paper_budget_note_takes_the_curves_cells_only_and_names_each_folder():
+    from bench.studies.learning import _paper_budget_note
+
+    def row(model, folder, err, **kw):
+        base = {"system": "chain_pendulum", "k": 2, "loss": "l2", "friction": 0.0,
+                "noise": 0.0, "coordinates": "velocity", "system_params": "()",
+                "status": "ok", "steps": 8000, "n_train": 800}  # fmt: skip
+        return {**base, "model": model, "_folder": folder, "rollout_error": err, **kw}
+
+    ref = pd.DataFrame(
+        [
+            row("hnn_so", "paper_gpu", 0.01),
+            row("hnn_so", "paper_gpu", 0.04),
+            row("hnn_so", "paper", 0.02),
+            # the damped campaign's HNN+SO shares system, k and model: not the curves' cell
+            row("hnn_so", "paper", 10.0, friction=0.4),
+            row("hnn_so", "paper", 10.0, noise=0.01),
+            row("node_so", "paper", 10.0, system="spring_pendulum"),
+        ]
+    )
+    note = _paper_budget_note(ref, "chain_pendulum", "()")
+    assert note == (
+        "HNN+SO 0.02 (8000 steps, n_train 800, n=1, `paper`); "
+        "HNN+SO 0.02 (8000 steps, n_train 800, n=2, `paper_gpu`)"
+    )
+    assert _paper_budget_note(ref.iloc[0:0], "chain_pendulum", "()") == ""

@@ -67,6 +67,10 @@ from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
 from .paper._rules import _restrict, claim_studies, evaluate_claims  # noqa: E402
 from .paper._stats import MODEL_LABELS  # noqa: E402
 
+# The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
+# runs share system, k and model with them)
+_PLAIN = {"k": 2, "loss": "l2", "friction": 0.0, "noise": 0.0, "coordinates": "velocity"}
+
 LEARNING_MODELS = ("node_so", "hnn_so")
 # Claims whose rule compares only LEARNING_MODELS (claim 4: the chain and spring edges of
 # NODE+SO over HNN+SO): judged again on the learning-curve experiment's longer runs.
@@ -334,7 +338,7 @@ def fig_learning_curves(results_dir) -> list[Path]:
         return []
     ref = _paper_reference(results_dir)
     if len(ref):
-        ref = select(ref, k=2, loss="l2", model=list(PAPER_MODELS))
+        ref = select(ref, model=list(PAPER_MODELS), **_PLAIN)
         ref = ref.assign(
             cell=[
                 _cell_name(a, b) for a, b in zip(ref["system"], ref["system_params"], strict=True)
@@ -465,6 +469,21 @@ def _seeds_cell(vals) -> str:
     return f"{_fmt(_gmean(vals))} [{', '.join(_fmt(v) for v in vals)}]"
 
 
+def _paper_budget_note(ref: pd.DataFrame, system: str, params: str) -> str:
+    """The final errors of the paper-budget runs of ``ref`` (:func:`_paper_reference`) in the
+    curves' cell, per model and folder; "" where there are none."""
+    if not len(ref):
+        return ""
+    r = select(ref, system=system, model=list(LEARNING_MODELS), **_PLAIN)
+    r = r[r["system_params"].astype(str) == params] if len(r) else r
+    return "; ".join(
+        f"{MODEL_LABELS.get(m, m)} {_fmt(_gmean(g['rollout_error']))} "
+        f"({int(g['steps'].median())} steps, n_train {int(g['n_train'].median())}, "
+        f"n={len(g)}, `{folder}`)"
+        for (m, folder), g in r.groupby(["model", "_folder"])
+    )
+
+
 def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, profile) -> list:
     """The dedicated experiment, per cell: the error of each model at each checkpoint over
     seeds, the NODE+SO / HNN+SO ratio, the same seeds' full-schedule runs at the profile's own
@@ -511,7 +530,7 @@ def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, pro
             lines.append(f"| {name} | NODE+SO / HNN+SO | " + " | ".join(cells) + " |")
         # the same seeds' full-schedule runs at the profile's own budget
         mine = rows[(rows["system"] == system) & (rows["system_params"].astype(str) == params)]
-        own = select(runs, system=system, k=2, loss="l2", model=list(LEARNING_MODELS))
+        own = select(runs, system=system, model=list(LEARNING_MODELS), **_PLAIN)
         if len(own) and base_steps and base_steps < budget:
             own = own[
                 (own["steps"] == base_steps)
@@ -532,17 +551,9 @@ def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, pro
                     )
             if parts:
                 notes.append(f"- {name}, same seeds: " + "; ".join(parts) + ".")
-        if len(ref):
-            r = select(ref, system=system, k=2, loss="l2", model=list(LEARNING_MODELS))
-            r = r[r["system_params"].astype(str) == params] if len(r) else r
-            parts = [
-                f"{MODEL_LABELS.get(m, m)} {_fmt(_gmean(g['rollout_error']))} "
-                f"({int(g['steps'].median())} steps, n_train {int(g['n_train'].median())}, "
-                f"n={len(g)}, `{g['_folder'].iloc[0]}`)"
-                for m, g in r.groupby("model")
-            ]
-            if parts:
-                notes.append(f"- {name}, paper budget: " + "; ".join(parts) + ".")
+        note = _paper_budget_note(ref, system, params)
+        if note:
+            notes.append(f"- {name}, paper budget: {note}.")
     lines.append("")
     if notes:
         lines += [
