@@ -432,7 +432,7 @@ def _run_experiments(args, names, *, order, seeds=None) -> dict:
 
 def _cmd_estimate(args) -> int:
     from .core._experiments import SELECTIONS, replication_seeds
-    from .studies.paper._campaign import format_plan, plan
+    from .studies.paper._campaign import format_plan, plan, replication_order
 
     check_choice("profile", args.profile, list(PROFILES))
     if args.workers < 1:
@@ -442,7 +442,10 @@ def _cmd_estimate(args) -> int:
     print(format_plan(df, args.profile, args.workers))
     seeds = replication_seeds(args.profile)
     if args.profile in SELECTIONS and seeds:  # a campaign's second phase (make paper-core)
-        rep = plan(args.profile, args.results, workers=args.workers, seeds=seeds, prior=df)
+        order = replication_order(args.results, args.profile)
+        rep = plan(
+            args.profile, args.results, workers=args.workers, seeds=seeds, prior=df, order=order
+        )
         print()
         print(format_plan(rep, args.profile, args.workers, seeds=seeds))
     return 0
@@ -450,23 +453,30 @@ def _cmd_estimate(args) -> int:
 
 def _cmd_campaign(args) -> int:
     from .core._experiments import replication_seeds
-    from .studies.paper._campaign import campaign_experiments, priority
+    from .studies.paper._campaign import (
+        CAMPAIGN_CLAIMS,
+        campaign_experiments,
+        priority,
+        replication_order,
+    )
 
     _check_sweep_args(args)
-    names = campaign_experiments(args.profile)
-    if not names:
+    if not campaign_experiments(args.profile):
         raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
-    seeds = None
+    seeds, order = None, CAMPAIGN_CLAIMS
     if args.replication:
         seeds = replication_seeds(args.profile) or None
         if seeds is None:
             allowed = [p for p in PROFILES if replication_seeds(p)]
             check_choice("profile with replication seeds", args.profile, allowed)
     _usable_results(args)
+    if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
+        order = replication_order(args.results, args.profile)
+    names = campaign_experiments(args.profile, order)
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
     print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
     # claim by claim, longest runs first within a claim
-    res = _run_experiments(args, names, order=priority(args.profile, seeds), seeds=seeds)
+    res = _run_experiments(args, names, order=priority(args.profile, seeds, order), seeds=seeds)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0

@@ -207,3 +207,42 @@ def test_the_replication_phase_runs_the_same_cells_on_seeds_5_to_9(tmp_path):
     assert list(df["calibration"]) == pytest.approx(list(prior["calibration"]))
     assert prior.iloc[-1]["calibration"] != 1.0
     assert "replication seeds 5, 6, 7, 8, 9" in C.format_plan(df, "paper-core", 2, seeds)
+
+
+def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
+    """Claims whose seeds 0-4 verdict is signed are replicated first; inconclusive and pending
+    ones (which no replication can change) after them, each group in campaign order."""
+    from bench.core import _query
+    from bench.studies.paper import _replication
+    from bench.studies.paper._stats import Verdict
+
+    def v(claim, verdict, pending=None):
+        return Verdict(claim, "t", verdict, 0.0, 0.0, 0.0, 5, "d", pending=pending)
+
+    primary = [
+        v(6, "inconclusive"),
+        v(4, "partly reproduced"),
+        v(2, "not reproduced"),
+        v(5, "pending (19 of 50 runs)", pending=(19, 50)),
+        v(10, "inconclusive (changes without a seed)"),
+        v(7, "reproduced"),
+    ]
+    judged = _replication.Judgement(final=primary, primary={x.key: x for x in primary})
+    monkeypatch.setattr(_replication, "judge", lambda *a, **k: judged)
+    monkeypatch.setattr(_query, "load_tables", lambda d: (None, None, None))
+    # an empty folder: the campaign's own order
+    assert C.replication_order(tmp_path) == C.CAMPAIGN_CLAIMS
+    (tmp_path / "runs.parquet").write_bytes(b"")  # a folder with runs (holds_runs)
+    order = C.replication_order(tmp_path)
+    assert order[:3] == (4, 2, 7) and sorted(order) == sorted(C.CAMPAIGN_CLAIMS)
+    assert order[3:] == tuple(c for c in C.CAMPAIGN_CLAIMS if c not in (4, 2, 7))
+    names = C.campaign_experiments("paper-core", order)
+    assert [E.get(n).claim for n in names][:3] == [4, 2, 7]
+    # a shared run goes with the first claim that reads it: claim 4 brings the L2 cells
+    seeds = E.replication_seeds("paper-core")
+    rep = C.campaign_runs("paper-core", seeds, order)
+    first = {c.config_hash for c in E.expand("coordinates", "paper-core", seeds=seeds)}
+    assert {c.config_hash for n, c in rep if n == "coordinates"} == first
+    key = C.priority("paper-core", seeds, order)
+    ordered = sorted((c for _, c in rep), key=key, reverse=True)
+    assert all(c.config_hash in first for c in ordered[: len(first)])

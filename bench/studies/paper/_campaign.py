@@ -11,9 +11,11 @@ NODE on damped data, k = 1, 3, 4) stay in the full ``paper`` profile, for a GPU 
 
 Order (:data:`CAMPAIGN_CLAIMS`): the claims that the learning-curve study found unsettled at
 quick first (6, 4, 1, 3), then the HNN seed's cheap tasks (10), then 2, 5, 9, 7, 8; within a
-claim, the longest runs first. A run that several claims share is counted, and run, with the
-first of them. Runs are content-addressed, so a campaign killed at any moment loses only the
-runs in flight; run it again to resume. ``make paper-core`` then runs the same cells on the
+claim, the longest runs first. The replication phase (:func:`replication_order`) takes the
+claims with a signed verdict first: an inconclusive one cannot change by its replication.
+A run that several claims share is counted, and run, with the first of them. Runs are
+content-addressed, so a campaign killed at any moment loses only the runs in flight; run it
+again to resume. ``make paper-core`` then runs the same cells on the
 profile's replication seeds (``seeds=``: 5-9), so that each verdict is judged again on a
 disjoint seed set; :func:`plan` counts that phase apart.
 
@@ -54,23 +56,52 @@ TRAIN_EVAL_COLUMNS = (
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12)
 
 
-def campaign_experiments(profile: str = "paper-core") -> list[str]:
-    """The registered experiments with a claim and runs under ``profile``, in claim order."""
+def campaign_experiments(profile: str = "paper-core", order=CAMPAIGN_CLAIMS) -> list[str]:
+    """The registered experiments with a claim and runs under ``profile``, in claim order
+    (``order``: :data:`CAMPAIGN_CLAIMS`, or a replication phase's :func:`replication_order`)."""
     names = [n for n in available() if get(n).claim is not None and expand(n, profile)]
+    order = tuple(order)
 
     def rank(n):
         c = get(n).claim
-        return (CAMPAIGN_CLAIMS.index(c) if c in CAMPAIGN_CLAIMS else len(CAMPAIGN_CLAIMS), c, n)
+        return (order.index(c) if c in order else len(order), c, n)
 
     return sorted(names, key=rank)
 
 
-def campaign_runs(profile: str = "paper-core", seeds=None) -> list[tuple[str, object]]:
+def replication_order(results_dir, profile: str = "paper-core") -> tuple[int, ...]:
+    """The claims in the order a replication phase settles them: first those whose verdict on
+    the profile's own seeds is signed (reproduced, partly reproduced or not reproduced), then
+    the rest (inconclusive or pending), each group in :data:`CAMPAIGN_CLAIMS` order. An
+    inconclusive verdict stays inconclusive whatever its replication says (a verdict that does
+    not replicate is *inconclusive (does not replicate)*), so its replication runs cannot change
+    a verdict and wait until the others are stored; they are still run. Runs shared between
+    claims go with the first claim that reads them, as in the first phase."""
+    from ...core._query import load_tables
+    from ._replication import judge
+    from ._stats import NOT_REPRODUCED, PARTLY, REPRODUCED
+
+    signed: set[int] = set()
+    if results_dir is not None and _store.holds_runs(Path(results_dir)):
+        runs, curves, _ = load_tables(Path(results_dir))
+        j = judge(runs, curves, profile, loso=False)
+        signed = {
+            v.claim
+            for v in j.primary.values()
+            if v.pending is None and v.verdict in (REPRODUCED, PARTLY, NOT_REPRODUCED)
+        }
+    first = tuple(c for c in CAMPAIGN_CLAIMS if c in signed)
+    return first + tuple(c for c in CAMPAIGN_CLAIMS if c not in signed)
+
+
+def campaign_runs(
+    profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS
+) -> list[tuple[str, object]]:
     """``(experiment, RunConfig)`` of every unique run of the campaign, in the order they start:
-    by claim (:data:`CAMPAIGN_CLAIMS`), then longest first (the estimate); on ``seeds`` instead
-    of the profile's (its replication seeds)."""
+    by claim (``order``), then longest first (the estimate); on ``seeds`` instead of the
+    profile's (its replication seeds)."""
     out, seen = [], set()
-    for name in campaign_experiments(profile):
+    for name in campaign_experiments(profile, order):
         cfgs = [c for c in expand(name, profile, seeds=seeds) if c.config_hash not in seen]
         seen.update(c.config_hash for c in cfgs)
         cfgs.sort(key=run_seconds, reverse=True)
@@ -78,11 +109,11 @@ def campaign_runs(profile: str = "paper-core", seeds=None) -> list[tuple[str, ob
     return out
 
 
-def priority(profile: str = "paper-core", seeds=None):
+def priority(profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS):
     """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
-    first): earlier claims first, longest runs first within a claim."""
+    first): earlier claims first (``order``), longest runs first within a claim."""
     rank = {}
-    for i, name in enumerate(campaign_experiments(profile)):
+    for i, name in enumerate(campaign_experiments(profile, order)):
         for c in expand(name, profile, seeds=seeds):
             rank.setdefault(c.config_hash, i)
 
@@ -93,7 +124,12 @@ def priority(profile: str = "paper-core", seeds=None):
 
 
 def plan(
-    profile: str = "paper-core", results_dir=None, workers: int = 2, seeds=None, prior=None
+    profile: str = "paper-core",
+    results_dir=None,
+    workers: int = 2,
+    seeds=None,
+    prior=None,
+    order=CAMPAIGN_CLAIMS,
 ) -> pd.DataFrame:
     """One row per claim of the campaign: ``claim, experiments, runs`` (every run its verdict
     reads), ``stored`` (of those), ``new_runs`` (those no earlier claim brings),
@@ -109,7 +145,7 @@ def plan(
     ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``. On
     ``seeds`` instead of the profile's: the campaign's replication phase, whose claims without
     a measured run take their calibration from ``prior`` (the plan of the profile's seeds)."""
-    runs = campaign_runs(profile, seeds)
+    runs = campaign_runs(profile, seeds, order)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
@@ -129,7 +165,7 @@ def plan(
     # runs need it, and is left to pay while none of its runs is stored
     charged = set()
     paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done}
-    for name in campaign_experiments(profile):
+    for name in campaign_experiments(profile, order):
         cells = expand(name, profile, seeds=seeds)  # every run the claim reads, shared too
         mine = [c for n, c in runs if n == name]  # the runs it brings first
         left = [c for c in mine if c.config_hash not in done]
@@ -220,8 +256,9 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None) -> str
     which = f"{profile}, replication seeds {', '.join(map(str, seeds))}" if seeds else profile
     if not len(df):
         return f"{which}: no runs"
+    order = "campaign order, signed verdicts first" if seeds else "campaign order"
     lines = [
-        f"{which}: runs and hours per claim, in campaign order (hours: the estimator's; done: "
+        f"{which}: runs and hours per claim, in {order} (hours: the estimator's; done: "
         "the stored runs' wall seconds, waiting included; t+e: of those, training and "
         f"evaluation; wall hours left at {workers} idle workers)",
         f"{'claim':>6} {'runs':>5} {'stored':>6} {'new':>5} {'CPU h':>6} {'done h':>6} "
