@@ -151,10 +151,10 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
     from ...core._execute import _build, train_config
     from ...core._train import _Batches, _compiled_block, optimizer, prepare
 
-    _, data, scene, model = _build(cfg, cache_root)
-    tc = train_config(cfg)
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {', '.join(VARIANTS)}; got {variant!r}")
+    _, data, scene, model = _build(cfg, cache_root)
+    tc = train_config(cfg)
     if variant == "reference_init":
         model = reference_biases(model, jax.random.PRNGKey(10_000 + cfg.seed))
     elif variant == "lr_1e-3":
