@@ -160,6 +160,20 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
     assert left == pytest.approx(
         (total_seconds(cfgs) - run_seconds(lnn) - data_seconds(lnn)) / 3600
     )
+    # calibration: the run that generated its dataset is set against its estimate plus the
+    # dataset's (its set-up, wall less training, shows it); one that found it made, its own
+    lnn1 = next(c for c in cfgs if c.model == "lnn" and c.seed == 1)
+    lnn1_node = next(c for c in cfgs if c.model == "node_so" and c.seed == 1)
+    d = data_seconds(lnn1)
+    for c, setup in ((lnn1, d), (lnn1_node, 2.0)):  # lnn made seed 1's data, node_so found it
+        r = run_seconds(c)
+        row = {**c.to_dict(), "config_hash": c.config_hash, "status": "ok"}
+        _store.write_row(
+            tmp_path,
+            {**row, "wall_seconds": setup + r, "train_seconds": r, "cpu_seconds": setup + r},
+        )
+    cal = C.plan("paper-core", tmp_path, workers=2).set_index("claim").loc[9, "calibration"]
+    assert cal == pytest.approx(1.0, rel=0.01)  # without the dataset: 3.4x
 
 
 def test_symplectic_runs_are_costed_as_measured_with_and_without_the_penalty():
