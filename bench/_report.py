@@ -261,6 +261,24 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> l
         what = "no runs" if _absent(v) else "cells missing"
         return [f"{what} at {label}: not comparable"]
     causes = []
+    # A verdict the replication checks demoted (does not replicate, changes without a seed):
+    # where its own seeds read what the other folder reads, the folders agree in direction and
+    # the disagreement is that reading's stability, not the budget.
+    agree_but_unstable = False
+    for v, lab, o, o_lab in ((a, label_a, b, label_b), (b, label_b, a, label_a)):
+        if v.primary is None:
+            continue
+        why = v.verdict.split(" (", 1)[1].rstrip(")")
+        if v.primary == _outcome(o):
+            agree_but_unstable = o.primary is None
+            causes.append(
+                f"stability: {lab} reads {v.primary} on its own seeds, as {o_lab} does, but "
+                f"{why} ({v.readings})"
+            )
+        else:
+            causes.append(f"stability: at {lab} the verdict {why} ({v.readings})")
+    if agree_but_unstable:
+        return causes
     if a.discriminating != b.discriminating:
         causes.append(
             f"test set: discriminating {_disc_mark(a)} at {label_a}, {_disc_mark(b)} at {label_b}"
@@ -291,7 +309,10 @@ def _comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "",
         "Each claim's verdict from these runs and from the other results folders (same rules; "
         "a folder without a claim's runs says *no runs*). Where they disagree, the likely cause "
-        "is named: missing runs, a test set that does not discriminate, failed runs, the metric "
+        "is named: missing runs, a test set that does not discriminate, failed runs, the "
+        "stability of one folder's reading (it does not replicate on seeds 5-9 or changes "
+        "without one seed; where its own seeds read as the other folder does, that is the only "
+        "cause named), the metric "
         "(claim 4: geometric-mean error vs MSE), or the budget (the paper profile trains 8000 "
         "steps on 800 trajectories at width 256 with 5 seeds; quick 1000 steps on 200 at width "
         "128 with 5). *agree* compares the verdicts (reproduced, partly reproduced, not "

@@ -233,3 +233,54 @@ def test_a_cause_shared_by_two_compared_folders_is_named_once():
     cause = row3.rstrip(" |").rsplit(" | ", 1)[1]
     assert cause.count("budget (") == 1, row3
     assert cause.count("failed runs (0 vs 1)") == 1, row3
+
+
+def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_budget():
+    """Quick's seeds 0-4 read *not reproduced*, as the paper budget does, but its verdict
+    changes without a seed: the cause is the reading's stability, and the budget is not named.
+    Where the demoted reading's own seeds differ from the other folder, both are named."""
+    from bench._report import _comparison_section
+    from bench.studies.paper._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
+    from bench.studies.paper._stats import Verdict
+
+    def v(verdict, claim, primary=None, readings=""):
+        return Verdict(
+            claim,
+            "t",
+            verdict,
+            0.1,
+            0.0,
+            0.2,
+            5,
+            "d",
+            profile="p",
+            primary=primary,
+            readings=readings,
+        )
+
+    quick = [
+        v(
+            CHANGES_WITHOUT_A_SEED,
+            9,
+            "not reproduced",
+            "seeds 0-4: not reproduced; without seed 1: inconclusive",
+        ),
+        v(
+            DOES_NOT_REPLICATE,
+            3,
+            "inconclusive",
+            "seeds 0-4: inconclusive; seeds 5-9: partly reproduced",
+        ),
+    ]
+    rows = _comparison_section(
+        [v("not reproduced", 9), v("partly reproduced", 3)],
+        "paper-core",
+        [("a", "quick", quick)],
+    )
+    row9 = next(r for r in rows if r.startswith("| 9 |"))
+    row3 = next(r for r in rows if r.startswith("| 3 |"))
+    assert "| **no** |" in row9 and "reads not reproduced on its own seeds" in row9, row9
+    assert "changes without a seed (seeds 0-4: not reproduced; without seed 1" in row9, row9
+    assert "budget" not in row9, row9
+    assert "the verdict does not replicate (seeds 0-4: inconclusive; seeds 5-9" in row3, row3
+    assert "budget" in row3, row3

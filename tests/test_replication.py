@@ -109,6 +109,10 @@ def test_disagreeing_seed_sets_do_not_replicate(
     assert j.replicates("3") is False
     assert final["3"].detail.startswith(f"seeds 0-4: {primary}; seeds 5-9: {replication}. ")
     assert final["3"].detail.endswith(j.primary["3"].detail)
+    # the demoted reading and the readings behind it, for the report's causes
+    assert final["3"].primary == primary
+    assert final["3"].readings == f"seeds 0-4: {primary}; seeds 5-9: {replication}"
+    assert final["5"].primary is None and final["5"].readings == ""
     # the rest of the verdict is the primary seeds' reading
     assert final["3"].effect == j.primary["3"].effect
     assert final["3"].n_seeds == 5
@@ -236,6 +240,10 @@ def test_a_verdict_that_changes_without_a_seed_is_inconclusive(
     if moved:  # the detail keeps the five-seed reading and names each seed and its reading
         assert v.detail.startswith("seeds 0-4: reproduced; without seed 1: inconclusive;")
         assert not settled(v.verdict)
+        assert v.primary == R.REPRODUCED and v.detail.startswith(v.readings + ". ")
+        assert v.readings.endswith("without seed 4: inconclusive")
+    else:
+        assert v.primary is None and v.readings == ""
     # without the leave-one-out check nothing is demoted
     assert _final(judge(runs, curves, PROFILE, loso=False))["3"].verdict == R.REPRODUCED
 

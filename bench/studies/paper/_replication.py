@@ -144,20 +144,27 @@ def judge(
     for v in prim:
         r = replication.get(v.key)
         if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
+            readings = f"seeds {_span(primary_seeds)}: {v.verdict}; seeds {_span(rep_seeds)}: " + (
+                r.verdict
+            )
             v = dataclasses.replace(
                 v,
                 verdict=DOES_NOT_REPLICATE,
-                detail=f"seeds {_span(primary_seeds)}: {v.verdict}; seeds {_span(rep_seeds)}: "
-                f"{r.verdict}. {v.detail}",
+                detail=f"{readings}. {v.detail}",
+                primary=v.verdict,
+                readings=readings,
             )
         elif settled(v.verdict) and (
             moved := [(s, w) for s, w in out_loso.get(v.key, []) if w.verdict != v.verdict]
         ):
             without = "; ".join(f"without seed {s}: {w.verdict}" for s, w in moved)
+            readings = f"seeds {_span(primary_seeds)}: {v.verdict}; {without}"
             v = dataclasses.replace(
                 v,
                 verdict=CHANGES_WITHOUT_A_SEED,
-                detail=f"seeds {_span(primary_seeds)}: {v.verdict}; {without}. {v.detail}",
+                detail=f"{readings}. {v.detail}",
+                primary=v.verdict,
+                readings=readings,
             )
         final.append(v)
     return Judgement(final, primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending)

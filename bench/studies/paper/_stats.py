@@ -132,7 +132,10 @@ class Verdict:
     ``variant`` names a sub-verdict (claim 4: metric and spring initial state); ``discriminating``
     is True/False, or None when no trivial-predictor runs exist; ``n_failed`` counts the runs
     scored as the worst error; ``pending`` is ``(stored, declared)`` runs of the claim while a
-    campaign (a selection such as ``paper-core``) has not stored them all, else None."""
+    campaign (a selection such as ``paper-core``) has not stored them all, else None;
+    ``primary`` is the verdict on the profile's own seeds where the replication checks demoted
+    it to an inconclusive one, with ``readings`` the seed sets' verdicts that did
+    (:func:`bench.studies.paper._replication.judge`), else None and ""."""
 
     claim: int
     title: str
@@ -149,6 +152,8 @@ class Verdict:
     discriminating: bool | None = None
     parts: tuple = ()  # the tested parts (``_Part``), for the report's parts table
     pending: tuple[int, int] | None = None
+    primary: str | None = None
+    readings: str = ""
 
     @property
     def key(self) -> str:
