@@ -260,3 +260,21 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     key = C.priority("paper-core", seeds, order)
     ordered = sorted((c for _, c in rep), key=key, reverse=True)
     assert all(c.config_hash in first for c in ordered[: len(first)])
+
+
+def test_plan_reads_a_stored_run_of_every_claim(tmp_path):
+    """One stored run of each campaign experiment (a pixel task's included, whose data are its
+    own and whose config describes no trajectory dataset): the plan counts each, and fails on
+    none (the status once stopped at the first stored pixel run)."""
+    from bench.core import _store
+
+    runs = C.campaign_runs("paper-core")
+    first = {}
+    for name, c in runs:
+        first.setdefault(name, c)
+    assert {"pixel_pendulum_hnn", "pixel_pendulum_vin"} <= set(first)
+    for c in first.values():
+        _store.write_row(tmp_path, {**c.to_dict(), "config_hash": c.config_hash, "status": "ok"})
+    plan = C.plan("paper-core", tmp_path, workers=2)
+    total = plan.set_index("claim").loc["total"]
+    assert total["stored"] >= len(first)

@@ -164,7 +164,9 @@ def plan(
     # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose
     # runs need it, and is left to pay while none of its runs is stored
     charged = set()
-    paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done}
+    # (only those datasets: a run with its own data, the pixel tasks', need not have a
+    # DatasetConfig that describes it)
+    paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done and data_seconds(c)}
     for name in campaign_experiments(profile, order):
         cells = expand(name, profile, seeds=seeds)  # every run the claim reads, shared too
         mine = [c for n, c in runs if n == name]  # the runs it brings first
