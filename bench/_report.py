@@ -33,13 +33,13 @@ from ._tables import (
 )
 from .core._env import cpu_count
 from .core._experiments import get
-from .core._provenance import compare_results, provenance_markdown
+from .core._provenance import compare_provenance, provenance_markdown
 from .core._query import (
     experiment_rows,
     load_tables,
     select,
 )
-from .core._store import REFERENCE_ROOT, compare_folders
+from .core._store import REFERENCE_ROOT, compare_folders, load_runs
 from .core._studies import studies
 from .studies.paper import (
     TRIVIAL_FACTOR,
@@ -395,10 +395,13 @@ def _extra_sections(results_dir: Path) -> list[str]:
 def _provenance_section(results_dir: Path, runs: pd.DataFrame, others) -> list[str]:
     """Versions, backend and commit of the runs per profile, and where compared folders differ."""
     lines = ["## Provenance", "", provenance_markdown(runs), ""]
+    here = _folder_label(results_dir)
     for d in others:
-        warnings = compare_results(results_dir, d)
+        # named as the verdict table names them: a committed report holds no machine's paths
+        there = _folder_label(d)
+        warnings = compare_provenance(load_runs(results_dir), load_runs(d), names=(here, there))
         if warnings:
-            lines += [f"Differences from `{d}`:", "", *[f"- {w}" for w in warnings], ""]
+            lines += [f"Differences from `{there}`:", "", *[f"- {w}" for w in warnings], ""]
     return lines
 
 

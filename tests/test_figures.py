@@ -284,3 +284,16 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
     assert "budget" not in row9, row9
     assert "the verdict does not replicate (seeds 0-4: inconclusive; seeds 5-9" in row3, row3
     assert "budget" in row3, row3
+
+
+def test_report_names_no_folder_by_its_absolute_path(tmp_path):
+    """The report is committed: a compared folder whose provenance differs is named as the
+    verdict table names it (relative to ``results/``, or by its name), never by this
+    machine's absolute path."""
+    runs, curves = synthetic_tables("smoke", seeds=(0, 1), noise=0.05)
+    _store(tmp_path / "a", runs.assign(jax_version="0.10.2"), curves)
+    _store(tmp_path / "a" / "gpu", runs.assign(jax_version="0.11.2"), curves)
+    text = write_report(tmp_path / "a", compare=[tmp_path / "a" / "gpu"]).read_text()
+    assert "Differences from `gpu`:" in text
+    assert "jax_version differs: 0.10.2 (a) vs 0.11.2 (gpu)" in text
+    assert str(tmp_path) not in text
