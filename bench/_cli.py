@@ -168,6 +168,14 @@ def _parser() -> argparse.ArgumentParser:
         "--steps", type=_int("steps"), default=None, help="probe steps (default: by profile)"
     )
 
+    dv_help = (
+        "the latent VIN of the pixel pendulum trained again without the auxiliary latent loss, "
+        "beside the protocol's VIN and ResNet (claim 12): <results>/vin_diagnosis.csv"
+    )
+    dvin = sub.add_parser("diagnose-vin", help=dv_help, description=dv_help)
+    dvin.add_argument("--profile", default="paper-core", help="smoke, quick or paper-core")
+    dvin.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
+
     cp = sub.add_parser(
         "campaign",
         help="sweep a profile's claim experiments claim by claim (make paper-core runs it niced "
@@ -380,6 +388,16 @@ def _cmd_diagnose_lnn(args) -> int:
 
     results = _usable_results(args)
     df = diagnose(args.profile, results)
+    print(summary(df))
+    print(f"wrote {results / FILE} ({len(df)} rows)")
+    return 0
+
+
+def _cmd_diagnose_vin(args) -> int:
+    from .studies.paper._vin_diagnosis import FILE, diagnose, summary
+
+    results = _usable_results(args)
+    df = diagnose(args.profile, results, seeds=_seed_list(args.seeds))
     print(summary(df))
     print(f"wrote {results / FILE} ({len(df)} rows)")
     return 0
@@ -753,4 +771,5 @@ def _main(argv) -> int:
         "data": _cmd_data,
         "diagnose-lnn": _cmd_diagnose_lnn,
         "diagnose-hnn": _cmd_diagnose_hnn,
+        "diagnose-vin": _cmd_diagnose_vin,
     }[args.verb](args)

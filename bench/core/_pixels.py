@@ -150,9 +150,10 @@ def _observations(frames):
     return jnp.stack([frames[..., :-1, :, :], frames[..., 1:, :, :]], axis=-3)
 
 
-def seed_loss(model, frames, integrator):
+def seed_loss(model, frames, integrator, aux_weight: float = CC_LOSS):
     """The HNN seed's loss on a batch of windows ``frames`` (B, C, S, S): (loss, (ae, cc, dyn))
-    (module docstring)."""
+    (module docstring). ``aux_weight`` weighs the auxiliary latent loss cc (the seed's 1; the
+    VIN diagnosis, ``python -m bench diagnose-vin``, also trains with 0)."""
     import jax
     import jax.numpy as jnp
 
@@ -166,7 +167,7 @@ def seed_loss(model, frames, integrator):
     d = z.shape[-1] // 2
     w, dw = z[..., :d], z[..., d:]
     cc = jnp.mean((dw[:, :-1] - (w[:, 1:] - w[:, :-1]) / LATENT_DT) ** 2)
-    return AE_LOSS * ae + CC_LOSS * cc + DYN_LOSS * dyn, (ae, cc, dyn)
+    return AE_LOSS * ae + aux_weight * cc + DYN_LOSS * dyn, (ae, cc, dyn)
 
 
 def _windows(n_traj: int, points: int, chunk: int) -> np.ndarray:
@@ -211,7 +212,7 @@ def _block(params, opt_state, frames, idx, static, hp):
 
     from ._train import optimizer
 
-    steps, batch, lr, chunk, method, substeps = hp
+    steps, batch, lr, chunk, method, substeps, aux_weight = hp
     integ = models.Integrator(method, substeps=substeps)
     opt = optimizer(_train_config(steps, batch, lr))
 
@@ -219,7 +220,7 @@ def _block(params, opt_state, frames, idx, static, hp):
         p, s = carry
         f = _gather(frames, i, chunk)
         loss, grads = jax.value_and_grad(
-            lambda p_: seed_loss(eqx.combine(p_, static), f, integ)[0]
+            lambda p_: seed_loss(eqx.combine(p_, static), f, integ, aux_weight)[0]
         )(p)
         ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
         updates, s2 = opt.update(grads, s, p)
@@ -231,8 +232,11 @@ def _block(params, opt_state, frames, idx, static, hp):
     return params, opt_state, losses
 
 
-def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
-    """Train ``model`` with :func:`seed_loss`; returns (model, meta) as the store keeps them.
+def train_pixels(
+    c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS
+) -> tuple:
+    """Train ``model`` with :func:`seed_loss` (its cc term weighed by ``aux_weight``); returns
+    (model, meta) as the store keeps them.
 
     A non-finite loss or gradient stops training at that block (``status`` diverged) and
     keeps the last finite parameters."""
@@ -243,7 +247,7 @@ def train_pixels(c: RunConfig, model, data, progress: bool = False) -> tuple:
 
     dtype = jnp.dtype(c.dtype)
     tcfg = _train_config(c.steps, c.batch, c.lr)
-    hp = (c.steps, c.batch, c.lr, c.chunk, c.train_integrator, c.train_substeps)
+    hp = (c.steps, c.batch, c.lr, c.chunk, c.train_integrator, c.train_substeps, aux_weight)
     opt = optimizer(tcfg)
     frames = jnp.asarray(data.frames_train, dtype)
     windows = _windows(*frames.shape[:2], c.chunk)

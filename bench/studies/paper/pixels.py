@@ -68,6 +68,7 @@ from ...core._query import experiment_rows, pick_profile
 from ...core._store import read_rows
 from ...core._studies import Study, register_study
 from .._figure import save_figure
+from . import _vin_diagnosis
 from ._rules import CLAIM_TITLES, _Disc, _verdict
 from ._stats import (
     DELTA,
@@ -367,7 +368,15 @@ def section(results_dir) -> str:
             + " | ".join(f(x) for x in cells)
             + f" | {f(seed.get(model, math.nan))} | {f(_gm(g.get('latent_energy_drift')))} |"
         )
-    return "\n".join(lines)
+    return "\n".join([*lines, *_vin_diagnosis_lines(Path(results_dir))])
+
+
+def _vin_diagnosis_lines(results_dir: Path) -> list[str]:
+    """The VIN diagnosis table (``python -m bench diagnose-vin``), where the folder has one."""
+    path = results_dir / _vin_diagnosis.FILE
+    if not path.exists():
+        return ["", "(No VIN diagnosis in this folder: `python -m bench diagnose-vin`.)"]
+    return ["", _vin_diagnosis.summary(pd.read_csv(path))]
 
 
 def figure(results_dir) -> list[Path]:
