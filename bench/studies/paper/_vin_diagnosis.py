@@ -16,7 +16,9 @@ their state and its difference. The VIN seed itself encodes positions only (no c
 The diagnosis trains the claim-12 VIN of each seed again with cc's weight 0, everything else as
 the protocol, and sets it beside the protocol's own VIN (cc weight 1) and ResNet. The protocol's
 runs are read from the folder's stored rows where they are there (the campaign's runs), else
-trained here. Every number comes from trained models; none is typed in.
+trained here. ``pixel_loss_test`` is the protocol's loss (cc weight 1) for every row, the
+ablation's included: it charges the ablation for a term it was not trained on; the pixel MSEs
+compare alike. Every number comes from trained models; none is typed in.
 """
 
 from __future__ import annotations
@@ -127,7 +129,7 @@ def summary(df: pd.DataFrame) -> str:
         "(geometric means over seeds; learned: pixel MSE 2x below holding the first frame).",
         "",
         "| model | aux weight | seeds | learned | pixel MSE | late pixel MSE | static / pixel MSE "
-        "per seed | decoded energy MSE | test loss | source |",
+        "per seed | decoded energy MSE | test loss (the seed's, cc included) | source |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for (model, w), g in df.groupby(["model", "aux_weight"], sort=False):
