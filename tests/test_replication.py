@@ -262,3 +262,16 @@ def test_every_claim_evaluates_on_a_table_of_one_experiment(reproduce_primary):
     shuffled = runs.sample(frac=1, random_state=0).reset_index(drop=True)
     got = {v.key: v.verdict for v in evaluate_claims(shuffled, curves, PROFILE)}
     assert got == {v.key: v.verdict for v in evaluate_claims(runs, curves, PROFILE)}
+
+
+def test_a_claim_without_stored_replication_runs_has_no_replication_reading(
+    reproduce_primary, contradict_replication
+):
+    """A campaign has stored the replication runs of some experiments only: a claim with none
+    of its own has no replication reading (the report's '-'), not a verdict on zero seeds."""
+    runs, curves = _join(reproduce_primary, contradict_replication)
+    rep = runs["seed"].isin(REPLICATION)
+    j = judge(runs[~rep | (runs["experiment"] == "second_order")], curves, PROFILE, loso=False)
+    assert j.replication["3"].n_seeds == 5 and j.replicates("3") is False
+    assert "5" not in j.replication and "5" not in j.replication_pending
+    assert j.replicates("5") is None

@@ -128,7 +128,9 @@ def judge(
         counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
         for key, r in list(replication.items()):
             n, m = counts.get(r.claim, (0, 0))
-            if 0 < n < m:
+            if r.n_seeds == 0:  # none of its runs stored yet: no reading, as with none at all
+                del replication[key]
+            elif 0 < n < m:
                 rep_pending[key] = (n, m)
                 del replication[key]
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
