@@ -275,3 +275,7 @@ def test_a_claim_without_stored_replication_runs_has_no_replication_reading(
     assert j.replication["3"].n_seeds == 5 and j.replicates("3") is False
     assert "5" not in j.replication and "5" not in j.replication_pending
     assert j.replicates("5") is None
+    # a claim that shares some of the stored runs but has no complete seed is pending
+    one = runs[rep & (runs["experiment"] == "second_order")].iloc[:1]
+    k = judge(pd.concat([runs[~rep], one]), curves, PROFILE, loso=False)
+    assert "3" not in k.replication and k.replication_pending["3"][0] == 1

@@ -124,14 +124,14 @@ def judge(
     if rep_seeds and len(_on(runs, rep_seeds)):
         replication = {v.key: v for v in evaluate_claims(_on(runs, rep_seeds), curves, profile)}
         # a claim whose replication runs are partly stored (a campaign under way) is not
-        # judged on them yet: fewer seeds would read as a verdict that does not replicate
+        # judged on them yet: fewer seeds would read as a verdict that does not replicate;
+        # one with no complete seed (none of its runs stored) has no reading, as with no runs
         counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
         for key, r in list(replication.items()):
             n, m = counts.get(r.claim, (0, 0))
-            if r.n_seeds == 0:  # none of its runs stored yet: no reading, as with none at all
-                del replication[key]
-            elif 0 < n < m:
+            if 0 < n < m:
                 rep_pending[key] = (n, m)
+            if 0 < n < m or r.n_seeds == 0:
                 del replication[key]
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
     present = sorted(set(_on(runs, primary_seeds)["seed"])) if len(runs) else []
