@@ -16,9 +16,10 @@ their state and its difference. The VIN seed itself encodes positions only (no c
 The diagnosis trains the claim-12 VIN of each seed again with cc's weight 0, everything else as
 the protocol, and sets it beside the protocol's own VIN (cc weight 1) and ResNet. The protocol's
 runs are read from the folder's stored rows where they are there (the campaign's runs), else
-trained here. ``pixel_loss_test`` is the protocol's loss (cc weight 1) for every row, the
-ablation's included: it charges the ablation for a term it was not trained on; the pixel MSEs
-compare alike. Every number comes from trained models; none is typed in.
+trained here. ``train_seconds`` of a row trained here is the wall clock of its training, compile
+included (a stored run's excludes the compile). ``pixel_loss_test`` is the protocol's loss (cc
+weight 1) for every row, the ablation's included: it charges the ablation for a term it was not
+trained on; the pixel MSEs compare alike. Every number comes from trained models; none is typed in.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import pandas as pd
 from ...core import _pixels
 from ...core._experiments import expand
 from ...core._store import read_rows
+from ._plot import _gmean as _gm
 
 FILE = "vin_diagnosis.csv"
 EXPERIMENT = "pixel_pendulum_vin"
@@ -106,12 +108,6 @@ def _num(x) -> float:
         return float(x)
     except (TypeError, ValueError):
         return math.nan
-
-
-def _gm(x) -> float:
-    x = np.asarray(pd.to_numeric(x, errors="coerce"), dtype=float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
 
 
 def summary(df: pd.DataFrame) -> str:
