@@ -46,6 +46,7 @@ from .studies.paper import (
     TRIVIAL_MODELS,
 )
 from .studies.paper._replication import judge
+from .studies.paper._sensitivity import margin_dependence
 
 __all__ = ["write_report"]
 
@@ -149,26 +150,30 @@ def _not_run_note(profile) -> list[str]:
 
 def _claims_table(j) -> list[str]:
     """One row per claim (claim 4: per metric and spring start): the final verdict, the
-    verdicts on the primary and replication seeds, whether it replicates, and what dropping
-    one seed does."""
+    verdicts on the primary and replication seeds and pooled, whether it replicates, and what
+    dropping one seed does. Effect and interval are the final reading's."""
     from .studies.paper._replication import _span
 
     ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
+    both = _span(sorted({*j.primary_seeds, *j.replication_seeds}))
     out = [
-        f"| claim | statement | verdict | seeds {ps} | seeds {rs or '(none)'} | replicates "
-        "| leave one seed out | effect | 90% CI | discriminating | failed runs |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        f"| claim | statement | verdict | seeds {ps} | seeds {rs or '(none)'} | pooled {both} | "
+        "replicates | leave one seed out | effect | 90% CI | discriminating | failed runs |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for v in j.final:
-        p = j.primary[v.key]
+        p = j.reading(v.key)
         r = j.replication.get(v.key)
+        pooled = j.pooled.get(v.key)
         rep = {True: "yes", False: "**no**", None: "not run"}[j.replicates(v.key)]
         if v.key in j.replication_pending:
             rep = "pending ({} of {} runs)".format(*j.replication_pending[v.key])
         effect = f"{_fmt(p.effect)} ({p.effect_name})" if p.effect_name else _fmt(p.effect)
+        prim = j.primary[v.key]
         out.append(
-            f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | {p.verdict} "
-            f"({p.n_seeds}) | {r.verdict + f' ({r.n_seeds})' if r else '-'} | {rep} | "
+            f"| {_md_escape(v.key)} | {_md_escape(v.title)} | **{v.verdict}** | {prim.verdict} "
+            f"({prim.n_seeds}) | {r.verdict + f' ({r.n_seeds})' if r else '-'} | "
+            f"{pooled.verdict + f' ({pooled.n_seeds})' if pooled else '-'} | {rep} | "
             f"{_md_escape(_loso_text(j, v.key))} | {_md_escape(effect)} | "
             f"{_ci(p.ci_low, p.ci_high)} | {_disc_mark(p)} | {p.n_failed} |"
         )
@@ -176,38 +181,108 @@ def _claims_table(j) -> list[str]:
 
 
 def _parts_table(j) -> list[str]:
-    """Every tested part: its effect, margin, test and level, its status on the primary and
-    replication seeds, and whether dropping one seed changes it."""
+    """Every part of the final reading (pooled where the seed sets agree): its effect, margin,
+    the margins at which it holds and is contradicted, its test and level, its status on each
+    seed set, and whether dropping one seed reverses it."""
     from .studies.paper._replication import _span
+    from .studies.paper._stats import margin_ranges
 
     ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
     out = [
-        f"| claim | part | kind | margin | test (level) | effect, seeds {ps} [90% CI] | "
-        f"seeds {ps} | seeds {rs or '(none)'} | leave one seed out |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| claim | part | role | kind | margin | margin range | test (level) | effect [90% CI] | "
+        f"seeds {ps} | seeds {rs or '(none)'} | pooled | leave one seed out |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for v in j.final:
-        p = j.primary[v.key]
+        reading = j.reading(v.key)
+        prim = {q.name: q for q in j.primary[v.key].parts}
         rep = {q.name: q for q in j.replication[v.key].parts} if v.key in j.replication else {}
+        pooled = {q.name: q for q in j.pooled[v.key].parts} if v.key in j.pooled else {}
         loso = [(s, {q.name: q for q in w.parts}) for s, w in j.loso.get(v.key, [])]
-        for part in p.parts:
-            r = rep.get(part.name)
+        flip = {("holds", "contradicts"), ("contradicts", "holds")}
+        for part in reading.parts:
+            if part.status != "not tested" and not part.ranges:
+                part.ranges = margin_ranges(part)
             moved = [s for s, d in loso if d.get(part.name) and d[part.name].status != part.status]
-            lo_text = (
-                "-"
-                if not loso
-                else (
-                    "stable" if not moved else "changes without seed " + ", ".join(map(str, moved))
-                )
+            reversed_ = [
+                s
+                for s, d in loso
+                if d.get(part.name) and (part.status, d[part.name].status) in flip
+            ]
+            if not loso:
+                lo_text = "-"
+            elif reversed_:
+                lo_text = "**reversed** without seed " + ", ".join(map(str, reversed_))
+            elif moved:
+                lo_text = "changes without seed " + ", ".join(map(str, moved))
+            else:
+                lo_text = "stable"
+            test = f"{part.test} ({part.alpha:.3g})" if part.test else "-"
+            name = part.name + (
+                f" (not tested: {part.note})" if part.status == "not tested" else ""
             )
-            test = f"{part.test} ({part.alpha:g})" if part.test else "-"
+            cells = [d[part.name].status if part.name in d else "-" for d in (prim, rep, pooled)]
             out.append(
-                f"| {_md_escape(v.key)} | {_md_escape(part.name)} | {part.kind or '-'} | "
-                f"{_md_escape(part.margin) or '-'} | {_md_escape(test)} | {_fmt(part.point)} "
-                f"{_ci(part.lo, part.hi)} | {part.status} | {r.status if r else '-'} | "
-                f"{lo_text} |"
+                f"| {_md_escape(v.key)} | {_md_escape(name)} | {part.role} | "
+                f"{part.kind or '-'} | {_md_escape(part.margin) or '-'} | "
+                f"{_md_escape(part.range_text())} | {_md_escape(test)} | {_fmt(part.point)} "
+                f"{_ci(part.lo, part.hi)} | {cells[0]} | {cells[1]} | {cells[2]} | {lo_text} |"
             )
     return out
+
+
+def _policy_section() -> list[str]:
+    """The margin policy: one margin per quantity, its plausible band, the words it covers,
+    and the margins the seeds state as numbers."""
+    from .studies.paper import policy
+
+    out = [
+        "## Margin policy",
+        "",
+        "One margin per compared quantity, the same for every word the papers use about it "
+        "(`bench/studies/paper/policy.py`); a ratio of mean squares (MSE, loss, energy MSE) "
+        "uses the square of its quantity's margin. The band is the range of margins a "
+        "reasonable reader might pick: *Margin-dependent claims* below re-judges every claim "
+        "across it.",
+        "",
+        "| quantity | margin | plausible band | words | why |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for q in policy.POLICY.values():
+        fmt = (lambda x: f"{x:.3g}x") if q.ratio else (lambda x: f"{x:g}")
+        out.append(
+            f"| {q.label} | {fmt(q.margin)} | {fmt(q.band[0])} to {fmt(q.band[1])} | "
+            f"{_md_escape(q.words)} | {_md_escape(q.why)} |"
+        )
+    stated = policy.stated_margins()
+    if stated:
+        out += ["", "Margins the seeds state as numbers (never varied):", ""]
+        for m in stated:
+            out.append(f'- {m.quantity}, {m.label()}: "{m.quote}" ({m.source})')
+    return [*out, ""]
+
+
+def _dependence_section(deps, final) -> list[str]:
+    out = [
+        "## Margin-dependent claims",
+        "",
+        "Each claim's final reading judged again at the ends and the middle of the plausible "
+        "band of each quantity its parts use (one quantity at a time, the others at the policy's; "
+        "learning is the learning gate).",
+        "",
+    ]
+    if not deps:
+        return [*out, "No verdict changes inside any band.", ""]
+    out += [
+        "| claim | quantity | verdict at the policy | verdicts across the band |",
+        "| --- | --- | --- | --- |",
+    ]
+    for d in deps:
+        out.append(
+            f"| {_md_escape(d.key)} | {d.quantity} | {d.at_policy} | {_md_escape(d.text())} |"
+        )
+    keys = sorted({d.key for d in deps}, key=lambda k: [v.key for v in final].index(k))
+    return [*out, "", f"Margin-dependent: claim {', '.join(keys)}.", ""]
 
 
 def _folder_label(d: Path) -> str:
@@ -517,28 +592,29 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "## Claims",
         "",
         "Verdict rules are in the docstrings of `bench/studies/paper/` (conventions: "
-        "`bench/studies/paper/_stats.py`). Each claim is split into parts; each part is a "
-        "one-sided t test at level 0.05 on paired per-seed values (log ratios of "
-        "geometric-mean rollout errors, energy violations or training times; slopes; shares), "
-        "against a stated margin, the smallest ratio that matters (1.25x for errors, 2x for "
-        'energy, "matches" and "slightly"). An ordering holds only beyond the margin; '
-        '"no gain", "no better" and "matches" hold only when the data rule out the '
-        "margin; a difference inside the margin is a tie, never an ordering, and no part holds "
-        "by default. Intervals are the two-sided 90% t intervals whose ends are the one-sided "
-        "95% bounds. A claim is *reproduced* when every part holds, *partly reproduced* when "
-        "some parts hold and others are contradicted, *not reproduced* when parts are "
-        "contradicted and none holds, *inconclusive* otherwise, with fewer than 5 seeds, or "
-        "when the experiment is not discriminating: its best model must beat the best trivial "
-        f"predictor (constant velocity; at rest in damped scenes) by {TRIVIAL_FACTOR:g}x on "
-        "every seed (*unknown* where no trivial-predictor runs are stored). Failed and diverged "
-        "runs score the worst error, 1, and are counted.",
+        "`bench/studies/paper/_stats.py`). Each claim is split into the parts its sentences "
+        "state; each part is a one-sided t test on paired per-seed values (log ratios of "
+        "rollout errors, energy violations, losses or training times; slopes; shares) against "
+        "the margin of its quantity (*Margin policy* below). An ordering holds only beyond the "
+        'margin; "no gain", "no better" and "matches" hold only when the data rule out the '
+        "margin; a difference inside it is a tie. Holm's correction runs across a claim's parts, "
+        "for holds and for contradicts alike (the level column). A comparison is judged only "
+        "where each of its models learned (beat the best trivial predictor by the learning "
+        "margin, geometric mean over seeds) and where the claim's stated condition holds "
+        '("at similar loss": a *condition* part); otherwise the part reads *not tested* and '
+        "cannot count against the claim. A claim is *reproduced* when every part holds, *partly "
+        "reproduced* when some hold and others are contradicted, *not reproduced* when parts "
+        "are contradicted and none holds, *inconclusive* otherwise, with fewer than 5 seeds, or "
+        "when the experiment is not discriminating (its best model does not beat the best "
+        f"trivial predictor by {TRIVIAL_FACTOR:g}x on every seed). Failed and diverged runs "
+        "score the worst error, 1, and are counted.",
         "",
-        "Replication: every claim is judged on the profile's seeds and again on a disjoint set "
-        "(stored by `make replicate`); a verdict that differs between them is *inconclusive "
-        "(does not replicate)*, with both readings shown. *Leave one seed out* judges the "
-        "profile's seeds without each one in turn (one seed fewer required); a verdict that "
-        "changes when any one seed is dropped is *inconclusive (changes without a seed)*, and the "
-        "table names the seed and what the verdict becomes without it.",
+        "Replication: every claim is judged on the profile's seeds and again on a disjoint set. "
+        "Where both read the same verdict, the final reading is the pooled seeds; where they "
+        "differ, the claim is *inconclusive (does not replicate)*. *Leave one seed out* judges "
+        "the final reading's seeds without each one in turn; it demotes a verdict to "
+        "*inconclusive (changes without a seed)* only where dropping a seed reverses a part "
+        "(holds <-> contradicts).",
         "",
         *_claims_table(j),
         "",
@@ -549,6 +625,8 @@ def write_report(results_dir: Path, compare=None) -> Path:
         "",
         f"Failed or diverged runs scored as error 1 in the verdicts: {n_failed}.",
         "",
+        *_policy_section(),
+        *_dependence_section(margin_dependence(runs, curves, profile, j), j.final),
         *_comparison_section(verdicts, profile, others),
         *other_errors,
     ]

@@ -1,27 +1,17 @@
-"""Verdicts that replicate (issue 20): every claim judged on the profile's seeds, again on a
-disjoint seed set, and without each of its seeds.
+"""Verdicts that replicate: every claim judged on the profile's seeds, again on a disjoint
+seed set, pooled where the two agree, and without each seed.
 
 - *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4; for a profile that declares
   fewer than a verdict needs, ``smoke``, every stored seed outside the replication set).
-- *Replication*: :data:`bench.core._experiments.REPLICATION_SEEDS` (``quick`` and ``paper``,
-  hence ``paper-core``: 5-9), stored beside the primary runs by ``make replicate``
-  (``python -m bench campaign --profile quick --replication``) or by the paper-core campaign
-  after its own seeds. Where both exist and the verdicts differ, the claim's verdict is
-  *inconclusive (does not replicate)*, and both readings are shown. A claim whose replication
-  runs are only partly stored (a campaign under way) is not judged on them until all are:
-  its replication reads *pending (n of m runs)*.
-- *Leave one seed out*: the primary seeds without each one in turn, judged by the same rules
-  with one seed fewer required (:func:`bench.studies.paper._stats.min_seeds`); a verdict that
-  changes when one seed is dropped rests on that seed, and the report says which.
-
-A claim counts as settled only when its verdict replicates on both checks: a verdict that
-differs on the replication seeds is *inconclusive (does not replicate)*; one that changes when
-any one primary seed is dropped is *inconclusive (changes without a seed)*, and the report names
-the seeds and what the verdict becomes without each. Dropping a seed costs the tests power (4
-seeds), so this demotes verdicts that only just clear their test: that is the point, a verdict
-that one seed carries is not one the suite signs. (Until 2026-11-25 the leave-one-seed-out
-reading was shown beside the verdict, not folded into it; folding it in turned quick's claim 4
-(geometric-mean error) and claim 9 inconclusive.)
+- *Replication*: the replication seeds (5-9). Where both sets read the same verdict, the final
+  reading is the *pooled* ten seeds: two disjoint sets that agree add evidence. Where they
+  differ, the claim is *inconclusive (does not replicate)*, both readings shown. A claim whose
+  replication runs are partly stored (a campaign under way) reads *pending* and keeps its
+  primary reading.
+- *Leave one seed out*: the final reading's seeds without each one in turn (one seed fewer
+  required). It flags an influential seed, and demotes the verdict to *inconclusive (changes
+  without a seed)* only where dropping that seed reverses a part (holds <-> contradicts); a
+  part that merely loses significance on fewer seeds is not evidence against it.
 """
 
 from __future__ import annotations
@@ -32,7 +22,7 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from ...core._experiments import PROFILES, SELECTIONS, expand, profile_defaults, replication_seeds
-from ._rules import claim_studies, evaluate_claims
+from ._rules import claim_studies, evaluate_claims, restrict_all
 from ._stats import INCONCLUSIVE, Verdict, min_seeds, required_seeds
 
 DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
@@ -42,8 +32,9 @@ CHANGES_WITHOUT_A_SEED = "inconclusive (changes without a seed)"
 @dataclass
 class Judgement:
     """Every claim's verdicts: ``final`` (what the report states), ``primary`` (the profile's
-    seeds), ``replication`` (the replication seeds; empty when none are stored) and ``loso``
-    (key -> [(dropped seed, verdict)]), with the seed sets used."""
+    seeds), ``replication`` (the replication seeds; empty when none are stored), ``pooled``
+    (both sets, where they agree), ``loso`` (key -> [(dropped seed, verdict)] over the final
+    reading's seeds), with the seed sets used."""
 
     final: list[Verdict]
     primary: dict[str, Verdict]
@@ -54,6 +45,7 @@ class Judgement:
     # key -> (stored, declared) replication runs of a claim whose replication is under way:
     # not judged until all are stored (a partial reading is not a replication)
     replication_pending: dict[str, tuple[int, int]] = field(default_factory=dict)
+    pooled: dict[str, Verdict] = field(default_factory=dict)
 
     def replicates(self, key: str) -> bool | None:
         r = self.replication.get(key)
@@ -61,9 +53,36 @@ class Judgement:
             return None
         return r.verdict == self.primary[key].verdict
 
+    def reading(self, key: str) -> Verdict:
+        """The reading the final verdict rests on: pooled where the seed sets agree, else the
+        primary seeds'."""
+        return self.pooled.get(key) or self.primary[key]
+
+    def reading_seeds(self, key: str) -> tuple[int, ...]:
+        if key in self.pooled:
+            return tuple(sorted({*self.primary_seeds, *self.replication_seeds}))
+        return self.primary_seeds
+
     def loso_changes(self, key: str) -> list[tuple[int, Verdict]]:
-        base = self.primary[key].verdict
+        """The dropped seeds whose absence changes the reading's verdict (flagged)."""
+        base = self.reading(key).verdict
         return [(s, v) for s, v in self.loso.get(key, []) if v.verdict != base]
+
+    def loso_reversals(self, key: str) -> list[tuple[int, list[str]]]:
+        """The dropped seeds whose absence reverses a part (holds <-> contradicts), with the
+        reversed parts' names (these demote the verdict)."""
+        return [
+            (s, parts)
+            for s, w in self.loso.get(key, [])
+            if (parts := reversed_parts(self.reading(key), w))
+        ]
+
+
+def reversed_parts(a: Verdict, b: Verdict) -> list[str]:
+    """The parts that hold in one verdict and are contradicted in the other."""
+    other = {q.name: q.status for q in b.parts}
+    flip = {("holds", "contradicts"), ("contradicts", "holds")}
+    return [q.name for q in a.parts if (q.status, other.get(q.name)) in flip]
 
 
 def seed_sets(profile: str | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
@@ -105,27 +124,26 @@ def judge(
     *,
     loso: bool = True,
 ) -> Judgement:
-    """Judge every claim on the primary seeds, the replication seeds (where stored) and
-    without each primary seed (``loso``; ``loso=False`` skips that check and its demotion, for
-    callers that need only the primary and replication readings). Runs of other seeds are
-    ignored; a folder whose profile is unknown is judged on all its seeds, without
-    replication."""
+    """Judge every claim on the primary seeds, the replication seeds (where stored), both
+    pooled (where they agree) and without each seed of the final reading (``loso``;
+    ``loso=False`` skips that check and its demotion). Runs of other seeds are ignored; a
+    folder whose profile is unknown is judged on all its seeds, without replication."""
     declared, rep_seeds = seed_sets(profile)
-    # primary: the profile's seeds; for a profile that declares fewer than a verdict needs
-    # (smoke) or none, every stored seed outside the replication set
     stored = sorted(int(s) for s in runs["seed"].unique()) if len(runs) and "seed" in runs else []
     if len(declared) >= required_seeds():
         primary_seeds = declared
     else:
         primary_seeds = tuple(s for s in stored if s not in rep_seeds)
-    prim = evaluate_claims(_on(runs, primary_seeds), curves, profile)
+    cache = restrict_all(runs, profile)
+
+    def evaluate(seeds):
+        return evaluate_claims(runs, curves, profile, seeds=seeds, restricted=cache)
+
+    prim = evaluate(primary_seeds)
     primary = {v.key: v for v in prim}
-    replication, rep_pending = {}, {}
+    replication, rep_pending, pooled = {}, {}, {}
     if rep_seeds and len(_on(runs, rep_seeds)):
-        replication = {v.key: v for v in evaluate_claims(_on(runs, rep_seeds), curves, profile)}
-        # a claim whose replication runs are partly stored (a campaign under way) is not
-        # judged on them yet: fewer seeds would read as a verdict that does not replicate;
-        # one with no complete seed (none of its runs stored) has no reading, as with no runs
+        replication = {v.key: v for v in evaluate(rep_seeds)}
         counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
         for key, r in list(replication.items()):
             n, m = counts.get(r.claim, (0, 0))
@@ -133,16 +151,28 @@ def judge(
                 rep_pending[key] = (n, m)
             if 0 < n < m or r.n_seeds == 0:
                 del replication[key]
+        agree = [k for k, r in replication.items() if r.verdict == primary[k].verdict]
+        if agree:
+            both = tuple(sorted({*primary_seeds, *rep_seeds}))
+            every = {v.key: v for v in evaluate(both)}
+            pooled = {k: every[k] for k in agree if k in every}
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
-    present = sorted(set(_on(runs, primary_seeds)["seed"])) if len(runs) else []
-    if loso and len(present) > 1:
-        with min_seeds(max(2, required_seeds() - 1)):
-            for s in present:
-                for v in evaluate_claims(
-                    _on(runs, [x for x in present if x != s]), curves, profile
-                ):
-                    out_loso.setdefault(v.key, []).append((int(s), v))
-    final = []
+    if loso:
+        groups: dict[tuple[int, ...], list[str]] = {}
+        for key in primary:
+            seeds = tuple(sorted({*primary_seeds, *rep_seeds})) if key in pooled else primary_seeds
+            groups.setdefault(seeds, []).append(key)
+        for seeds, keys in groups.items():
+            present = sorted(set(_on(runs, seeds)["seed"])) if len(runs) else []
+            if len(present) < 2:
+                continue
+            with min_seeds(max(2, required_seeds() - 1)):
+                for s in present:
+                    rest = [x for x in present if x != s]
+                    for v in evaluate(rest):
+                        if v.key in keys:
+                            out_loso.setdefault(v.key, []).append((int(s), v))
+    j = Judgement([], primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending, pooled)
     for v in prim:
         r = replication.get(v.key)
         if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
@@ -156,11 +186,12 @@ def judge(
                 primary=v.verdict,
                 readings=readings,
             )
-        elif settled(v.verdict) and (
-            moved := [(s, w) for s, w in out_loso.get(v.key, []) if w.verdict != v.verdict]
-        ):
-            without = "; ".join(f"without seed {s}: {w.verdict}" for s, w in moved)
-            readings = f"seeds {_span(primary_seeds)}: {v.verdict}; {without}"
+            j.final.append(v)
+            continue
+        v = j.reading(v.key)
+        if settled(v.verdict) and (rev := j.loso_reversals(v.key)):
+            without = "; ".join(f"without seed {s}: {', '.join(ps)} reversed" for s, ps in rev)
+            readings = f"seeds {_span(j.reading_seeds(v.key))}: {v.verdict}; {without}"
             v = dataclasses.replace(
                 v,
                 verdict=CHANGES_WITHOUT_A_SEED,
@@ -168,8 +199,8 @@ def judge(
                 primary=v.verdict,
                 readings=readings,
             )
-        final.append(v)
-    return Judgement(final, primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending)
+        j.final.append(v)
+    return j
 
 
 def _span(seeds) -> str:

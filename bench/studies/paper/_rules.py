@@ -15,20 +15,28 @@ import pandas as pd
 
 from ...core._query import _parse_pairs, experiment_rows, select
 from ...core._studies import studies
+from . import policy
 from ._common import TRIVIAL_MODELS
 from ._stats import (
     INCONCLUSIVE,
+    MODEL_LABELS,
     NOT_REPRODUCED,
     PARTLY,
     REPRODUCED,
-    TRIVIAL_FACTOR,
     WORST_ERROR,
+    Gate,
     Verdict,
     _bad,
     _greater,
+    _log_per_seed,
     _Part,
+    apply_gates,
+    gated,
+    holm,
+    learned,
     required_seeds,
     scored,
+    undecided,
 )
 
 __all__ = ["claim_studies", "discrimination", "evaluate_claims", "succeeds"]
@@ -63,7 +71,7 @@ def _variant_key(runs: pd.DataFrame) -> pd.Series:
 
 @dataclass
 class _Disc:
-    """Whether a group's best model beats the best trivial predictor by TRIVIAL_FACTOR."""
+    """Whether a group's best model beats the best trivial predictor by the learning margin."""
 
     group: str
     status: str  # "yes" | "no" | "unknown"
@@ -77,7 +85,7 @@ class _Disc:
         return (
             f"{self.group}: discriminating {self.status} (best {self.best} beats the best "
             f"trivial predictor by {math.exp(self.margin):.3g}x on its worst seed, needs "
-            f"{TRIVIAL_FACTOR:g}x)"
+            f"{policy.margin('learning').label()})"
         )
 
 
@@ -91,13 +99,30 @@ def _trivial_log(rows: pd.DataFrame, metric: str = "rollout_error") -> pd.Series
 
 
 def succeeds(model_log: pd.Series, trivial_log: pd.Series) -> tuple[bool | None, float]:
-    """(success, worst-seed log margin): a model succeeds when ``log(trivial / model) >=
-    log(TRIVIAL_FACTOR)`` on every seed both have; None without paired seeds."""
+    """(success, worst-seed log margin): a model succeeds when ``log(trivial / model)`` reaches
+    the policy's learning margin on every seed both have; None without paired seeds."""
     m = (trivial_log - model_log).dropna()
     if not len(m):
         return None, math.nan
     worst = float(m.min())
-    return bool(worst >= math.log(TRIVIAL_FACTOR)), worst
+    return bool(worst >= policy.margin("learning").test), worst
+
+
+def learned_cell(
+    rows: pd.DataFrame,
+    cell: Mapping,
+    label: str | None = None,
+    metric: str = "rollout_error",
+    trivial: pd.DataFrame | None = None,
+    *,
+    squared: bool = False,
+) -> Gate:
+    """The learning gate of one cell of ``rows`` against the best finished trivial predictor
+    among ``trivial`` (default: the trivial rows of ``rows``: the same test set); ``squared``
+    when ``metric`` is a mean of squares."""
+    t = _trivial_log(rows if trivial is None else trivial, metric)
+    name = label or MODEL_LABELS.get(str(cell.get("model")), str(cell.get("model")))
+    return learned(name, _log_per_seed(rows, cell, metric), t if len(t) else None, squared=squared)
 
 
 def discrimination(
@@ -142,18 +167,26 @@ def _verdict(
     variant: str = "",
     universal: bool = False,
 ) -> Verdict:
-    """Combine a claim's parts: *reproduced* when every part holds, *not reproduced* when some
-    contradict and none holds, *partly reproduced* when some hold and some contradict (the
-    claim's separate statements), else *inconclusive*. ``universal``: the parts are instances
-    of one statement over a grid ("no gain at any weight"), so one contradicting instance
-    refutes it (*not reproduced*, never *partly*)."""
+    """Combine a claim's parts. First each part is settled: one tested on fewer seeds than a
+    verdict needs is undecided; one with a closed gate reads *not tested*; Holm's correction
+    runs across the rest; each part gets its margin ranges. Then: *reproduced* when every part
+    holds, *not reproduced* when some contradict and none holds, *partly reproduced* when some
+    hold and some contradict (the claim's separate statements), else *inconclusive*; a part
+    not tested never counts against the claim. Condition parts (``role == "condition"``) are
+    shown, not counted. ``universal``: the parts are instances of one statement over a grid
+    ("no gain at any weight"), so one contradicting instance refutes it (*not reproduced*,
+    never *partly*)."""
     discs = list(discs)
     need = required_seeds()
     for p in parts:  # a part tested on fewer seeds than a verdict needs decides nothing
-        if 0 <= p.n < need and p.status != "undecided":
+        if 0 <= p.n < need and p.status not in ("undecided", "not tested"):
             p.note = (p.note + "; " if p.note else "") + f"{p.status} on {p.n} < {need} seeds"
             p.status = "undecided"
-    statuses = [p.status for p in parts]
+            p.decide = None
+    apply_gates(parts)
+    holm(parts)
+    claim_parts = [p for p in parts if p.role == "part"]
+    statuses = [p.status for p in claim_parts]
     not_disc = [d for d in discs if d.status == "no"]
     if discs and all(d.status == "yes" for d in discs):
         discriminating = True
@@ -161,7 +194,7 @@ def _verdict(
         discriminating = False
     else:
         discriminating = None
-    if n_seeds < need or not parts or not_disc:
+    if n_seeds < need or not claim_parts or not_disc:
         verdict = INCONCLUSIVE
     elif all(s == "holds" for s in statuses):
         verdict = REPRODUCED
@@ -236,7 +269,7 @@ def _cost_part(d: pd.DataFrame, so: Mapping, mix: Mapping, system: str) -> _Part
     rs, rm = select(d, **so), select(d, **mix)  # finished runs only: cost of a failure is moot
     name = f"{system}: (c) cost log(train s mixture HNN / NODE+SO)"
     if not len(rs) or not len(rm) or "train_seconds" not in d:
-        return _Part(name, "undecided", math.nan, math.nan, math.nan, 0, "no runs")
+        return undecided(name, "no runs")
     ts = np.log(rs.groupby("seed")["train_seconds"].mean().astype(float))
     tm = np.log(rm.groupby("seed")["train_seconds"].mean().astype(float))
     dt = (tm - ts).dropna()
@@ -251,22 +284,18 @@ def _cost_part(d: pd.DataFrame, so: Mapping, mix: Mapping, system: str) -> _Part
         if np.isfinite(flops)
         else "no flops_per_step recorded"
     ) + f"; params {rs['n_params'].mean():.0f} vs {rm['n_params'].mean():.0f}"
-    part = _greater(name, dt.to_numpy(), note=note)
-    if np.isfinite(flops) and flops >= 1:
+    part = _greater(name, dt.to_numpy(), policy.margin("cost"), note=note)
+    if np.isfinite(flops) and flops >= 1:  # more FLOPs per step: not cheaper, at any margin
+        part.decide = lambda value, alpha: "contradicts"
         part.status = "contradicts"
-    return part
+    return gated(part, learned_cell(d, so), learned_cell(d, mix))
 
 
 # Claim 1 (b) and claim 8 (c): slopes of log EV against log t over the late half of the horizon.
-# Linear growth has slope 1, a bounded oscillation 0, a random walk of the energy 0.5.
-GROWTH_SLOPE = 0.5
-# "Grows about linearly" (claim 1 b): the slope lies in this band. Its lower end is the random
-# walk (sqrt t, the slowest growth that is still unbounded); its upper end is as far above
-# linear as the lower end is below it (t^1.5: a violation that accelerates).
-GROWTH_BAND = (0.5, 1.5)
-
-
-BOUNDED_SLOPE = 0.5
+# Linear growth has slope 1, a bounded oscillation 0; the tolerance around them is the policy's
+# slope margin (0.5: a random walk, sqrt t, lies half-way between the two).
+LINEAR_SLOPE = 1.0
+BOUNDED_SLOPE = 0.0
 
 
 def _curve_slopes(runs: pd.DataFrame, curves: pd.DataFrame | None, t_min_frac: float = 0.0):
@@ -304,6 +333,19 @@ def _restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
 
 
+def restrict_all(runs: pd.DataFrame, profile: str | None) -> dict[int, pd.DataFrame]:
+    """``{claim: the rows it reads}`` for every claim study (:func:`_restrict`): the rows a
+    claim reads do not depend on the seed, so one restriction serves every seed set."""
+    return {s.claim: _plain_columns(_restrict(runs, s, profile)) for s in claim_studies()}
+
+
+def _plain_columns(df: pd.DataFrame) -> pd.DataFrame:
+    """Arrow-backed string columns as plain objects: the rules slice a table thousands of
+    times, and taking rows of Arrow strings costs several times more."""
+    cols = {c: object for c in df.columns if pd.api.types.is_string_dtype(df[c].dtype)}
+    return df.astype(cols) if cols else df
+
+
 def runs_at(study, profile: str | None) -> bool:
     """Whether a study's claim is judged at ``profile``: one of its experiments runs there
     (``Experiment.profiles``). Always with no profile."""
@@ -323,22 +365,37 @@ def claim_studies() -> list:
 
 
 def evaluate_claims(
-    runs: pd.DataFrame, curves: pd.DataFrame | None = None, profile: str | None = None
+    runs: pd.DataFrame,
+    curves: pd.DataFrame | None = None,
+    profile: str | None = None,
+    claims: Iterable[int] | None = None,
+    *,
+    seeds: Iterable[int] | None = None,
+    restricted: Mapping[int, pd.DataFrame] | None = None,
 ) -> list[Verdict]:
     """Every verdict (claim 4 gives several); a claim whose computation fails is
     "inconclusive" with the error. With ``profile``, each claim sees only the runs of its
     experiments (by config hash, plus older rows tagged with them) and its verdicts carry it;
     a claim whose experiments do not run at ``profile`` has no verdict (:func:`claims_not_run`).
+    ``claims``: only these claim numbers; ``seeds``: only these seeds; ``restricted``: each
+    claim's rows already restricted (:func:`restrict_all`), for callers that judge one table on
+    many seed sets or margins.
     """
     import dataclasses
 
     out = []
+    wanted = None if claims is None else set(claims)
     for study in claim_studies():
         n = study.claim
+        if wanted is not None and n not in wanted:
+            continue
         if not runs_at(study, profile):
             continue  # e.g. claim 6 at quick: no verdict, not an inconclusive one
         try:
-            got = study.rule(_restrict(runs, study, profile), curves)
+            rows = restricted[n] if restricted is not None else _restrict(runs, study, profile)
+            if seeds is not None and len(rows) and "seed" in rows:
+                rows = rows[rows["seed"].isin(list(seeds))].reset_index(drop=True)
+            got = study.rule(rows, curves)
             got = got if isinstance(got, list) else [got]
         except Exception as e:  # noqa: BLE001 - a report must still be written
             got = [

@@ -1,57 +1,27 @@
-"""Verdicts on the eight claims of REFERENCE.md, computed from the stored runs.
+"""The statistics of the verdicts: scores, paired per-seed effects, parts, gates and Holm.
 
-Every claim is a function ``claim_N(runs, curves=None) -> Verdict`` (claim 4: a list, one
-verdict per metric and spring initial state). The runs table is the store's
-``results/runs.parquet`` (one row per run: every ``RunConfig`` field and the metrics); the curves
-table is ``results/curves.parquet`` (``config_hash, t, rel_error, energy_violation``).
+Every claim is a function ``claim_N(runs, curves=None) -> Verdict`` (claim 4: a list). A claim
+is split into *parts*; each part is a t test on paired per-seed values (log ratios for
+ratios) against a margin from :mod:`bench.studies.paper.policy`:
 
-Rules shared by all claims (issue 20: statistics a referee can sign):
-
-* Failed and diverged runs are never dropped: a run whose ``status`` is not ``"ok"`` or whose
-  metric is not finite scores the worst error, 1 (the relative error of predicting nothing; for
-  metrics without that bound, the worst finite value of the table, at least 1). Every verdict
-  counts them (``n_failed``) and the report lists them.
-* Comparisons are paired by seed: for two cells A and B (same system, k, ..., different model),
-  the per-seed effect is ``d_s = log(err_A,s / err_B,s)``, and the seeds that have both cells are
-  the sample (at least :data:`MIN_SEEDS` = 5 for a verdict).
-* The test: a one-sided t test on the per-seed values at level :data:`ALPHA` = 0.05, in each
-  direction that the part needs; equivalently, the part compares the one-sided 95% bounds
-  ``mean -/+ t(0.95, n - 1) * sd / sqrt(n)`` (together: the two-sided 90% interval the report
-  prints) with its *margin*, the smallest ratio that matters, ``delta = log(margin)``. A
-  difference inside the margin is a tie, never an ordering, and no part holds by default:
-  every status is the outcome of a test.
-* Part kinds (``_Part.kind``):
-  - *greater* ("A is worse than B", an ordering): holds when ``lo > delta`` (A is worse by more
-    than the margin, p < alpha), contradicts when ``hi < delta`` (a difference of the margin is
-    ruled out: a tie or the reverse), else undecided;
-  - *at most* ("no gain", "no better", "matches or beats": the upper of the two one-sided tests
-    of an equivalence test, because the other side also satisfies the claim: a regulariser that
-    hurts gives "no gain"): holds when ``hi < delta``, contradicts when ``lo > delta``;
-  - *equivalent* ("slightly", two one-sided tests, TOST): holds when ``-delta < lo`` and
-    ``hi < delta``, contradicts when ``lo > delta`` or ``hi < -delta``;
-  - *band* / *threshold* (slopes of energy growth, shares of a gap): the same bounds against a
-    stated interval or threshold.
-  Margins come from the paper's effect sizes (its headline ratios are 2x to 10x): 1.25x for
-  errors (:data:`DELTA`), 2x for energy violations, "matches" and "slightly" (:data:`DELTA_2`).
-* Trivial predictors (issue 10). Every experiment runs ``constant_velocity`` (and ``at_rest`` in
-  damped scenes) on the same test trajectories; only finished trivial runs count. A model
-  *succeeds* when it beats the best trivial predictor by :data:`TRIVIAL_FACTOR` (2x) on every
-  seed. An experiment whose best model does not is *not discriminating*: the test set cannot
-  tell a model that works from one that does not, and the verdict is "inconclusive" whatever
-  its parts say. Without finished trivial-predictor runs discrimination is "unknown" and the
-  verdict stands, flagged.
-* The verdict is one of :data:`VERDICTS`: "reproduced" when every part holds; "partly
-  reproduced" when some parts hold and others are contradicted; "not reproduced" when parts are
-  contradicted and none holds; "inconclusive" otherwise (undecided parts), with fewer than
-  :data:`MIN_SEEDS` seeds, or when the experiment is not discriminating. Each carries its
-  parts, effect, interval, seeds, profile and the count of failed runs. The report judges each
-  claim again on a disjoint seed set and without each seed (``bench._report``).
+- *greater* ("A is worse than B"): holds when the lower one-sided bound is above the margin,
+  contradicts when the upper one is below it; *at most* ("no better", "matches or beats") the
+  mirror image; *equivalent* ("slightly", TOST) within +-margin; *band* / *below* (slopes)
+  against a centre and the slope tolerance; *above* (a share of a gap).
+- Failed and diverged runs are scored, never dropped: the worst error, 1 (or the table's worst
+  finite value, at least 1, for metrics without that bound).
+- A part whose models did not learn, or whose stated condition ("at similar loss") does not
+  hold, reads *not tested* (:func:`gated`, :func:`learned`, :func:`condition`).
+- Holm's step-down correction runs across a claim's tested parts, for *holds* and for
+  *contradicts* alike (:func:`holm`); each part shows the margins at which it holds, is
+  undecided and is contradicted (:func:`margin_ranges`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -61,6 +31,7 @@ import pandas as pd
 from scipy import stats
 
 from ...core._query import initial_state, option, select
+from . import policy
 
 __all__ = [
     "MODEL_LABELS",
@@ -76,9 +47,6 @@ NOT_REPRODUCED = "not reproduced"
 INCONCLUSIVE = "inconclusive"
 VERDICTS = (REPRODUCED, PARTLY, NOT_REPRODUCED, INCONCLUSIVE)
 
-# Smallest error ratio that "matters": log(1.25). Chosen before looking at results; the paper's
-# headline effects (Figs. 4-6) are factors of 2 to 10.
-DELTA = math.log(1.25)
 # The level of every one-sided test, and the fewest paired seeds that give a verdict.
 ALPHA = 0.05
 MIN_SEEDS = 5
@@ -101,10 +69,8 @@ def required_seeds() -> int:
     return _MIN_SEEDS.get()
 
 
-# Energy violations and "matching" are judged at a factor of 2.
-DELTA_2 = math.log(2.0)
-# A model succeeds when it beats the best trivial predictor by this factor on every seed.
-TRIVIAL_FACTOR = 2.0
+# A model succeeds when it beats the best trivial predictor by this factor (the policy's).
+TRIVIAL_FACTOR = policy.POLICY["learning"].margin
 # The score of a failed or diverged run (relative errors are ~1 for a prediction of nothing).
 WORST_ERROR = 1.0
 
@@ -282,16 +248,31 @@ def _paired(runs: pd.DataFrame, a: Mapping, b: Mapping, metric: str = "rollout_e
     return d[np.isfinite(d)]
 
 
+@dataclass(frozen=True)
+class Gate:
+    """A precondition of a comparison: ``open`` True (met), False (not met: the part it gates
+    reads *not tested*) or None (unknown: no trivial-predictor runs; the part is judged,
+    flagged). ``text`` says what was measured against what."""
+
+    label: str
+    open: bool | None
+    text: str
+
+
 @dataclass
 class _Part:
     """One tested part of a claim: ``point`` (the effect, a mean of per-seed values, on the log
     scale for ratios), ``lo``/``hi`` (its one-sided (1 - alpha) bounds, together the two-sided
     90% interval at alpha = 0.05), ``n`` seeds, the ``status`` its test gives, and what the
-    test was: ``kind`` (see the module docstring), ``margin`` (the ratio, or the threshold or
-    band on the effect's own scale when ``log_scale`` is False), ``test`` and ``alpha``."""
+    test was: ``kind`` (see the module docstring), ``margin`` (its label), ``quantity`` and
+    ``margin_value`` (from :mod:`bench.studies.paper.policy`), ``test`` and ``alpha`` (the
+    level after Holm's correction). ``decide(margin value, level)`` re-judges the part at
+    another margin or level; ``gates`` are its preconditions; ``role`` is "part" (a statement
+    of the claim) or "condition" (a stated condition of other parts, "at similar loss": shown,
+    never a finding of its own); ``ranges`` are (status, from, to) margin segments."""
 
     name: str
-    status: str  # "holds" | "contradicts" | "undecided"
+    status: str  # "holds" | "contradicts" | "undecided" | "not tested"
     point: float
     lo: float
     hi: float
@@ -302,26 +283,59 @@ class _Part:
     margin: str = ""
     test: str = ""
     alpha: float = ALPHA
+    quantity: str = ""
+    margin_value: float = math.nan
+    gates: tuple = ()
+    role: str = "part"
+    ranges: tuple = ()
+    decide: Callable | None = field(default=None, repr=False, compare=False)
+    levels: tuple[float, float] = (ALPHA, ALPHA)  # Holm's levels for holds / contradicts
 
     def text(self) -> str:
         ci = f"[{self.lo:.3g}, {self.hi:.3g}]" if np.isfinite(self.lo) else "[n/a]"
         s = f"{self.name}: {self.point:.3g} {ci}, n={self.n} -> {self.status}"
         return s + (f" ({self.note})" if self.note else "")
 
+    def range_text(self) -> str:
+        """The margins at which the part holds, is undecided and is contradicted, e.g.
+        "holds below 1.41x; undecided 1.41x-1.72x; contradicts from 1.72x"."""
+        if not self.ranges:
+            return "-"
+        q = policy.POLICY.get(self.quantity)
+        unit = (lambda x: f"{x:.3g}x") if q is None or q.ratio else (lambda x: f"{x:.3g}")
+        out = []
+        for i, (status, a, b) in enumerate(self.ranges):
+            if len(self.ranges) == 1:
+                where = "at every margin"
+            elif i == 0:
+                where = f"below {unit(b)}"
+            elif i == len(self.ranges) - 1:
+                where = f"from {unit(a)}"
+            else:
+                where = f"{unit(a)}-{unit(b)}"
+            out.append(f"{status} {where}")
+        return "; ".join(out)
+
     def as_row(self) -> dict:
         return {
             "part": self.name,
+            "role": self.role,
             "status": self.status,
             "effect": self.point,
             "lo": self.lo,
             "hi": self.hi,
             "n": self.n,
             "kind": self.kind,
+            "quantity": self.quantity,
             "margin": self.margin,
+            "margin range": self.range_text(),
             "test": self.test,
             "alpha": self.alpha,
             "note": self.note,
         }
+
+
+# --------------------------------------------------------------------------- statistics
 
 
 def t_bounds(values, alpha: float = ALPHA) -> tuple[float, float, float]:
@@ -353,123 +367,329 @@ def t_bounds_jackknife(stat: Callable, n: int, alpha: float = ALPHA):
     return point, point - half, point + half
 
 
-def _bounds(d) -> tuple[float, float, float, int]:
+def _stat(d) -> tuple[float, float, int, int]:
+    """(point, standard error, degrees of freedom, n) of per-seed values, or of a precomputed
+    ``(point, lo, hi, n)`` whose ``lo``/``hi`` are one-sided (1 - alpha) t bounds (the standard
+    error is read back from their width)."""
     if isinstance(d, tuple):
-        return (*d[:3], d[3] if len(d) > 3 else -1)
-    values = np.asarray(list(d), dtype=float)
-    return (*t_bounds(values), int(np.isfinite(values).sum()))
+        point, lo, hi = (float(x) for x in d[:3])
+        n = int(d[3]) if len(d) > 3 else -1
+        if n < 2 or not (np.isfinite(lo) and np.isfinite(hi)):
+            return point, math.nan, max(n - 1, 0), n
+        return point, (hi - lo) / (2 * float(stats.t.ppf(1 - ALPHA, n - 1))), n - 1, n
+    v = np.asarray(list(d), dtype=float)
+    v = v[np.isfinite(v)]
+    n = len(v)
+    if n < 2:
+        return (float(v.mean()) if n else math.nan), math.nan, 0, n
+    return float(v.mean()), float(np.std(v, ddof=1)) / math.sqrt(n), n - 1, n
 
 
-def _decide(lo: float, holds, contradicts) -> str:
-    """A part's status from its test: undecided without bounds, else "holds" when ``holds()``,
-    "contradicts" when ``contradicts()``, undecided otherwise."""
-    if not np.isfinite(lo):
+@functools.lru_cache(maxsize=4096)
+def _t_quantile(alpha: float, df: int) -> float:
+    return float(stats.t.ppf(1 - alpha, df))
+
+
+def _t_interval(point: float, se: float, df: int, alpha: float) -> tuple[float, float]:
+    if not (np.isfinite(se) and df >= 1):
+        return math.nan, math.nan
+    half = _t_quantile(float(alpha), int(df)) * se
+    return point - half, point + half
+
+
+# what each kind of part asks of its bounds (lo, hi) at the margin m on the test scale
+_RULES: dict[str, tuple[Callable, Callable]] = {
+    "greater": (lambda lo, hi, m, c: lo > m, lambda lo, hi, m, c: hi < m),
+    "at most": (lambda lo, hi, m, c: hi < m, lambda lo, hi, m, c: lo > m),
+    "equivalent": (
+        lambda lo, hi, m, c: -m < lo and hi < m,
+        lambda lo, hi, m, c: lo > m or hi < -m,
+    ),
+    "band": (
+        lambda lo, hi, m, c: c - m < lo and hi < c + m,
+        lambda lo, hi, m, c: hi < c - m or lo > c + m,
+    ),
+    "below": (lambda lo, hi, m, c: hi < c + m, lambda lo, hi, m, c: lo > c + m),
+    "above": (lambda lo, hi, m, c: lo > m, lambda lo, hi, m, c: hi < m),
+}
+_TESTS = {
+    "greater": "one-sided t, H1: effect > margin",
+    "at most": "one-sided t, H1: effect < margin",
+    "equivalent": "TOST: two one-sided t",
+    "band": "one-sided t at both ends of center +- margin",
+    "below": "one-sided t, H1: effect < center + margin",
+    "above": "one-sided t, H1: effect > margin",
+}
+
+
+def _status(kind: str, lo: float, hi: float, m: float, center: float) -> str:
+    if not (np.isfinite(lo) and np.isfinite(hi)):
         return "undecided"
-    if holds():
+    holds, contradicts = _RULES[kind]
+    if holds(lo, hi, m, center):
         return "holds"
-    return "contradicts" if contradicts() else "undecided"
+    return "contradicts" if contradicts(lo, hi, m, center) else "undecided"
 
 
-def _fmt_margin(delta: float) -> str:
-    return f"{math.exp(delta):.3g}x"
+def _check_margin(mg) -> None:
+    if not isinstance(mg, policy.Margin):
+        raise TypeError(
+            "a part's margin must come from bench.studies.paper.policy (margin() or stated()); "
+            f"got {mg!r}"
+        )
 
 
-def _greater(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
-    """An ordering: the effect (a log ratio) exceeds the margin ``exp(delta)``."""
-    point, lo, hi, n = _bounds(d)
-    status = _decide(lo, lambda: lo > delta, lambda: hi < delta)
+def _part(kind: str, name: str, d, mg, note: str = "", center: float = 0.0) -> _Part:
+    """A part of ``kind`` on per-seed values ``d`` (or precomputed bounds) at margin ``mg``."""
+    _check_margin(mg)
+    point, se, df, n = _stat(d)
+    to_test = math.log if mg.ratio else float
+
+    def decide(value: float, alpha: float) -> str:
+        lo, hi = _t_interval(point, se, df, alpha)
+        if np.isfinite(se) and se == 0:
+            lo = hi = point
+        return _status(kind, lo, hi, to_test(value), center)
+
+    lo, hi = _t_interval(point, se, df, ALPHA)
+    if np.isfinite(se) and se == 0:
+        lo = hi = point
+    label = mg.label()
+    if kind == "equivalent":
+        label = f"1/{label} to {label}" if mg.ratio else f"+-{label}"
+    elif kind in ("band", "below"):
+        label = f"{center:g} +- {label}" if kind == "band" else f"{center:g} + {label}"
     return _Part(
         name,
-        status,
+        decide(mg.value, ALPHA),
         point,
         lo,
         hi,
         n,
         note,
-        kind="greater",
-        margin=_fmt_margin(delta),
-        test="one-sided t, H1: effect > margin",
+        kind=kind,
+        margin=label + (f" (stated: {mg.source})" if mg.quote else ""),
+        test=_TESTS[kind],
+        quantity=mg.quantity,
+        margin_value=mg.value,
+        decide=decide,
     )
 
 
-def _at_most(name: str, d, delta: float = DELTA, note: str = "") -> _Part:
+def _greater(name: str, d, mg, note: str = "") -> _Part:
+    """An ordering: the effect (a log ratio) exceeds the margin."""
+    return _part("greater", name, d, mg, note)
+
+
+def _at_most(name: str, d, mg, note: str = "") -> _Part:
     """ "No gain" / "no better" / "matches or beats": the effect stays below the margin."""
-    point, lo, hi, n = _bounds(d)
-    status = _decide(lo, lambda: hi < delta, lambda: lo > delta)
+    return _part("at most", name, d, mg, note)
+
+
+def _equivalent(name: str, d, mg, note: str = "") -> _Part:
+    """Equivalence (TOST): the effect lies within +-margin."""
+    return _part("equivalent", name, d, mg, note)
+
+
+def _band(name: str, values, center: float, mg, note: str = "") -> _Part:
+    """The mean of ``values`` lies within ``center +- margin`` (both one-sided tests), outside
+    it (one of them the other way), or undecided."""
+    return _part("band", name, values, mg, note, center)
+
+
+def _below(name: str, values, center: float, mg, note: str = "") -> _Part:
+    """The mean of ``values`` lies below ``center + margin``."""
+    return _part("below", name, values, mg, note, center)
+
+
+def _share(name: str, closed, gap, mg, note: str = "") -> _Part:
+    """ "Most of the gap": per seed ``closed - s * gap > 0`` at the share margin ``s`` (a
+    one-sided t test); the effect printed is the share ``mean(closed) / mean(gap)``, its bounds
+    those of ``closed - s * gap`` read as a share (the gap held at its mean)."""
+    _check_margin(mg)
+    closed, gap = np.asarray(closed, float), np.asarray(gap, float)
+    mean_gap = float(np.mean(gap)) if len(gap) else math.nan
+
+    def bounds(s: float, alpha: float) -> tuple[float, float]:
+        point, se, df, _ = _stat(closed - s * gap)
+        lo, hi = _t_interval(point, se, df, alpha)
+        if np.isfinite(se) and se == 0:
+            lo = hi = point
+        return lo, hi
+
+    def decide(s: float, alpha: float) -> str:
+        lo, hi = bounds(s, alpha)
+        return _status("above", lo, hi, 0.0, 0.0)
+
+    s = mg.value
+    lo, hi = bounds(s, ALPHA)
+    share = float(np.mean(closed)) / mean_gap if mean_gap else math.nan
+    ends = sorted(x / mean_gap + s for x in (lo, hi)) if mean_gap and np.isfinite(lo) else None
     return _Part(
         name,
-        status,
-        point,
-        lo,
-        hi,
-        n,
+        decide(s, ALPHA),
+        share,
+        ends[0] if ends else math.nan,
+        ends[1] if ends else math.nan,
+        len(closed),
         note,
-        kind="at most",
-        margin=_fmt_margin(delta),
-        test="one-sided t, H1: effect < margin",
+        kind="above",
+        margin=mg.label(),
+        test=f"one-sided t, H1: closed - {s:g} gap > 0",
+        quantity=mg.quantity,
+        margin_value=s,
+        decide=decide,
     )
 
 
-def _equivalent(name: str, d, delta: float = DELTA_2, note: str = "") -> _Part:
-    """Equivalence (TOST): the effect lies within ``+-delta``."""
-    point, lo, hi, n = _bounds(d)
-    status = _decide(lo, lambda: -delta < lo and hi < delta, lambda: lo > delta or hi < -delta)
-    return _Part(
-        name,
-        status,
-        point,
-        lo,
-        hi,
-        n,
-        note,
-        kind="equivalent",
-        margin=f"1/{_fmt_margin(delta)} to {_fmt_margin(delta)}",
-        test="TOST: two one-sided t",
+def undecided(name: str, note: str, role: str = "part") -> _Part:
+    """A part that could not be tested at all (no runs, no curves)."""
+    return _Part(name, "undecided", math.nan, math.nan, math.nan, 0, note, role=role)
+
+
+# --------------------------------------------------------------------------- gates
+
+
+def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared=False) -> Gate:
+    """The learning gate: the model's per-seed log score beats the best trivial predictor's by
+    the policy's learning margin, as a geometric mean over the paired seeds (``squared``: the
+    scores are mean squares, the margin squared). Unknown without paired trivial runs."""
+    mg = policy.margin("learning", squared=squared)
+    if trivial_log is None or model_log is None:
+        return Gate(label, None, f"{label}: no paired trivial-predictor runs")
+    d = (trivial_log - model_log).dropna()
+    d = d[np.isfinite(d)]
+    if not len(d):
+        return Gate(label, None, f"{label}: no paired trivial-predictor runs")
+    ratio = math.exp(float(d.mean()))
+    ok = bool(float(d.mean()) >= mg.test)
+    return Gate(
+        label,
+        ok,
+        f"{label} {'learned' if ok else 'did not learn'}: {ratio:.3g}x below the best trivial "
+        f"predictor (geometric mean over {len(d)} seeds; the gate is {mg.label()})",
     )
 
 
-def _band(name: str, values, low: float, high: float, note: str = "") -> _Part:
-    """The mean of ``values`` lies inside ``[low, high]`` (both one-sided tests), outside it
-    (one of them the other way), or undecided."""
-    point, lo, hi, n = _bounds(values)
-    status = _decide(lo, lambda: lo > low and hi < high, lambda: hi < low or lo > high)
-    return _Part(
-        name,
-        status,
-        point,
-        lo,
-        hi,
-        n,
-        note,
-        kind="band",
-        margin=f"[{low:g}, {high:g}]",
-        test="one-sided t at both ends",
-    )
+def condition(part: _Part) -> Gate:
+    """A stated condition of other parts ("at similar loss"): open when ``part`` holds. The
+    part becomes a *condition*: shown, never a finding of its own."""
+    part.role = "condition"
+    return Gate(part.name, part.status == "holds", f"condition {part.name}: {part.status}")
 
 
-def _threshold(name: str, values, threshold: float, note: str = "", above: bool = True) -> _Part:
-    """The mean of ``values`` lies above ``threshold`` (``above``; below otherwise): holds when
-    its one-sided bound is past the threshold, contradicts when the other bound is short of it."""
-    point, lo, hi, n = _bounds(values)
-    status = _decide(
-        lo,
-        lambda: (lo > threshold) if above else (hi < threshold),
-        lambda: (hi < threshold) if above else (lo > threshold),
-    )
-    return _Part(
-        name,
-        status,
-        point,
-        lo,
-        hi,
-        n,
-        note,
-        kind="above" if above else "below",
-        margin=f"{threshold:g}",
-        test=f"one-sided t test on per-seed values, H1 mean {'>' if above else '<'} {threshold:g}",
-    )
+def gated(part: _Part, *gates: Gate) -> _Part:
+    """``part`` judged only where every gate is open (:func:`apply_gates`)."""
+    part.gates = (*part.gates, *gates)
+    return part
 
 
-def _positive(name: str, d, delta: float = DELTA, note="") -> _Part:
-    """An ordering (kept name): see :func:`_greater`."""
-    return _greater(name, d, delta, note)
+def apply_gates(parts: list[_Part]) -> None:
+    """A part with a closed gate reads *not tested*, its reasons in the note."""
+    for p in parts:
+        closed = [g for g in p.gates if g.open is False]
+        if closed:
+            p.status = "not tested"
+            p.note = "; ".join([*(g.text for g in closed), *([p.note] if p.note else [])])
+        elif any(g.open is None for g in p.gates):
+            unknown = "; ".join(g.text for g in p.gates if g.open is None)
+            p.note = f"{p.note}; gate unknown: {unknown}" if p.note else f"gate unknown: {unknown}"
+
+
+# --------------------------------------------------------------------------- Holm, ranges
+
+
+def _p_value(decide: Callable, value: float, status: str) -> float:
+    """The smallest level at which ``decide`` gives ``status`` at margin ``value`` (1 when it
+    does not even at 0.5): the part's p-value for that direction."""
+    if decide(value, 0.5) != status:
+        return 1.0
+    lo, hi = 1e-12, 0.5
+    if decide(value, lo) == status:
+        return lo
+    for _ in range(50):
+        mid = math.sqrt(lo * hi)
+        if decide(value, mid) == status:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def holm(parts: list[_Part], alpha: float = ALPHA) -> None:
+    """Holm's step-down correction across the claim's tested parts, for *holds* and for
+    *contradicts* alike: the part with the i-th smallest p-value (of m) is tested at
+    ``alpha / (m - i)``, and the steps stop at the first that fails. Sets each part's status,
+    ``levels`` and ``alpha`` (the level its status was decided at)."""
+    family = [
+        p
+        for p in parts
+        if p.decide is not None
+        and p.role == "part"
+        and p.status in ("holds", "contradicts", "undecided")
+    ]
+    m = len(family)
+    if not m:
+        return
+    result = {id(p): "undecided" for p in family}
+    levels = {id(p): [alpha, alpha] for p in family}
+    for j, direction in enumerate(("holds", "contradicts")):
+        ps = sorted(
+            ((_p_value(p.decide, p.margin_value, direction), p) for p in family), key=lambda x: x[0]
+        )
+        stopped = False
+        for i, (pv, p) in enumerate(ps):
+            level = alpha / (m - i)
+            levels[id(p)][j] = level
+            if not stopped and pv <= level:
+                result[id(p)] = direction
+            else:
+                stopped = True
+    for p in family:
+        p.status = result[id(p)]
+        p.levels = tuple(levels[id(p)])
+        p.alpha = p.levels[1] if p.status == "contradicts" else p.levels[0]
+        if m > 1:
+            p.test = f"{p.test}; Holm over {m} parts"
+
+
+def margin_ranges(part: _Part, n_grid: int = 241) -> tuple:
+    """``(status, from, to)`` segments over the margins: for ratios 1x to 1e4x (log grid), for
+    shares and slopes 0 to 1 and 0 to 2; *holds* judged at the part's Holm level for holds,
+    *contradicts* at its level for contradicts, each boundary refined by bisection."""
+    if part.decide is None or not part.quantity:
+        return ()
+    q = policy.POLICY[part.quantity]
+    lh, lc = part.levels
+
+    def status(v: float) -> str:
+        if part.decide(v, lh) == "holds":
+            return "holds"
+        return "contradicts" if part.decide(v, lc) == "contradicts" else "undecided"
+
+    if q.ratio:
+        top = max(1e4, part.margin_value * 10)
+        grid = np.exp(np.linspace(0.0, math.log(top), n_grid))
+        mid = lambda a, b: math.sqrt(a * b)  # noqa: E731
+    else:
+        top = 1.0 if part.quantity == "share" else 2.0
+        grid = np.linspace(0.0, top, n_grid)
+        mid = lambda a, b: (a + b) / 2  # noqa: E731
+    segs = []
+    prev = status(float(grid[0]))
+    start = float(grid[0])
+    for a, b in zip(grid, grid[1:], strict=False):
+        s = status(float(b))
+        if s == prev:
+            continue
+        lo, hi = float(a), float(b)
+        for _ in range(40):
+            c = mid(lo, hi)
+            if status(c) == prev:
+                lo = c
+            else:
+                hi = c
+        segs.append((prev, start, hi))
+        prev, start = s, hi
+    segs.append((prev, start, math.inf))
+    return tuple(segs)

@@ -35,7 +35,6 @@ Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are not here yet 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -47,8 +46,9 @@ from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
 from .._figure import save_figure
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict
-from ._stats import NOT_REPRODUCED, PARTLY, _at_most, _bad, _greater, _paired
+from . import policy
+from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
+from ._stats import _at_most, _bad, _greater, _paired, condition, gated
 
 SYSTEMS = ("mass_spring", "pendulum", "two_body")
 # (model, coordinates) of the study: the seed's two models on (q, p), NODE+SO and the trivial
@@ -62,8 +62,14 @@ CELLS = (
 BASELINE = {"model": "node", "coordinates": "momentum"}
 HNN = {"model": "hnn", "coordinates": "momentum"}
 NODE_SO = {"model": "node_so", "coordinates": "velocity"}
-ENERGY_FACTOR = 10.0  # "orders of magnitude": at least one
-LOSS_FACTOR = 3.0  # "similar loss": the HNN's test loss at most 3x the baseline's
+# The seed states a number for the two-body task only; its other tasks say "dramatically"
+# (seeds/003 line 35), which is the policy's energy margin (squared: an energy MSE).
+TWO_BODY_ENERGY = policy.stated(
+    "energy",
+    100.0,
+    "an energy MSE that was several orders of magnitude below the baseline",
+    "seeds/003 line 47",
+)
 
 # The seed's own numbers (greydanus/hamiltonian-nn README, "Numbers": baseline NN, HNN), the
 # means of its test loss on derivatives and of its energy MSE along rollouts. Its test loss is
@@ -162,19 +168,18 @@ CLAIM_TITLES[10] = (
 
 
 def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
-    """Claim 10 (HNN seed, its Table 1): on each task the HNN's energy MSE along rollouts is
-    at least an order of magnitude below the baseline MLP's, at a similar test loss.
+    """Claim 10 (HNN seed, its Table 1): "even as HNNs tied with the baseline on loss, they
+    dramatically outperformed it on the MSE energy metric" (seeds/003 line 35; two-body: "several
+    orders of magnitude below the baseline", line 47).
 
-    Parts per system, one-sided t tests at level 0.05 on paired per-seed values: (a) a
-    *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the margin 10x
-    (:data:`ENERGY_FACTOR`); (b) an *at most* part on ``log(test loss HNN / test loss
-    baseline)`` at 3x (:data:`LOSS_FACTOR`: the HNN does not buy its energy with a worse fit).
-    All parts holding: reproduced; some contradicted: partly, except that when every (a) part
-    is contradicted the claim is not reproduced (the (b) parts only qualify them). Failed runs
-    score the worst value. Discriminating: a model beats the best trivial predictor
-    by 2x in rollout error on each system. Headline: (a) on the mass-spring. The Deconstructing
-    view on the same runs (NODE+SO's energy MSE and rollout error against the HNN's) is
-    reported beside (``extra``), not tested.
+    Per system: (a) a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the
+    policy's energy margin squared (an MSE), on the two-body at the stated 100x
+    (:data:`TWO_BODY_ENERGY`); judged under (b), the condition "tied on loss": an *at most* part
+    at the loss margin on ``log(test loss HNN / test loss baseline)``, and where both models
+    learned (rollout error on (q, qdot) against the best trivial predictor). Every (a) holding:
+    reproduced; some contradicted: partly or not reproduced. Failed runs score the worst value.
+    Headline: (a) on the mass-spring. The Deconstructing view on the same runs (NODE+SO's
+    energy MSE and rollout error against the HNN's) is reported beside, not tested.
     """
     r = select(runs, ok=False, system=list(SYSTEMS))
     if len(r) and "train_target" in r:
@@ -189,14 +194,19 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
             continue
         e = _paired(rs, BASELINE, HNN, "energy_mse")
         loss = _paired(rs, HNN, BASELINE, "derivative_mse_test")
-        parts.append(
-            _greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), math.log(10))
+        similar = _at_most(
+            f"(b) {system}: log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss")
         )
+        mg = TWO_BODY_ENERGY if system == "two_body" else policy.margin("energy", squared=True)
         parts.append(
-            _at_most(
-                f"(b) {system}: log(test loss HNN / MLP)", loss.to_numpy(), math.log(LOSS_FACTOR)
+            gated(
+                _greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
+                condition(similar),
+                learned_cell(rs, HNN, f"HNN on {system}", "rollout_error_any"),
+                learned_cell(rs, BASELINE, f"MLP on {system}", "rollout_error_any"),
             )
         )
+        parts.append(similar)
         seeds.append(min(len(e), len(loss)))
         so_e = _paired(rs, NODE_SO, HNN, "energy_mse")
         so_r = _paired(rs, NODE_SO, HNN, "rollout_error_any")
@@ -207,7 +217,7 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
             )
     head = parts[0] if parts else None
     n_failed = int(_bad(r[r["model"] != "constant_velocity"], "energy_mse").sum())
-    v = _verdict(
+    return _verdict(
         10,
         CLAIM_TITLES[10],
         parts,
@@ -218,12 +228,6 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         discs=_per_system_disc(r.assign(rollout_error=r["rollout_error_any"]), "rollout_error"),
         n_failed=n_failed,
     )
-    # the (b) parts qualify the (a) parts, they are not claims of their own: no energy gap
-    # anywhere is "not reproduced" whatever the losses did
-    energy = [p.status for p in parts if p.name.startswith("(a)")]
-    if v.verdict == PARTLY and energy and all(s == "contradicts" for s in energy):
-        v = dataclasses.replace(v, verdict=NOT_REPRODUCED)
-    return v
 
 
 def _rollout_any(r: pd.DataFrame) -> pd.Series:

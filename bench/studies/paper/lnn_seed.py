@@ -56,7 +56,6 @@ than data.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -68,10 +67,10 @@ from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
 from .._figure import save_figure
-from . import _lnn_diagnosis
+from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict
-from ._stats import NOT_REPRODUCED, PARTLY, _at_most, _bad, _greater, _paired
+from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
+from ._stats import _at_most, _bad, _greater, _paired, condition, gated
 
 # Costs measured on this 2-core machine on 2026-11-25, the paper-core campaign paused (other
 # sessions' processes running): ms per training step at the paper's size (width 500, 3 hidden
@@ -90,8 +89,6 @@ MEASURED = {
 PURE_LNN = (("kinetic_prior", 0.0), ("solve", "pinv"))
 LNN = {"model": "lnn"}
 BASELINE = {"model": "node_so"}
-ENERGY_FACTOR = 5.0  # the LNN's energy discrepancy at least 5x below the baseline's (seed: 20x)
-LOSS_FACTOR = 3.0  # "similar loss": the LNN's test loss on dz/dt at most 3x the baseline's
 # The seed's numbers (its text): % of max potential energy (its scale: 3 g), final losses
 SEED_NUMBERS = {
     "energy_pct": {"node_so": 8.0, "lnn": 0.4},
@@ -192,29 +189,33 @@ def _worst_for_failed(r: pd.DataFrame) -> pd.DataFrame:
 
 
 def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
-    """Claim 9 (LNN seed, double pendulum): the LNN's energy discrepancy along rollouts is well
-    below the baseline's, at a similar loss.
+    """Claim 9 (LNN seed, double pendulum): the LNN "conserves the total energy of the system
+    significantly better than the baseline" at "similar final losses" (seeds/002, lines 71-80).
 
-    Parts, one-sided t tests at level 0.05 on paired per-seed values: (a) a *greater* part on
-    ``log(energy % baseline / energy % LNN)`` (``energy_pct_max_pe``, the text's mean over
-    time) at the margin 5x (:data:`ENERGY_FACTOR`; the seed's gap is 20x); (b) an *at most*
-    part on ``log(test loss LNN / test loss baseline)`` (``derivative_mse_test``) at 3x
-    (:data:`LOSS_FACTOR`, "similar final losses"). Both holding: reproduced; (a) contradicted:
-    not reproduced; (a) holding and (b) contradicted: partly. A diverged or failed run scores
-    the table's worst value. Discriminating: a model beats constant velocity by 2x in rollout
-    error. The notebook's last-step metric is reported beside (``extra``), not tested.
+    (a) a *greater* part at the energy margin on ``log(energy % baseline / energy % LNN)``
+    (``energy_pct_max_pe``, the text's mean over time; the seed's own gap, 8% against 0.4%, is
+    a result, not a stated margin); judged under (b), the condition "at similar loss": an *at
+    most* part at the loss margin on ``log(test loss LNN / test loss baseline)``
+    (``derivative_mse_test``), and where both models learned (rollout error against the best
+    trivial predictor). (a) holding: reproduced; contradicted: not reproduced; not tested:
+    inconclusive. A diverged or failed run scores the table's worst value. The notebook's
+    last-step metric is reported beside (``extra``), not tested.
     """
-    r = _seed_rows(runs)
-    if not len(r):
+    r0 = _seed_rows(runs)
+    if not len(r0):
         return _verdict(9, CLAIM_TITLES[9], [], None, 0, "log energy-% ratio baseline / LNN")
-    n_failed = int(_bad(r[r["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
-    r = _worst_for_failed(r)
+    n_failed = int(_bad(r0[r0["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
+    r = _worst_for_failed(r0)
     e = _paired(r, BASELINE, LNN, "energy_pct_max_pe")
     loss = _paired(r, LNN, BASELINE, "derivative_mse_test")
-    parts = [
-        _greater("(a) log(energy % baseline / LNN)", e.to_numpy(), math.log(ENERGY_FACTOR)),
-        _at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), math.log(LOSS_FACTOR)),
-    ]
+    similar = _at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), policy.margin("loss"))
+    energy = gated(
+        _greater("(a) log(energy % baseline / LNN)", e.to_numpy(), policy.margin("energy")),
+        condition(similar),
+        learned_cell(r0, LNN, "pure LNN"),
+        learned_cell(r0, BASELINE, "NODE+SO (baseline)"),
+    )
+    parts = [energy, similar]
     last = (
         _paired(r, BASELINE, LNN, "energy_pct_max_pe_last")
         if "energy_pct_max_pe_last" in r
@@ -223,7 +224,7 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     extra = ""
     if last is not None and len(last):
         extra = f"last-step energy % (the notebook's) baseline / LNN {math.exp(last.mean()):.3g}x"
-    v = _verdict(
+    return _verdict(
         9,
         CLAIM_TITLES[9],
         parts,
@@ -234,10 +235,6 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         discs=_per_system_disc(r, "rollout_error"),
         n_failed=n_failed,
     )
-    # (b) qualifies (a): no energy gap is "not reproduced" whatever the losses did
-    if v.verdict == PARTLY and parts[0].status == "contradicts":
-        v = dataclasses.replace(v, verdict=NOT_REPRODUCED)
-    return v
 
 
 # ------------------------------------------------------------------------ table and figure
