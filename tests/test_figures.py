@@ -297,3 +297,18 @@ def test_report_names_no_folder_by_its_absolute_path(tmp_path):
     assert "Differences from `gpu`:" in text
     assert "jax_version differs: 0.10.2 (a) vs 0.11.2 (gpu)" in text
     assert str(tmp_path) not in text
+
+
+def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_claims(results):
+    from bench.studies.paper import policy
+
+    _, _, text = results
+    section = text.split("## Margin policy")[1].split("## Margin-dependent claims")[0]
+    for q in policy.POLICY.values():
+        assert f"| {q.label} |" in section
+    assert "several orders of magnitude" in section  # a margin a seed states, with its source
+    parts = text.split("### Every part")[1].split("## Margin policy")[0]
+    assert "| margin range |" in parts.splitlines()[2]
+    assert re.search(r"holds below [\d.]+x; undecided [\d.]+x-[\d.]+x; contradicts from", parts)
+    dependent = text.split("## Margin-dependent claims")[1].split("## Verdicts at both budgets")[0]
+    assert "No verdict changes inside any band." in dependent or "Margin-dependent: claim" in dependent

@@ -13,6 +13,7 @@ import pytest
 from bench.core import _store
 from bench.core._experiments import expand
 from bench.studies.paper import hnn_seed as H
+from bench.studies.paper import policy
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32: t half-width 0.30 at n = 5
@@ -78,11 +79,15 @@ def test_declarations_follow_the_seed():
     assert (two.n_train, two.chunk, two.steps, two.noise) == (800, 50, 10000, 0.0)
 
 
-def test_an_order_of_magnitude_at_similar_loss_is_reproduced():
-    v = H.claim_10(_tables(energy_ratio=100.0, loss_ratio=1.0, spread=0.1))
+def test_several_orders_of_magnitude_at_similar_loss_are_reproduced():
+    v = H.claim_10(_tables(energy_ratio=1000.0, loss_ratio=1.0, spread=0.1))
     assert v.verdict == "reproduced", v.detail
     assert len(v.parts) == 6 and all(p.status == "holds" for p in v.parts)
-    assert v.effect == pytest.approx(math.log(100.0), rel=1e-6)
+    assert v.effect == pytest.approx(math.log(1000.0), rel=1e-6)
+    assert [p.role for p in v.parts if p.name.startswith("(b)")] == ["condition"] * 3
+    # the two-body margin is the seed's stated number, the others the policy's energy margin
+    two = next(p for p in v.parts if p.name.startswith("(a) two_body"))
+    assert two.margin_value == 100.0 and "stated: seeds/003 line 47" in two.margin
     assert "Deconstructing view" in v.detail
 
 
@@ -92,16 +97,24 @@ def test_equal_energy_error_is_not_reproduced():
     assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"contradicts"}
 
 
-def test_energy_bought_with_a_worse_fit_is_partly_reproduced():
-    v = H.claim_10(_tables(energy_ratio=100.0, loss_ratio=30.0, spread=0.1))
-    assert v.verdict == "partly reproduced", v.detail
-    assert {p.status for p in v.parts if p.name.startswith("(b)")} == {"contradicts"}
-
-
-def test_a_ratio_on_the_margin_is_undecided_and_inconclusive():
-    v = H.claim_10(_tables(energy_ratio=10.0, loss_ratio=1.0, spread=1.0))
+def test_energy_bought_with_a_worse_fit_is_not_tested():
+    v = H.claim_10(_tables(energy_ratio=1000.0, loss_ratio=30.0, spread=0.1))
     assert v.verdict == "inconclusive", v.detail
-    assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"undecided"}
+    assert {p.status for p in v.parts if p.name.startswith("(b)")} == {"contradicts"}
+    assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"not tested"}
+
+
+def test_a_ratio_on_the_margin_is_undecided():
+    # at the policy's energy-MSE margin: undecided where the seed says "dramatically", far
+    # short of the two-body's stated 100x
+    margin = policy.margin("energy", squared=True).value
+    v = H.claim_10(_tables(energy_ratio=margin, loss_ratio=1.0, spread=1.0))
+    got = {p.name.split(":")[0]: p.status for p in v.parts if p.name.startswith("(a)")}
+    assert got == {
+        "(a) mass_spring": "undecided",
+        "(a) pendulum": "undecided",
+        "(a) two_body": "contradicts",
+    }, v.detail
 
 
 def test_fewer_than_five_seeds_or_no_runs_are_inconclusive():

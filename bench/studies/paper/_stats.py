@@ -555,7 +555,9 @@ def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared
     the policy's learning margin, as a geometric mean over the paired seeds (``squared``: the
     scores are mean squares, the margin squared). Unknown without paired trivial runs."""
     mg = policy.margin("learning", squared=squared)
-    if trivial_log is None or model_log is None:
+    if model_log is None or not len(model_log):
+        return Gate(label, None, f"{label} has no runs")
+    if trivial_log is None:
         return Gate(label, None, f"{label}: no paired trivial-predictor runs")
     d = (trivial_log - model_log).dropna()
     d = d[np.isfinite(d)]
