@@ -311,4 +311,6 @@ def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_cla
     assert "| margin range |" in parts.splitlines()[2]
     assert re.search(r"holds below [\d.]+x; undecided [\d.]+x-[\d.]+x; contradicts from", parts)
     dependent = text.split("## Margin-dependent claims")[1].split("## Verdicts at both budgets")[0]
-    assert "No verdict changes inside any band." in dependent or "Margin-dependent: claim" in dependent
+    assert (
+        "No verdict changes inside any band." in dependent or "Margin-dependent: claim" in dependent
+    )
