@@ -153,7 +153,7 @@ def _parser() -> argparse.ArgumentParser:
 
     dl_help = (
         "the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
-        "(issue 23): <results>/lnn_diagnosis.csv"
+        ": <results>/lnn_diagnosis.csv"
     )
     dl = sub.add_parser("diagnose-lnn", help=dl_help, description=dl_help)
     dl.add_argument("--profile", default="quick", help="smoke, quick or paper")
@@ -186,7 +186,7 @@ def _parser() -> argparse.ArgumentParser:
         "--replication",
         action="store_true",
         help="on the profile's replication seeds instead of its own "
-        "(quick, paper, paper-core: 5-9; issue 20)",
+        "(quick, paper, paper-core: 5-9)",
     )
 
     da = sub.add_parser("data", help="export a profile's datasets with a card; verify a folder")

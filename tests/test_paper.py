@@ -135,6 +135,6 @@ def test_smoke_is_small_and_quick_budget_does_not_grow():
     assert len(E.profile_defaults("quick")[1]) >= 5  # issue 20: five seeds per verdict
     # `make bench` promises about 30 minutes on 2 cores. With five seeds it does not keep it:
     # the estimator (calibrated on an older CPU, where it over-predicted by 15%) says 34.6 min,
-    # and this machine measured 50.6 min under load (README, "Known limits"). This guard keeps
-    # the estimate from growing further while the budget is open.
+    # and this machine measured 50.6 min under load (docs/measured.md, "Known limits"). This guard
+    # keeps the estimate from growing further while the budget is open.
     assert P.make_bench_seconds("quick") <= 35 * 60, quick

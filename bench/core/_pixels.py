@@ -1,4 +1,4 @@
-"""Runs that learn from pixels (``RunConfig.observation == "pixels"``; issue 22): rendered frames
+"""Runs that learn from pixels (``RunConfig.observation == "pixels"``): rendered frames
 of the system, an autoencoder with latent dynamics (``models.LatentModel``), the HNN seed's
 three-term loss, rollouts decoded to pixels, and their metrics as one row.
 

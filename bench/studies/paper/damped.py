@@ -84,7 +84,7 @@ DAMPED = Experiment(
     fixed={"friction": 0.4},
     # paper-core: the verdict's cells only (the extras, plain NODE and the Rayleigh HNN, are
     # 1.6 of the 5.5 CPU hours of the paper's damped cells)
-    # quick: the same (issue 20 paid for quick's five seeds with the extras' seed-0 runs)
+    # quick: the same (quick's five seeds are paid for by the extras' seed-0 runs)
     profile_overrides={
         "quick": {
             "model": ("node_so", "hnn_so", "mixture_hnn", *TRIVIAL_MODELS),

@@ -1,4 +1,4 @@
-"""The HNN seed's own tasks (Greydanus et al. 2019; issue 22): mass-spring, pendulum and two-body
+"""The HNN seed's own tasks (Greydanus et al. 2019): mass-spring, pendulum and two-body
 from states, its protocol, claim 10's verdict rule, its table beside the seed's numbers and a
 figure.
 
@@ -30,7 +30,7 @@ figure.
 Budgets: ``paper`` (and the ``paper-core`` campaign) is the seed's; ``quick`` the seed's data
 with 1000 steps (the seed: 2000, two-body 10000) and 200 two-body orbits (the seed: 800), inside
 ``make bench``; ``smoke`` tiny.
-Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are not here yet (issue 22).
+Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are in ``pixels.py``.
 """
 
 from __future__ import annotations
@@ -154,7 +154,7 @@ def _experiment(system: str) -> Experiment:
         profile_overrides={
             "smoke": {**_SMOKE, "seeds": (0,)},
             "quick": _QUICK[system],
-            "paper-core": {},  # the seed's budget: part of the CPU campaign (issue 24)
+            "paper-core": {},  # the seed's budget: part of the CPU campaign
         },
         include=_include,
         claim=10,

@@ -1,4 +1,4 @@
-"""The LNN seed's double pendulum as the seed ran it (Cranmer et al. 2020; issue 23): the
+"""The LNN seed's double pendulum as the seed ran it (Cranmer et al. 2020): the
 experiment, claim 9's verdict rule, its table beside the seed's numbers, and a figure.
 
 **The seed's protocol** (its text, "Training details" and "Double pendulum"; its notebook, see
@@ -72,7 +72,7 @@ from ._common import UNIT_DOUBLE_PENDULUM
 from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
 from ._stats import _at_most, _bad, _greater, _paired, condition, gated
 
-# Costs measured on this 2-core machine on 2026-11-25, the paper-core campaign paused (other
+# Costs measured on this 2-core machine, the paper-core campaign paused (other
 # sessions' processes running): ms per training step at the paper's size (width 500, 3 hidden
 # layers, 32 states a step), float32; ground-truth data per training trajectory (Dopri8 at
 # 1e-11 over 10 s; 150,000 per seed at paper, one dataset per seed shared by the models); the
