@@ -8,9 +8,11 @@ studies and changes nothing in the process: the entry points set threads and the
 cache up (``bench.core._env.setup_process``).
 """
 
-from . import studies  # registers the built-in studies
-from .core import _experiments as experiments
-from .core import _metrics as metrics
+from . import (
+    experiments,
+    metrics,
+    studies,  # registers the built-in studies
+)
 from .core._ensemble import train_ensemble
 from .core._experiments import (
     PROFILES,

@@ -313,40 +313,38 @@ def _cmd_list(args) -> int:
     import models
     import systems
 
-    from .core import _experiments as E
+    from .core._experiments import available
 
     print("systems:     " + ", ".join(systems.available()))
     print("models:      " + ", ".join(models.available()))
-    print("experiments: " + (", ".join(E.available()) or "(none registered)"))
+    print("experiments: " + (", ".join(available()) or "(none registered)"))
     print("profiles:    " + ", ".join(PROFILES))
     return 0
 
 
 def _cmd_run(args) -> int:
-    from .core import _runner
+    from .core._runner import sweep
 
     cfg = _config_from_args(args)
     _usable_results(args)
-    row = _runner.sweep(
-        [cfg], args.results, experiment="adhoc", profile=args.profile, progress=False
-    )
+    row = sweep([cfg], args.results, experiment="adhoc", profile=args.profile, progress=False)
     if not row:  # already stored: show the stored row
-        from .core import _store
+        from .core._store import read_rows
 
-        row = [r for r in _store.read_rows(args.results) if r["config_hash"] == cfg.config_hash]
+        row = [r for r in read_rows(args.results) if r["config_hash"] == cfg.config_hash]
         print("(already stored; delete its row file to rerun)")
     _print_row(row[0])
     return 0 if row[0]["status"] != "failed" else 1
 
 
 def _sweep_names(args) -> list[str]:
-    from .core import _experiments as E
+    from .core._experiments import available, get
 
     if getattr(args, "all", False) or args.verb == "bench":
-        return E.available()
+        return available()
     if not args.experiment:
         raise UsageError("sweep needs an experiment name or --all")
-    E.get(args.experiment)  # ValueError with the allowed names
+    get(args.experiment)  # ValueError with the allowed names
     return [args.experiment]
 
 
@@ -431,9 +429,9 @@ def _model_list(args) -> list[str] | None:
 
 def _run_experiments(args, names, *, order, seeds=None) -> dict:
     """One sweep of ``names`` with the sweep options of ``args`` (sweep, bench, campaign)."""
-    from .core import _runner
+    from .core._runner import run_experiments
 
-    return _runner.run_experiments(
+    return run_experiments(
         names,
         args.profile,
         args.results,
@@ -502,9 +500,9 @@ def _cmd_campaign(args) -> int:
 
 def _usable_results(args) -> Path:
     """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
-    from .core import _store
+    from .core._store import check_results_dir
 
-    return _store.check_results_dir(args.results, create=True)
+    return check_results_dir(args.results, create=True)
 
 
 class NoRuns(Exception):
@@ -513,20 +511,28 @@ class NoRuns(Exception):
 
 def _stored_runs(args, verb: str, action: str) -> None:
     """Raise NoRuns when the results hold no runs; warn about row files that did not read."""
-    from .core import _store
+    from .core._store import (
+        DAMAGED,
+        ROWS,
+        check_results_dir,
+        load_runs,
+        rebuild_tables,
+        stale_tables,
+        unread_rows,
+    )
 
-    results = _store.check_results_dir(args.results, create=False)
-    runs = _store.load_runs(results)  # damaged row files are named and set aside here
-    stale = _store.stale_tables(results)
+    results = check_results_dir(args.results, create=False)
+    runs = load_runs(results)  # damaged row files are named and set aside here
+    stale = stale_tables(results)
     if stale:  # tables others read (pandas users, the figures of a fresh clone): rebuild them
         what = ", ".join(f"{name} ({why})" for name, why in stale)
         print(f"warning: rebuilt from the row files: {what}", file=sys.stderr)
-        _store.rebuild_tables(results)
-    unread = _store.unread_rows(results)
+        rebuild_tables(results)
+    unread = unread_rows(results)
     if unread:
         print(
             f"warning: {len(unread)} stored row file(s) could not be read and are left out of "
-            f"the {verb} (kept in {results / _store.ROWS / _store.DAMAGED}; the next sweep "
+            f"the {verb} (kept in {results / ROWS / DAMAGED}; the next sweep "
             "reruns their runs)",
             file=sys.stderr,
         )
@@ -593,14 +599,14 @@ def _cmd_bench(args) -> int:
         _check_sweep_args(args)
         print("no experiments yet")
         return 0
-    from .core import _store
     from .core._provenance import provenance
+    from .core._store import done_hashes
 
-    before = len(_store.done_hashes(Path(args.results)))
+    before = len(done_hashes(Path(args.results)))
     start = time.time()
     _do_sweep(args, names)
     swept = time.time()
-    executed = len(_store.done_hashes(Path(args.results))) - before
+    executed = len(done_hashes(Path(args.results))) - before
     if not args.skip_stability:
         args.case = None
         _cmd_stability(args)

@@ -177,12 +177,12 @@ def _cell_label(row: pd.Series) -> str:
 
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
     from .core._experiments import RunConfig
-    from .core._query import _cell_key
+    from .core._query import cell_key
     from .studies.paper._stats import scored
 
     def prep(df):
         df = df.assign(
-            _cell=[_cell_key(RunConfig.from_dict(r)) for r in df.to_dict("records")],
+            _cell=[cell_key(RunConfig.from_dict(r)) for r in df.to_dict("records")],
             _err=np.log(scored(df).clip(lower=1e-300)),
         )
         return df[np.isfinite(df["_err"])]
@@ -273,9 +273,9 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
 def compare(a, b) -> Comparison:
     """Compare results folder ``b`` against the reference ``a`` (see the module docstring).
     ValueError (one line) for a folder without runs or of another schema version."""
-    from .core import _store
     from .core._query import load_tables
     from .core._schema import SCHEMA_VERSION
+    from .core._store import ROWS
 
     a, b = Path(a), Path(b)
     warnings = []
@@ -297,7 +297,7 @@ def compare(a, b) -> Comparison:
     rb, cb, pb = load_tables(b)
     for d, r in ((a, ra), (b, rb)):
         if r.empty:
-            raise ValueError(f"{d} holds no stored runs ({_store.ROWS}/ or runs.parquet)")
+            raise ValueError(f"{d} holds no stored runs ({ROWS}/ or runs.parquet)")
     if pa != pb:
         warnings.append(f"the folders hold different profiles ({pa} and {pb})")
     return Comparison(

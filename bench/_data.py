@@ -26,6 +26,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from systems._base import MAX_STEPS
+
 from . import data_loader
 from .core._experiments import RunConfig, available, expand, profile_defaults
 
@@ -174,7 +176,7 @@ def export(
                 f"PIDController(rtol={sys_obj.ground_truth_tol:g}, "
                 f"atol={sys_obj.ground_truth_tol:g})"
             ),
-            "max_steps": _tol("MAX_STEPS"),
+            "max_steps": MAX_STEPS,
             "dtype": "float64",
             "initial_states": inspect.getdoc(type(sys_obj).sample_initial) or "",
         },
@@ -201,12 +203,6 @@ def export(
 
 def _velocity_twin(c) -> str:
     return dataclasses.replace(c, coordinates="velocity").canonical_json()
-
-
-def _tol(name: str):
-    from systems import _base
-
-    return getattr(_base, name)
 
 
 def _version() -> str:

@@ -152,10 +152,10 @@ def _claims_table(j) -> list[str]:
     """One row per claim (claim 4: per metric and spring start): the final verdict, the
     verdicts on the primary and replication seeds and pooled, whether it replicates, and what
     dropping one seed does. Effect and interval are the final reading's."""
-    from .studies.paper._replication import _span
+    from .studies.paper._replication import seed_span
 
-    ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
-    both = _span(sorted({*j.primary_seeds, *j.replication_seeds}))
+    ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
+    both = seed_span(sorted({*j.primary_seeds, *j.replication_seeds}))
     out = [
         f"| claim | statement | verdict | seeds {ps} | seeds {rs or '(none)'} | pooled {both} | "
         "replicates | leave one seed out | effect | 90% CI | discriminating | failed runs |",
@@ -184,10 +184,10 @@ def _parts_table(j) -> list[str]:
     """Every part of the final reading (pooled where the seed sets agree): its effect, margin,
     the margins at which it holds and is contradicted, its test and level, its status on each
     seed set, and whether dropping one seed reverses it."""
-    from .studies.paper._replication import _span
+    from .studies.paper._replication import seed_span
     from .studies.paper._stats import margin_ranges
 
-    ps, rs = _span(j.primary_seeds), _span(j.replication_seeds)
+    ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
     out = [
         "| claim | part | role | kind | margin | margin range | test (level) | effect [90% CI] | "
         f"seeds {ps} | seeds {rs or '(none)'} | pooled | leave one seed out |",

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .core._experiments import RunConfig, expand
-from .core._query import _cell_key, _parse_pairs, option, params_of, variant
+from .core._query import cell_key, option, params_of, parse_pairs, variant
 from .studies.paper import MODEL_LABELS, TRIVIAL_MODELS, discrimination, velocity_scores
 
 
@@ -52,7 +52,7 @@ def _table_variant(rows: pd.DataFrame) -> pd.Series:
     base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh (extra, not judged)"})
 
     def opts(v) -> str:
-        o = {a: b for a, b in _parse_pairs(v).items() if a != "weight"}
+        o = {a: b for a, b in parse_pairs(v).items() if a != "weight"}
         return "[" + ", ".join(f"{a}={b}" for a, b in sorted(o.items())) + "]" if o else ""
 
     extra = rows["model_options"].map(opts) if "model_options" in rows else ""
@@ -155,8 +155,8 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
     try:
         want = {}
         for c in expand(name, profile):
-            want.setdefault(_cell_key(c), c)
-        have = {_cell_key(RunConfig.from_dict(r)) for r in rows.to_dict("records")}
+            want.setdefault(cell_key(c), c)
+        have = {cell_key(RunConfig.from_dict(r)) for r in rows.to_dict("records")}
     except ValueError:
         return []
     missing = [c for k, c in want.items() if k not in have]

@@ -27,7 +27,7 @@ import pandas as pd
 import models
 from bench.core import _store
 from bench.core._experiments import expand
-from bench.core._query import _parse_pairs
+from bench.core._query import parse_pairs
 from bench.studies.paper import PAPER_EXPERIMENTS
 
 TRIVIAL_ERROR = 0.6
@@ -69,7 +69,7 @@ def _error(c, scenario: str) -> tuple[float, float, str]:
             err = 1e-4
         return err, 1.0, "linear"
     if c.system == "relativistic_particle":
-        opts = _parse_pairs(c.model_options)
+        opts = parse_pairs(c.model_options)
         if c.model == "hnn" and c.coordinates == "momentum":
             name = "hnn_p"
         elif c.model == "hnn" and opts.get("momentum_map") is False:
@@ -91,7 +91,7 @@ def _error(c, scenario: str) -> tuple[float, float, str]:
         name = "ray" if c.dissipation else c.model
         return DAMPED[key][name], 0.3, "linear"
     if c.model in ("node_so_symreg", "node_symreg"):
-        w = _parse_pairs(c.model_options).get("weight", 0.0)
+        w = parse_pairs(c.model_options).get("weight", 0.0)
         base = 0.05
         if w and contradict:
             return base / 3, 0.3, "linear"
@@ -156,7 +156,7 @@ def synthetic_tables(
                 }[shape]
                 ev_t = ev * growth * np.exp(noise * gen.standard_normal(len(t)))
                 q = np.sin(t)[:, None] * np.ones((1, 2 * max(1, c.k or 1)))
-                w = _parse_pairs(c.model_options).get("weight", 0.0)
+                w = parse_pairs(c.model_options).get("weight", 0.0)
                 trivial = models.spec(c.model).trivial
                 momentum = c.coordinates == "momentum"
                 row = c.to_dict()

@@ -14,7 +14,7 @@ import models
 from bench.core import _execute, _store
 from bench.core._ensemble import train_ensemble
 from bench.core._experiments import RunConfig
-from bench.core._train import TrainConfig, _Batches, checkpoint_steps, loss_fn, prepare, train
+from bench.core._train import Batches, TrainConfig, checkpoint_steps, loss_fn, prepare, train
 
 
 def test_checkpoint_grid_halves_and_snaps_to_blocks():
@@ -70,7 +70,7 @@ def test_snapshots_are_the_parameters_after_their_step_and_change_nothing():
     # independent check: the loss of snapshot s on the batch of step s is the loss the trainer
     # recorded at step s (computed before step s's update, i.e. after exactly s updates)
     z, args, ts = prepare(_model(), data, CFG)
-    batches = _Batches(len(z), CFG.batch, CFG.seed).take(CFG.steps)
+    batches = Batches(len(z), CFG.batch, CFG.seed).take(CFG.steps)
     for snap in kept.snapshots[:-1]:
         ix = batches[snap.step]
         got = float(loss_fn(snap.model, z[ix], args[ix], ts, CFG))

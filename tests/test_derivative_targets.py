@@ -148,7 +148,7 @@ def test_a_derivative_run_trains_and_is_evaluated_on_rollouts(tmp_path):
 def test_noisy_inputs_get_the_true_field_at_the_clean_states(tmp_path):
     """The HNN seed's protocol: noise on the observed states, targets the true dz/dt where
     the system was (its data.py adds the noise after computing dz/dt)."""
-    from bench.core._execute import _build
+    from bench.core._execute import build_run
 
     cfg = RunConfig(
         system="mass_spring",
@@ -162,7 +162,7 @@ def test_noisy_inputs_get_the_true_field_at_the_clean_states(tmp_path):
         test_chunks=2,
         chunk=5,
     )
-    system, data, _, _ = _build(cfg, tmp_path)
+    system, data, _, _ = build_run(cfg, tmp_path)
     clean = systems.make_dataset(dataclasses.replace(cfg.dataset_config(), noise=0.0), tmp_path)
     assert np.std(data.z_train - clean.z_train) == pytest.approx(0.1, rel=0.3)  # noisy inputs
     np.testing.assert_array_equal(data.z_train_clean, clean.z_train)

@@ -372,7 +372,7 @@ def test_full_disk_in_a_run_stops_the_sweep_not_recorded_as_failed(tmp_path, mon
             raise OSError(errno.ENOSPC, "No space left on device", str(cache_root / "x.npz"))
         raise RuntimeError("a bug in this run")  # an ordinary failure: recorded, not fatal
 
-    monkeypatch.setattr(execute, "_build", build)
+    monkeypatch.setattr(execute, "build_run", build)
     with pytest.raises(StorageError, match="No space left on device.*after 1 new of 3 runs"):
         runner.sweep(configs, res, progress=False, cache_root=tmp_path / "cache")
     rows = _store.read_rows(res)

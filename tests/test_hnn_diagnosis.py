@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 import models
-from bench.core._execute import _build, train_config
+from bench.core._execute import build_run, train_config
 from bench.core._train import train
 from bench.studies.paper import _hnn_diagnosis as D
 from models._mlp import MLP
@@ -30,7 +30,7 @@ def test_the_cells_are_the_plain_hnn_spring_runs_of_claims_1_and_3():
 def test_replay_is_the_trainers_run_and_says_how_long_it_equals_the_stored_one(tmp_path):
     cfg = D.cells("smoke")[0]
     cache = tmp_path / "cache"
-    _, data, _, model = _build(cfg, cache)
+    _, data, _, model = build_run(cfg, cache)
     res = train(model, data, train_config(cfg))
     k = len(res.losses)  # smoke: one block of the run's 20 steps
     pdir = cache / "params" / cfg.train_hash

@@ -16,9 +16,9 @@ from bench.studies.paper import evaluate_claims
 from bench.studies.paper._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
-    _span,
     judge,
     seed_sets,
+    seed_span,
     settled,
 )
 
@@ -52,7 +52,7 @@ def test_seed_sets_of_the_profiles():
     assert seed_sets("smoke") == ((0,), ())
     assert seed_sets(None) == ((), ())
     assert seed_sets("no-such-profile") == ((), ())
-    assert _span(REPLICATION) == "5-9" and _span((0, 2)) == "0, 2"
+    assert seed_span(REPLICATION) == "5-9" and seed_span((0, 2)) == "0, 2"
     assert settled(R.REPRODUCED) and settled(R.NOT_REPRODUCED) and settled(R.PARTLY)
     assert not settled(R.INCONCLUSIVE) and not settled(DOES_NOT_REPLICATE)
     assert not settled(CHANGES_WITHOUT_A_SEED)

@@ -152,7 +152,7 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     import jax
     import jax.numpy as jnp
 
-    from ._train import Snapshot, TrainResult, _Batches, optimizer, prepare
+    from ._train import Batches, Snapshot, TrainResult, optimizer, prepare
 
     m_count = len(models)
     if not (m_count == len(datasets) == len(configs)):
@@ -180,7 +180,7 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     lr = jnp.asarray([c.lr for c in configs], jnp.dtype(cfg.dtype))
     n = stacked[0].shape[1]
     k = min(cfg.steps_per_call, cfg.steps)
-    batches = [_Batches(n, cfg.batch, c.seed) for c in configs]
+    batches = [Batches(n, cfg.batch, c.seed) for c in configs]
 
     def inputs(start):
         idx = np.stack([b.take(k) for b in batches], axis=1)  # (k, M, B)
@@ -359,7 +359,7 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
             models, datasets = [], []
             for c in configs:
                 c.validate()
-                _, data, _, model = R._build(c, cache_root)
+                _, data, _, model = R.build_run(c, cache_root)
                 models.append(model)
                 datasets.append(data)
             results = train_ensemble(models, datasets, [R.train_config(c) for c in configs])

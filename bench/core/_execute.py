@@ -52,7 +52,7 @@ _SYMPLECTIC_STATES = 64
 
 
 # -------------------------------------------------------------------------------- one run
-def _build(config: RunConfig, cache_root: Path):
+def build_run(config: RunConfig, cache_root: Path):
     import jax
 
     import models
@@ -107,7 +107,7 @@ class WithDerivatives:
         return getattr(self._data, name)
 
 
-def _train_cached(config: RunConfig, model, data, cache_root: Path, progress):
+def train_cached(config: RunConfig, model, data, cache_root: Path, progress):
     """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
     import equinox as eqx
 
@@ -574,9 +574,9 @@ def execute_run(
         _write_json(art / "config.json", config.to_dict())
         (art / "traceback.txt").unlink(missing_ok=True)
         config.validate()
-        system, data, _, model = _build(config, cache_root)
+        system, data, _, model = build_run(config, cache_root)
         if trained is None:
-            model, meta = _train_cached(config, model, data, cache_root, progress)
+            model, meta = train_cached(config, model, data, cache_root, progress)
         else:
             model, meta = trained
         row.update(

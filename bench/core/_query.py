@@ -21,7 +21,7 @@ import models
 from . import _store
 
 
-def _parse_pairs(value) -> dict:
+def parse_pairs(value) -> dict:
     """``model_options``/``system_params`` as a dict, whatever the store serialised them as."""
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return {}
@@ -38,7 +38,7 @@ def _parse_pairs(value) -> dict:
                 value = ast.literal_eval(text)
             except (ValueError, SyntaxError):
                 return {}
-        return _parse_pairs(value)
+        return parse_pairs(value)
     if isinstance(value, np.ndarray):
         value = value.tolist()
     if isinstance(value, (list, tuple)):
@@ -57,14 +57,14 @@ def option(runs: pd.DataFrame, name: str, column: str = "model_options") -> pd.S
     """The value of option ``name`` in each row's ``column`` (NaN where absent)."""
     if column not in runs:
         return pd.Series(np.nan, index=runs.index)
-    return runs[column].map(lambda v: _parse_pairs(v).get(name, np.nan))
+    return runs[column].map(lambda v: parse_pairs(v).get(name, np.nan))
 
 
 def params_of(runs: pd.DataFrame, column: str = "system_params") -> pd.Series:
     """Each row's ``column`` as a dict."""
     if column not in runs:
         return pd.Series([{}] * len(runs), index=runs.index)
-    return runs[column].map(_parse_pairs)
+    return runs[column].map(parse_pairs)
 
 
 def _matches(series: pd.Series, value) -> pd.Series:
@@ -146,7 +146,7 @@ def load_tables(results_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, str | No
     return runs, curves, profile
 
 
-def _cell_key(cfg) -> str:
+def cell_key(cfg) -> str:
     """Hash of a run's configuration without its seed: the cell it belongs to."""
     from ._experiments import _hash
 
@@ -168,8 +168,8 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
             exp = get(name)
             if exp.profiles is not None and profile not in exp.profiles:
                 return runs.iloc[0:0]  # not run at this profile: no stored row speaks for it
-            cells = {_cell_key(c) for c in expand(name, profile)}
-            keys = [_cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
+            cells = {cell_key(c) for c in expand(name, profile)}
+            keys = [cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
             match = pd.Series([k in cells for k in keys], index=runs.index)
             if "experiment" in runs:  # rows of older declarations of the same experiment
                 match |= runs["experiment"] == name

@@ -229,7 +229,7 @@ def make_step(static, config: TrainConfig, data, lr=None):
     return step
 
 
-def _block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig):
+def train_block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig):
     """Run ``len(idx)`` steps of :func:`make_step` as one ``lax.scan``."""
     _TRACES[0] += 1
     data, idx, active = inputs
@@ -262,7 +262,7 @@ def step_flops(compiled) -> float:
     return value if np.isfinite(value) and value >= 0 else float("nan")
 
 
-def _compiled_block(params, static, opt_state, dead, good, data, idx, active, config):
+def compiled_block(params, static, opt_state, dead, good, data, idx, active, config):
     """The compiled block for this configuration and these shapes (compiled at most once);
     its ``flops`` attribute is :func:`step_flops` of the compiled program."""
     cfg_key = dataclasses.replace(config, seed=0, log_every=1, checkpoints=())
@@ -277,7 +277,7 @@ def _compiled_block(params, static, opt_state, dead, good, data, idx, active, co
     if hit is not None:
         return hit, 0.0
     # the inputs (data, batch indices) are not donated; the state is replaced by the outputs
-    fn = eqx.filter_jit(_block, donate="all-except-first")
+    fn = eqx.filter_jit(train_block, donate="all-except-first")
     t0 = time.perf_counter()
     compiled = fn.lower(
         (data, idx, active), params, opt_state, dead, good, static=static, config=cfg_key
@@ -294,7 +294,7 @@ def _compiled_block(params, static, opt_state, dead, good, data, idx, active, co
     return run, seconds
 
 
-class _Batches:
+class Batches:
     """Batch indices: per epoch a random permutation of the N chunks, cut into N // B batches."""
 
     def __init__(self, n: int, batch: int, seed: int):
@@ -387,7 +387,7 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
     params = jax.tree.map(jnp.copy, params)
     opt_state = optimizer(config).init(params)
     k = min(config.steps_per_call, config.steps)
-    batches = _Batches(n, config.batch, config.seed)
+    batches = Batches(n, config.batch, config.seed)
     dead = jnp.asarray(False)
 
     def block_inputs(start):
@@ -397,7 +397,7 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
 
     idx, active = block_inputs(0)
     good = jax.tree.map(jnp.copy, params)  # a distinct buffer: both are donated
-    compiled, compile_seconds = _compiled_block(
+    compiled, compile_seconds = compiled_block(
         params, static, opt_state, dead, good, data, idx, active, config
     )
 

@@ -56,15 +56,15 @@ import pandas as pd  # noqa: E402
 
 import models  # noqa: E402
 
-from ..core import _store  # noqa: E402
 from ..core._execute import CHECKPOINT_METRICS as SCORES  # noqa: E402 - what a checkpoint replaces
 from ..core._experiments import PROFILES, Experiment  # noqa: E402
 from ..core._query import load_tables, select  # noqa: E402
+from ..core._store import load_checkpoints  # noqa: E402
 from ..core._studies import Study, register_study  # noqa: E402
 from ._figure import save_figure  # noqa: E402
-from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, _initial_ok, _shared  # noqa: E402
+from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides  # noqa: E402
 from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
-from .paper._rules import _restrict, claim_studies, evaluate_claims  # noqa: E402
+from .paper._rules import claim_studies, evaluate_claims, restrict  # noqa: E402
 from .paper._stats import MODEL_LABELS  # noqa: E402
 
 # The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
@@ -80,7 +80,7 @@ PAPER_STEPS = PROFILES["paper"]["steps"]
 
 def _learning_cell(c) -> bool:
     # the chain, and the spring from its physical equilibrium (claim 4's spring, Fig. 5)
-    return _initial_ok(c, allowed=(SPRING_EQUILIBRIUM,))
+    return initial_ok(c, allowed=(SPRING_EQUILIBRIUM,))
 
 
 LEARNING = Experiment(
@@ -89,7 +89,7 @@ LEARNING = Experiment(
     axes={"system": SYSTEMS, "k": (2,), "model": LEARNING_MODELS},
     # quick: the shared 1000-step cells (no training of its own since issue 20, whose five
     # seeds it pays for; the longer runs are the paper-core campaign's, results/reference/paper/)
-    profile_overrides=_shared({"smoke": {"steps": 40}}),
+    profile_overrides=shared_overrides({"smoke": {"steps": 40}}),
     include=_learning_cell,
 )
 
@@ -186,7 +186,7 @@ def verdicts_along_curve(
     n = int(cp.groupby("config_hash").size().max())
     judged = {}
     for study in claim_studies():
-        mine = _restrict(runs, study, profile)
+        mine = restrict(runs, study, profile)
         if not len(mine):
             continue
         hashes = set(mine.loc[_trained(mine), "config_hash"])
@@ -236,7 +236,7 @@ def verdicts_along_learning(
     )
     out = []
     for study in claim_studies():
-        mine = _restrict(runs, study, profile)
+        mine = restrict(runs, study, profile)
         if not len(mine):
             continue
         if study.claim not in LEARNING_CLAIMS:
@@ -281,7 +281,7 @@ def settling_table(along: pd.DataFrame) -> pd.DataFrame:
 # ------------------------------------------------------------------------ loading
 def _tables(results_dir: Path):
     runs, curves, profile = load_tables(results_dir)
-    cp, cp_curves = _store.load_checkpoints(results_dir)
+    cp, cp_curves = load_checkpoints(results_dir)
     if len(cp) and len(runs):
         cp = cp[cp["config_hash"].isin(runs["config_hash"])]
         cp_curves = cp_curves[cp_curves["config_hash"].isin(cp["config_hash"])]

@@ -218,14 +218,14 @@ def estimate(
     """
     import math
 
-    from .paper import _budget as _paper
+    from .paper._budget import MS_PER_STEP, PAPER_EXPERIMENTS
 
-    ms = dict(_paper.MS_PER_STEP)
+    ms = dict(MS_PER_STEP)
     ms.update(ms_per_step or {})
     runs = expand(TRADEOFF, profile)
     shared = set()
     if exclude_shared:
-        for exp in _paper.PAPER_EXPERIMENTS:
+        for exp in PAPER_EXPERIMENTS:
             shared |= {c.config_hash for c in expand(exp, profile)}
     new = [c for c in runs if c.config_hash not in shared]
     trained_elsewhere = {c.train_hash for c in runs if c.config_hash in shared}

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from ...core import _store
 from ...core._experiments import available, expand, get
+from ...core._store import done_hashes, holds_runs, read_rows
 from ._budget import data_seconds, run_seconds, total_seconds
 
 # The row columns summed as the campaign's training and evaluation time (issue 24's "CPU
@@ -82,7 +82,7 @@ def replication_order(results_dir, profile: str = "paper-core") -> tuple[int, ..
     from ._stats import NOT_REPRODUCED, PARTLY, REPRODUCED
 
     signed: set[int] = set()
-    if results_dir is not None and _store.holds_runs(Path(results_dir)):
+    if results_dir is not None and holds_runs(Path(results_dir)):
         runs, curves, _ = load_tables(Path(results_dir))
         j = judge(runs, curves, profile, loso=False)
         signed = {
@@ -149,8 +149,8 @@ def plan(
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
-        done = _store.done_hashes(Path(results_dir))
-        rows = [r for r in _store.read_rows(Path(results_dir)) if r["config_hash"] in cfgs]
+        done = done_hashes(Path(results_dir))
+        rows = [r for r in read_rows(Path(results_dir)) if r["config_hash"] in cfgs]
         stored = pd.DataFrame(rows)
     else:
         done = set()

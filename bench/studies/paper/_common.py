@@ -47,7 +47,7 @@ SHARED_OVERRIDES: dict[str, dict[str, object]] = {
 }
 
 
-def _shared(extra: Mapping[str, Mapping[str, object]] | None = None) -> dict:
+def shared_overrides(extra: Mapping[str, Mapping[str, object]] | None = None) -> dict:
     out = {p: dict(v) for p, v in SHARED_OVERRIDES.items()}
     for p, v in (extra or {}).items():
         out.setdefault(p, {}).update(v)
@@ -63,7 +63,7 @@ def _trivial(model: str) -> bool:
     return models.spec(model).trivial
 
 
-def _initial_ok(c: RunConfig, allowed=(SPRING_PAPER,)) -> bool:
+def initial_ok(c: RunConfig, allowed=(SPRING_PAPER,)) -> bool:
     """Chain cells carry no system params; spring cells one of the ``allowed`` initial states
     (``SPRING_EQUILIBRIUM`` is ``()``, the default)."""
     if c.system == "spring_pendulum":
@@ -73,4 +73,4 @@ def _initial_ok(c: RunConfig, allowed=(SPRING_PAPER,)) -> bool:
 
 def _paper_cell(c: RunConfig) -> bool:
     # constant velocity only: at_rest is for damped scenes
-    return _initial_ok(c) and c.model != "at_rest"
+    return initial_ok(c) and c.model != "at_rest"

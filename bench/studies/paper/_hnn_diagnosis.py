@@ -140,7 +140,7 @@ def _stored_losses(cfg: RunConfig, cache_root: Path) -> np.ndarray | None:
 
 def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> list[dict]:
     """The run's first ``n_steps`` (whole blocks) through the trainer's own compiled block
-    (:func:`bench.core._train._compiled_block`), probed before the first step and after each
+    (:func:`bench.core._train.compiled_block`), probed before the first step and after each
     block. ``loss``: the batch loss of the step at the probe (the last step's at the end);
     ``block_loss``: the mean over the block before it; ``stored_loss``: the stored run's loss
     at the same step (``suite`` only; NaN where its cache is absent)."""
@@ -148,12 +148,12 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
     import jax
     import jax.numpy as jnp
 
-    from ...core._execute import _build, train_config
-    from ...core._train import _Batches, _compiled_block, optimizer, prepare
+    from ...core._execute import build_run, train_config
+    from ...core._train import Batches, compiled_block, optimizer, prepare
 
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {', '.join(VARIANTS)}; got {variant!r}")
-    _, data, scene, model = _build(cfg, cache_root)
+    _, data, scene, model = build_run(cfg, cache_root)
     tc = train_config(cfg)
     if variant == "reference_init":
         model = reference_biases(model, jax.random.PRNGKey(10_000 + cfg.seed))
@@ -167,7 +167,7 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
     good = jax.tree.map(jnp.copy, params)
     dead = jnp.asarray(False)
     k = min(tc.steps_per_call, tc.steps)
-    batches = _Batches(z_all.shape[0], tc.batch, tc.seed)
+    batches = Batches(z_all.shape[0], tc.batch, tc.seed)
     states, states_args = z_all[:N_STATES, 0], args_all[:N_STATES]
     probe = eqx.filter_jit(lambda p: _probe(eqx.combine(p, static), states, states_args, scene.dof))
     stored = _stored_losses(cfg, cache_root) if variant.startswith("suite") else None
@@ -178,9 +178,7 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
         done = len(losses)
         idx = jnp.asarray(batches.take(k))
         active = jnp.asarray(np.arange(done, done + k) < tc.steps)
-        compiled, _ = _compiled_block(
-            params, static, opt_state, dead, good, arrays, idx, active, tc
-        )
+        compiled, _ = compiled_block(params, static, opt_state, dead, good, arrays, idx, active, tc)
         params, opt_state, dead, good, block, _ = compiled(
             arrays, params, opt_state, dead, good, idx, active
         )

@@ -140,7 +140,7 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ...core._execute import _build
+    from ...core._execute import build_run
 
     seeds, _, steps = SIZES[profile]
     rows = []
@@ -156,7 +156,7 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
                     cfg = dataclasses.replace(
                         _rollout_config(profile, seed, opts, steps), activation=act
                     )
-                    system, data, _, model = _build(cfg, Path(cache_root))
+                    system, data, _, model = build_run(cfg, Path(cache_root))
                     z = np.asarray(data.z_train)  # (N, C, 2d)
                     states = z.reshape(-1, z.shape[-1])
                     eig = hessian_eigs(model, states)
@@ -237,12 +237,12 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ...core._execute import _build, _train_cached
+    from ...core._execute import build_run, train_cached
 
     rows = []
     for label, cfg in _trained_models(profile, cache_root):
-        system, data, _, model = _build(cfg, Path(cache_root))
-        model, meta = _train_cached(cfg, model, data, Path(cache_root), False)
+        system, data, _, model = build_run(cfg, Path(cache_root))
+        model, meta = train_cached(cfg, model, data, Path(cache_root), False)
         z = np.asarray(data.z_test)[:N_TRAJ]
         pred = _jit(_roll)(
             model,

@@ -176,8 +176,9 @@ def judge(
     for v in prim:
         r = replication.get(v.key)
         if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
-            readings = f"seeds {_span(primary_seeds)}: {v.verdict}; seeds {_span(rep_seeds)}: " + (
-                r.verdict
+            readings = (
+                f"seeds {seed_span(primary_seeds)}: {v.verdict}; seeds {seed_span(rep_seeds)}: "
+                + (r.verdict)
             )
             v = dataclasses.replace(
                 v,
@@ -191,7 +192,7 @@ def judge(
         v = j.reading(v.key)
         if settled(v.verdict) and (rev := j.loso_reversals(v.key)):
             without = "; ".join(f"without seed {s}: {', '.join(ps)} reversed" for s, ps in rev)
-            readings = f"seeds {_span(j.reading_seeds(v.key))}: {v.verdict}; {without}"
+            readings = f"seeds {seed_span(j.reading_seeds(v.key))}: {v.verdict}; {without}"
             v = dataclasses.replace(
                 v,
                 verdict=CHANGES_WITHOUT_A_SEED,
@@ -203,7 +204,7 @@ def judge(
     return j
 
 
-def _span(seeds) -> str:
+def seed_span(seeds) -> str:
     seeds = sorted(seeds)
     if seeds and seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
         return f"{seeds[0]}-{seeds[-1]}"

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ...core._query import _parse_pairs, experiment_rows, select
+from ...core._query import experiment_rows, parse_pairs, select
 from ...core._studies import studies
 from . import policy
 from ._common import TRIVIAL_MODELS
@@ -55,7 +55,7 @@ def _variant_key(runs: pd.DataFrame) -> pd.Series:
         s = str(r["model"])
         if r.get("dissipation") is True or r.get("dissipation") == 1.0:
             s += "+rayleigh"
-        opts = _parse_pairs(r.get("model_options"))
+        opts = parse_pairs(r.get("model_options"))
         if opts:
             s += "[" + ",".join(f"{a}={b}" for a, b in sorted(opts.items())) + "]"
         if r.get("coordinates") == "momentum":
@@ -317,7 +317,7 @@ def _curve_slopes(runs: pd.DataFrame, curves: pd.DataFrame | None, t_min_frac: f
     return pd.DataFrame(rows, columns=cols)
 
 
-def _restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
+def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
     """The rows a claim reads: those of its study's experiments (by config hash under
     ``profile``) plus the stored rows tagged with an experiment in ``study.reads`` (results older
     than today's declarations, whose cells no longer expand, still reach the claims that filter
@@ -334,9 +334,9 @@ def _restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
 
 
 def restrict_all(runs: pd.DataFrame, profile: str | None) -> dict[int, pd.DataFrame]:
-    """``{claim: the rows it reads}`` for every claim study (:func:`_restrict`): the rows a
+    """``{claim: the rows it reads}`` for every claim study (:func:`restrict`): the rows a
     claim reads do not depend on the seed, so one restriction serves every seed set."""
-    return {s.claim: _plain_columns(_restrict(runs, s, profile)) for s in claim_studies()}
+    return {s.claim: _plain_columns(restrict(runs, s, profile)) for s in claim_studies()}
 
 
 def _plain_columns(df: pd.DataFrame) -> pd.DataFrame:
@@ -392,7 +392,7 @@ def evaluate_claims(
         if not runs_at(study, profile):
             continue  # e.g. claim 6 at quick: no verdict, not an inconclusive one
         try:
-            rows = restricted[n] if restricted is not None else _restrict(runs, study, profile)
+            rows = restricted[n] if restricted is not None else restrict(runs, study, profile)
             if seeds is not None and len(rows) and "seed" in rows:
                 rows = rows[rows["seed"].isin(list(seeds))].reset_index(drop=True)
             got = study.rule(rows, curves)

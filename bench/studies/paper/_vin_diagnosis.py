@@ -31,14 +31,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core import _pixels
 from ...core._experiments import expand
+from ...core._pixels import CC_LOSS, build, evaluate_pixels, train_pixels
 from ...core._store import read_rows
 from ._plot import _gmean as _gm
 
 FILE = "vin_diagnosis.csv"
 EXPERIMENT = "pixel_pendulum_vin"
-WEIGHTS = (_pixels.CC_LOSS, 0.0)  # the protocol's auxiliary weight, and none
+WEIGHTS = (CC_LOSS, 0.0)  # the protocol's auxiliary weight, and none
 PROFILES = ("smoke", "quick", "paper-core")
 COLUMNS = (
     "pixel_mse",
@@ -55,11 +55,11 @@ COLUMNS = (
 
 def _run(c, aux_weight: float) -> dict:
     """Train and evaluate one pixel run with the auxiliary weight ``aux_weight``."""
-    system, data, model = _pixels.build(c)
+    system, data, model = build(c)
     t0 = time.perf_counter()
-    model, meta = _pixels.train_pixels(c, model, data, aux_weight=aux_weight)
+    model, meta = train_pixels(c, model, data, aux_weight=aux_weight)
     seconds = time.perf_counter() - t0
-    metrics, _ = _pixels.evaluate_pixels(c, system, data, model)
+    metrics, _ = evaluate_pixels(c, system, data, model)
     return {**metrics, "final_loss": meta["final_loss"], "train_seconds": seconds}
 
 
@@ -78,7 +78,7 @@ def diagnose(profile: str, results_dir, seeds=None, progress: bool = True) -> pd
     rows = []
     for c in configs:
         for w in WEIGHTS if c.model == "vin" else WEIGHTS[:1]:
-            if w == _pixels.CC_LOSS and c.config_hash in stored:
+            if w == CC_LOSS and c.config_hash in stored:
                 r, source = stored[c.config_hash], "stored run"
                 values = {k: r.get(k) for k in COLUMNS}
             else:

@@ -19,8 +19,8 @@ from ._common import (
     SPRING_EQUILIBRIUM,
     SPRING_PAPER,
     SYSTEMS,
-    _initial_ok,
-    _shared,
+    initial_ok,
+    shared_overrides,
 )
 from ._plot import (
     _model_bars,
@@ -45,7 +45,7 @@ from ._stats import (
 
 
 def _coordinates_include(c: RunConfig) -> bool:
-    return _initial_ok(c, (SPRING_PAPER, SPRING_EQUILIBRIUM))
+    return initial_ok(c, (SPRING_PAPER, SPRING_EQUILIBRIUM))
 
 
 # Claim 4. The paper's published plotting code draws Fig. 5 from the test MSE over k = 1..4;
@@ -60,7 +60,7 @@ COORDINATES = Experiment(
         "model": ("node_so", "hnn_so", "constant_velocity"),
         "system_params": (SPRING_EQUILIBRIUM, SPRING_PAPER),
     },
-    profile_overrides=_shared({"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}}),
+    profile_overrides=shared_overrides({"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}}),
     include=_coordinates_include,
     claim=4,
 )

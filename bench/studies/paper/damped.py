@@ -20,7 +20,7 @@ from ._common import (
     SYSTEMS,
     TRIVIAL_MODELS,
     _free,
-    _initial_ok,
+    initial_ok,
 )
 from ._plot import (
     MODEL_ORDER,
@@ -59,7 +59,7 @@ DAMPED_EXTRAS = (("node", None), ("hnn_so", True))
 def _damped_include(c: RunConfig) -> bool:
     # Free models ignore dissipation: one run each (None). The HNN runs twice: plain
     # (dissipation=False, the paper's "HNN") and with the Rayleigh term (True, an extra).
-    if (c.dissipation is None) != _free(c.model) or not _initial_ok(c):
+    if (c.dissipation is None) != _free(c.model) or not initial_ok(c):
         return False
     if (c.model, c.dissipation) in DAMPED_EXTRAS and c.n_train < 800:  # quick, smoke
         return c.model != "node" and c.seed == 0

@@ -23,7 +23,7 @@ from ._common import (
     SYSTEMS,
     TRIVIAL_MODELS,
     _paper_cell,
-    _shared,
+    shared_overrides,
 )
 from ._plot import (
     COLORS,
@@ -68,7 +68,7 @@ ENERGY = Experiment(
         "model": (*PAPER_MODELS, "constant_velocity"),
         "system_params": ((), SPRING_PAPER),
     },
-    profile_overrides=_shared(
+    profile_overrides=shared_overrides(
         {"smoke": {"k": (2,)}, "quick": {"k": (2,)}, "paper-core": {"k": (2,)}}
     ),
     include=_paper_cell,

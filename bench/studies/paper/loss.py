@@ -21,8 +21,8 @@ from ._common import (
     PAPER_MODELS,
     TRIVIAL_MODELS,
     _paper_cell,
-    _shared,
     _trivial,
+    shared_overrides,
 )
 from ._plot import (
     MODEL_ORDER,
@@ -66,7 +66,7 @@ LOSS = Experiment(
         "model": (*PAPER_MODELS, "constant_velocity"),
         "loss": ("l1", "l2"),
     },
-    profile_overrides=_shared(),
+    profile_overrides=shared_overrides(),
     include=_loss_include,
     claim=6,
     # Not at quick (issue 20): its verdict is inconclusive at every checkpoint of quick's

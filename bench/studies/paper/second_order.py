@@ -18,7 +18,7 @@ from ._common import (
     SPRING_PAPER,
     SYSTEMS,
     _paper_cell,
-    _shared,
+    shared_overrides,
 )
 from ._plot import (
     _model_bars,
@@ -50,7 +50,7 @@ SECOND_ORDER = Experiment(
         "model": (*PAPER_MODELS, "constant_velocity"),
         "system_params": ((), SPRING_PAPER),
     },
-    profile_overrides=_shared(),
+    profile_overrides=shared_overrides(),
     include=_paper_cell,
     claim=3,
 )

@@ -23,8 +23,8 @@ from ._common import (
     SYMREG_WEIGHTS_QUICK,
     SYSTEMS,
     TRIVIAL_MODELS,
-    _initial_ok,
     _trivial,
+    initial_ok,
 )
 from ._plot import (
     SYSTEM_LABELS,
@@ -54,8 +54,8 @@ from ._stats import (
 
 def _symplectic_include(c: RunConfig) -> bool:
     if _trivial(c.model):
-        return c.model == "constant_velocity" and c.model_options == () and _initial_ok(c)
-    return c.model_options != () and _initial_ok(c)
+        return c.model == "constant_velocity" and c.model_options == () and initial_ok(c)
+    return c.model_options != () and initial_ok(c)
 
 
 # Claim 2. The penalty ||(J DF)^T - J DF||^2 is only zero for the true field in canonical

@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 from models._integrators import Integrator, rollout_batch  # noqa: E402
 
-from ...core._train import _Batches, _block, _compiled_block, loss_fn, optimizer  # noqa: E402
+from ...core._train import Batches, compiled_block, loss_fn, optimizer, train_block  # noqa: E402
 
 # ms per step and per 40 x 100-step rollout of the PyTorch reference (mean of its two runs).
 REFERENCE = {
@@ -118,12 +118,12 @@ def time_steps(model, dataset, config, repeats):
     """(per-step ms of each timed block, compile seconds, block length)."""
     data, params, static, opt_state = _prepare(model, dataset, config)
     k = config.steps_per_call
-    batches = _Batches(data[0].shape[0], config.batch, config.seed)
+    batches = Batches(data[0].shape[0], config.batch, config.seed)
     active = jnp.ones((k,), bool)
     dead = jnp.asarray(False)
     good = jax.tree.map(jnp.copy, params)
     idx = jnp.asarray(batches.take(k))
-    run, compile_s = _compiled_block(
+    run, compile_s = compiled_block(
         params, static, opt_state, dead, good, data, idx, active, config
     )
     state = (params, opt_state, dead, good)
@@ -168,10 +168,12 @@ def time_seeds(name, dataset, config, n_seeds=3, repeats=3):
     cfg = config
 
     def many(data, idx, params, opt_state, dead, good):
-        one = lambda i, p, o, d, g: _block((data, i, active), p, o, d, g, static=static, config=cfg)
+        def one(i, p, o, d, g):
+            return train_block((data, i, active), p, o, d, g, static=static, config=cfg)
+
         return jax.vmap(one)(idx, params, opt_state, dead, good)
 
-    batches = [_Batches(data[0].shape[0], config.batch, s) for s in range(n_seeds)]
+    batches = [Batches(data[0].shape[0], config.batch, s) for s in range(n_seeds)]
     take = lambda: jnp.asarray(np.stack([b.take(k) for b in batches]))
     f = eqx.filter_jit(many)
     t0 = time.perf_counter()

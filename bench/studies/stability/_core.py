@@ -22,10 +22,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from models import _integrators
+from models import DESCRIPTIONS, METHODS
 
-from ...core import _metrics as M
 from ...core._errors import one_line
+from ...core._metrics import (
+    energies,
+    energy_violation_curve,
+    valid_prediction_time,
+)
+from ...core._metrics import relative_error as _relative_error
 
 OUTCOMES = ("ok", "diverged", "failed")
 DT = 0.03
@@ -34,7 +39,7 @@ DT = 0.03
 BOUND_FACTOR = 100.0
 # What each method label in the tables is (``models.DESCRIPTIONS`` and this study's choices).
 METHOD_NOTES = {
-    **_integrators.DESCRIPTIONS,
+    **DESCRIPTIONS,
     "adaptive": "Tsit5, PID rtol 1e-6",
     "native": "the discrete model's own step",
 }
@@ -102,20 +107,20 @@ def first_bad_step(zs, bound: float | None = None, mask=None) -> int | None:
 # --------------------------------------------------------------------------- metrics
 def relative_error(system, zhat, z):
     """``bench.core._metrics.relative_error`` with the system's angles wrapped, shape (..., T)."""
-    return M.relative_error(zhat, z, tuple(system.angular))
+    return _relative_error(zhat, z, tuple(system.angular))
 
 
 def energy_drift(system, zs, args=None):
     """|H(z_t) - H(z_0)| / (|H(z_t)| + |H(z_0)|) with the true H (``bench.core._metrics``'
     energies and violation curve), for zs (..., T, D); 1 from the first non-finite state."""
     zs = np.asarray(zs, dtype=np.float64)
-    h = M.energies(system, zs, args)
-    return M.energy_violation_curve(h, np.broadcast_to(h[..., :1], h.shape))
+    h = energies(system, zs, args)
+    return energy_violation_curve(h, np.broadcast_to(h[..., :1], h.shape))
 
 
 def valid_time(system, zhat, z, ts):
     """``bench.core._metrics.valid_prediction_time`` of the wrapped relative error."""
-    return M.valid_prediction_time(relative_error(system, zhat, z), ts)
+    return valid_prediction_time(relative_error(system, zhat, z), ts)
 
 
 def _cast(tree, dtype):
@@ -155,7 +160,7 @@ class StabilitySize:
     speeds: tuple[float, ...] = (0.99, 0.999, 0.9999)
     dts: tuple[float, ...] = (3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
     high_energy_steps: int = 200
-    dt_methods: tuple[str, ...] = tuple(m for m in _integrators.METHODS if m != "adaptive")
+    dt_methods: tuple[str, ...] = tuple(m for m in METHODS if m != "adaptive")
     stiff_solvers: tuple[str, ...] = ("tsit5", "kvaerno5")
     stiff_horizon: float = 1.0  # seconds of the stiffness case (each call counted on the host)
     stiff_fixed: tuple[str, ...] = ("rk4", "implicit_midpoint")
