@@ -158,6 +158,7 @@ paper-core-stop:
 paper-core-report: $(STAMP)
 	$(PY) -m bench --results $(CAMPAIGN_DIR) figures
 	$(PY) -m bench --results $(CAMPAIGN_DIR) report
+	$(PY) -m bench.findings
 
 clean:
 	rm -rf $(VENV) .cache .pytest_cache

@@ -1,0 +1,111 @@
+"""README's findings table, generated from the committed reports.
+
+``python -m bench.findings`` rewrites the block between ``<!-- findings:begin -->`` and
+``<!-- findings:end -->`` of README.md from the *Claims* tables of
+``results/reference/quick/REPORT.md`` and ``results/reference/paper/REPORT.md`` (paper-core);
+``--check`` exits 1, naming the file, when the README no longer says what the reports say.
+Each row: the claim, the paper's sentence, the final verdict at both budgets, and the measured
+effect behind the paper-core verdict with its 90% interval.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+BUDGETS = {"quick": "results/reference/quick", "paper-core": "results/reference/paper"}
+BEGIN, END = "<!-- findings:begin -->", "<!-- findings:end -->"
+_HEADER = "| claim | statement | verdict |"
+
+
+def claims_table(report: str) -> dict[str, dict[str, str]]:
+    """The *Claims* table of a REPORT.md: claim label -> column -> cell text."""
+    lines = report.splitlines()
+    try:
+        start = next(i for i, line in enumerate(lines) if line.startswith(_HEADER))
+    except StopIteration:
+        raise ValueError(f"no claims table (a line starting {_HEADER!r}) in the report") from None
+    cols = [c.strip() for c in lines[start].strip("|").split("|")]
+    out = {}
+    for line in lines[start + 2 :]:
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        out[cells[0]] = dict(zip(cols, cells, strict=True))
+    return out
+
+
+def _verdict(row: dict[str, str] | None) -> str:
+    if row is None:
+        return "not run"
+    text = row["verdict"]
+    return text + (" (not discriminating)" if row.get("discriminating") == "**no**" else "")
+
+
+def _why(row: dict[str, str]) -> str:
+    """'<what the effect measures>: <value> [<90% interval>]' from the effect column."""
+    m = re.fullmatch(r"(\S+) \((.*)\)", row["effect"])
+    what, value = (m.group(2), m.group(1)) if m else ("effect", row["effect"])
+    return f"{what}: {value} {row['90% CI']}"
+
+
+def findings(root: Path = ROOT) -> str:
+    """The findings block (Markdown table) from the committed reports under ``root``."""
+    tables = {b: claims_table((root / d / "REPORT.md").read_text()) for b, d in BUDGETS.items()}
+    quick, core = tables["quick"], tables["paper-core"]
+    lines = [
+        "| claim | the paper says | quick | paper-core | measured at paper-core (90% CI) |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for label in [*core, *(label for label in quick if label not in core)]:
+        row = core.get(label) or quick[label]
+        why = _why(core[label]) if label in core else "-"
+        lines.append(
+            f"| {label} | {row['statement']} | {_verdict(quick.get(label))} | "
+            f"{_verdict(core.get(label))} | {why} |"
+        )
+    return "\n".join(lines)
+
+
+def _split(text: str) -> tuple[str, str, str]:
+    if BEGIN not in text or END not in text:
+        raise ValueError(f"README.md has no {BEGIN} ... {END} block")
+    head, rest = text.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    return head, rest.split(END, 1)[0], tail
+
+
+def current(readme: Path = README) -> str:
+    """The findings block README.md holds now."""
+    return _split(readme.read_text())[1].strip("\n")
+
+
+def write(readme: Path = README, root: Path = ROOT) -> bool:
+    """Rewrite README's block from the reports; True when it changed."""
+    head, old, tail = _split(readme.read_text())
+    new = "\n" + findings(root) + "\n"
+    if new == old:
+        return False
+    readme.write_text(head + BEGIN + new + END + tail)
+    return True
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m bench.findings", description=__doc__)
+    p.add_argument("--check", action="store_true", help="exit 1 if README.md is out of date")
+    args = p.parse_args(argv)
+    if args.check:
+        if current() != findings():
+            print(f"{README}: findings table out of date; run python -m bench.findings")
+            return 1
+        return 0
+    print(f"{README}: {'rewritten' if write() else 'already up to date'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

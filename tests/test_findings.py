@@ -1,0 +1,52 @@
+"""README's findings table says what the committed reports say, and the README stays short."""
+
+import shutil
+
+import pytest
+
+from bench import findings
+
+README_LIMIT = 12 * 1024
+
+
+def test_readme_findings_match_the_reports():
+    assert findings.current() == findings.findings(), "run python -m bench.findings"
+
+
+def test_readme_is_short_with_the_findings_on_its_first_screen():
+    text = findings.README.read_text()
+    assert len(text.encode()) <= README_LIMIT
+    assert text.index(findings.BEGIN) < text.index("## The two commands")
+    assert text[: text.index(findings.BEGIN)].count("\n") < 40
+
+
+def _copy(tmp_path):
+    for d in findings.BUDGETS.values():
+        (tmp_path / d).mkdir(parents=True)
+        shutil.copy(findings.ROOT / d / "REPORT.md", tmp_path / d / "REPORT.md")
+    readme = tmp_path / "README.md"
+    shutil.copy(findings.README, readme)
+    return readme
+
+
+def test_a_changed_verdict_changes_the_table_and_the_check(tmp_path):
+    readme = _copy(tmp_path)
+    report = tmp_path / findings.BUDGETS["paper-core"] / "REPORT.md"
+    table = findings.claims_table(report.read_text())
+    row = table["5"]
+    line = next(x for x in report.read_text().splitlines() if x.startswith("| 5 |"))
+    report.write_text(report.read_text().replace(line, line.replace(row["verdict"], "**no way**")))
+    new = findings.findings(tmp_path)
+    assert "| **no way** |" in next(x for x in new.splitlines() if x.startswith("| 5 |"))
+    assert findings.current(readme) != new
+    assert findings.write(readme, tmp_path) and findings.current(readme) == new
+    assert not findings.write(readme, tmp_path)
+
+
+def test_claims_table_reads_every_column_and_refuses_a_report_without_one():
+    text = (findings.ROOT / findings.BUDGETS["quick"] / "REPORT.md").read_text()
+    table = findings.claims_table(text)
+    assert "1" in table and "2" not in table  # claim 2 does not run at quick
+    assert {"statement", "verdict", "effect", "90% CI", "discriminating"} <= set(table["1"])
+    with pytest.raises(ValueError, match="no claims table"):
+        findings.claims_table("# a report\n\nno table here\n")
