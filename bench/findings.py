@@ -5,7 +5,8 @@
 ``results/reference/quick/REPORT.md`` and ``results/reference/paper/REPORT.md`` (paper-core);
 ``--check`` exits 1, naming the file, when the README no longer says what the reports say.
 Each row: the claim, the paper's sentence, the final verdict at both budgets, and the measured
-effect behind the paper-core verdict with its 90% interval.
+effect behind the paper-core verdict with its 90% interval; then the margin policy (quantity,
+margin, plausible band) and each budget's margin-dependent claims.
 """
 
 from __future__ import annotations
@@ -39,6 +40,30 @@ def claims_table(report: str) -> dict[str, dict[str, str]]:
     return out
 
 
+def _section(report: str, title: str) -> list[str]:
+    lines = report.splitlines()
+    try:
+        start = lines.index(f"## {title}")
+    except ValueError:
+        raise ValueError(f"no '## {title}' section in the report") from None
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), None)
+    return lines[start + 1 : end]
+
+
+def policy_rows(report: str) -> list[tuple[str, str, str]]:
+    """(quantity, margin, plausible band) of the report's *Margin policy* table."""
+    rows = [x for x in _section(report, "Margin policy") if x.startswith("| ")]
+    return [tuple(c.strip() for c in x.strip("|").split("|")[:3]) for x in rows[2:]]
+
+
+def margin_dependent(report: str) -> str:
+    """The report's one-line list of margin-dependent claims ('none' when it has none)."""
+    for line in _section(report, "Margin-dependent claims"):
+        if line.startswith("Margin-dependent: "):
+            return line.removeprefix("Margin-dependent: claim ").rstrip(".")
+    return "none"
+
+
 def _verdict(row: dict[str, str] | None) -> str:
     if row is None:
         return "not run"
@@ -55,8 +80,8 @@ def _why(row: dict[str, str]) -> str:
 
 def findings(root: Path = ROOT) -> str:
     """The findings block (Markdown table) from the committed reports under ``root``."""
-    tables = {b: claims_table((root / d / "REPORT.md").read_text()) for b, d in BUDGETS.items()}
-    quick, core = tables["quick"], tables["paper-core"]
+    reports = {b: (root / d / "REPORT.md").read_text() for b, d in BUDGETS.items()}
+    quick, core = (claims_table(reports[b]) for b in ("quick", "paper-core"))
     lines = [
         "| claim | the paper says | quick | paper-core | measured at paper-core (90% CI) |",
         "| --- | --- | --- | --- | --- |",
@@ -68,6 +93,10 @@ def findings(root: Path = ROOT) -> str:
             f"| {label} | {row['statement']} | {_verdict(quick.get(label))} | "
             f"{_verdict(core.get(label))} | {why} |"
         )
+    lines += ["", "| quantity compared | margin | plausible band |", "| --- | --- | --- |"]
+    lines += [f"| {q} | {m} | {b} |" for q, m, b in policy_rows(reports["paper-core"])]
+    dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())
+    lines += ["", f"Margin-dependent inside the bands: {dependent}."]
     return "\n".join(lines)
 
 
