@@ -197,5 +197,5 @@ def synthetic_tables(
                     },
                 )
                 rows.append(row)
-    rows = [_store._jsonable(r) for r in rows]
+    rows = [_store.jsonable(r) for r in rows]
     return _store.rows_frame(rows), _store.curves_frame(rows)

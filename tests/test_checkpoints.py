@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import models
-from bench.core import _execute, _store
+from bench.core import _execute, _fit, _store
 from bench.core._ensemble import train_ensemble
 from bench.core._experiments import RunConfig
 from bench.core._train import Batches, TrainConfig, checkpoint_steps, loss_fn, prepare, train
@@ -101,10 +101,10 @@ def _run(**kw):
 STEADY = ("rollout_error", "energy_violation", "mse", "valid_time", "symplectic_error")
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a CPU
 def test_run_with_checkpoints_has_the_final_metrics_of_the_run_without(tmp_path, monkeypatch):
     # 2-step blocks, so that an 8-step run has checkpoints (2, 4, 8) inside it
-    monkeypatch.setattr(_execute, "TRAIN_BLOCK", 2)
+    monkeypatch.setattr(_fit, "TRAIN_BLOCK", 2)
     plain = _execute.execute_run(_run(), cache_root=tmp_path / "a")
     cfg = _run(eval_checkpoints=3)
     assert cfg.config_hash != _run().config_hash and cfg.train_hash == _run().train_hash
@@ -134,7 +134,7 @@ def test_run_with_checkpoints_has_the_final_metrics_of_the_run_without(tmp_path,
 
 
 def test_a_diverged_run_records_diverged_checkpoints_after_its_divergence(tmp_path, monkeypatch):
-    monkeypatch.setattr(_execute, "TRAIN_BLOCK", 2)
+    monkeypatch.setattr(_fit, "TRAIN_BLOCK", 2)
     row = _execute.execute_run(_run(eval_checkpoints=3, lr=1e30), cache_root=tmp_path)
     assert row["status"] == "diverged"
     cp = row["checkpoints"]

@@ -11,7 +11,7 @@ import pytest
 
 import systems._dataset as _dataset
 from bench import execute_run
-from bench.core import _rows
+from bench.core import _params
 from bench.core._ensemble import plan_groups
 from bench.core._experiments import RunConfig, profile_defaults
 from systems._dataset import DatasetConfig, make_dataset, source_fingerprint
@@ -76,7 +76,7 @@ def test_parameters_and_floor_trained_by_other_code_are_recomputed(tmp_path, mon
     b = execute_run(config, cache_root=tmp_path)
     assert a["status"] == b["status"] == "ok", (a["error"], b["error"])
     assert not a["train_cached"] and b["train_cached"]
-    monkeypatch.setattr(_rows, "source_fingerprint", lambda *p: "edited models")
+    monkeypatch.setattr(_params, "source_fingerprint", lambda *p: "edited models")
     c = execute_run(config, cache_root=tmp_path)
     assert c["status"] == "ok" and not c["train_cached"]
     assert c["rollout_error"] == a["rollout_error"]  # the same code really: the same numbers
@@ -95,11 +95,11 @@ def test_ensemble_planning_groups_a_run_whose_cached_training_is_stale(tmp_path,
         pdir = tmp_path / "params" / c.train_hash
         pdir.mkdir(parents=True)
         (pdir / "model.eqx").write_bytes(b"params")
-        meta = {"sha256": _rows.sha256_file(pdir / "model.eqx"), "code": code}
+        meta = {"sha256": _params.sha256_file(pdir / "model.eqx"), "code": code}
         (pdir / "train.json").write_text(json.dumps(meta))
 
     fresh, stale, new = run(1), run(2), run(3)
-    cache(fresh, _rows.code_fingerprint())
+    cache(fresh, _params.code_fingerprint())
     cache(stale, "older code")
     groups = [{c.seed for c in g} for g in plan_groups([fresh, stale, new], tmp_path, 8)]
     assert sorted(groups, key=len) == [{1}, {2, 3}]  # the fresh cache loads alone

@@ -148,7 +148,7 @@ def test_a_derivative_run_trains_and_is_evaluated_on_rollouts(tmp_path):
 def test_noisy_inputs_get_the_true_field_at_the_clean_states(tmp_path):
     """The HNN seed's protocol: noise on the observed states, targets the true dz/dt where
     the system was (its data.py adds the noise after computing dz/dt)."""
-    from bench.core._execute import build_run
+    from bench.core._build import build_run
 
     cfg = RunConfig(
         system="mass_spring",

@@ -10,7 +10,7 @@ import pytest
 
 import bench.core._runner as runner
 import models
-from bench.core import _rows, _store
+from bench.core import _params, _store
 from bench.core._ensemble import enabled, group_key, plan_groups, train_ensemble
 from bench.core._experiments import RunConfig
 from bench.core._train import TrainConfig, train
@@ -111,7 +111,7 @@ def test_grouping_puts_exactly_the_shape_compatible_runs_together(tmp_path):
     pdir = tmp_path / "params" / cached.train_hash
     pdir.mkdir(parents=True)
     (pdir / "model.eqx").write_bytes(b"x")
-    meta = {"sha256": _rows.sha256_file(pdir / "model.eqx"), "code": _rows.code_fingerprint()}
+    meta = {"sha256": _params.sha256_file(pdir / "model.eqx"), "code": _params.code_fingerprint()}
     (pdir / "train.json").write_text(json.dumps(meta))
     groups = plan_groups(same + other + [again, cached], tmp_path, max_size=20)
     as_sets = [{c.config_hash for c in g} for g in groups]
@@ -148,7 +148,7 @@ def _sweep(configs, root, mode, executor="local", cache=None):
     )
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a CPU
 def test_ensemble_sweep_rows_match_single_runs(tmp_path, capsys):
     # one seed, two learning rates (one dataset to generate); the second diverges
     configs = [_run(seed=0), _run(seed=0, lr=1e30)]

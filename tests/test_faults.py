@@ -1,4 +1,4 @@
-"""Faults from outside a run: nothing is lost silently (issue 13).
+"""Faults from outside a run: nothing is lost silently.
 
 Damaged row files, unusable results folders, empty results, runs that can never run, a full
 disk while a row or a dataset is written, and a sweep killed with SIGKILL. Each fault is
@@ -294,7 +294,7 @@ def _limited(cmd, kib):
     return ["bash", "-c", f"trap '' XFSZ; ulimit -f {kib} && exec \"$@\"", "limited", *cmd]
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a CPU
 def test_full_disk_while_a_row_is_written_stops_and_resumes(tmp_path, monkeypatch):
     res = tmp_path / "res"
     env = _env(tmp_path, DECON_TEST_FAKE_SLEEP="0", DECON_TEST_FAKE_PAD_SEED="3")
@@ -420,7 +420,7 @@ def test_orphan_temporaries_of_dead_writers_are_cleared(tmp_path):
     assert _store.clear_orphans(rows) == [orphan]
     assert not orphan.exists() and live.exists() and unnamed.exists()
     # this process's own temporaries carry its pid
-    assert _store._tmp_prefix() == f".tmp-{os.getpid()}-"
+    assert _store.tmp_prefix() == f".tmp-{os.getpid()}-"
 
 
 def test_resume_after_kill(tmp_path):

@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 import models
-from bench.core._execute import build_run, train_config
+from bench.core._build import build_run
+from bench.core._fit import train_config
 from bench.core._train import train
 from bench.studies.paper import _hnn_diagnosis as D
 from models._mlp import MLP

@@ -1,4 +1,4 @@
-"""Claim 10 (the HNN seed's tasks, issue 22): its declarations, and its verdict rule on
+"""Claim 10 (the HNN seed's tasks): its declarations, and its verdict rule on
 synthetic tables built to pass, to fail and to be undecided (no training), plus the table
 beside the seed's numbers and the figure from a synthetic results folder."""
 
@@ -51,7 +51,7 @@ def _tables(energy_ratio: float, loss_ratio: float, spread: float = 0.0) -> pd.D
                     rollout_error_velocity=err if momentum else math.nan,
                     curves={"t": [0.1], "rel_error": [err], "energy_violation": [0.1]},
                 )
-                rows.append(_store._jsonable(row))
+                rows.append(_store.jsonable(row))
     return _store.rows_frame(rows)
 
 

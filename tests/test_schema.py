@@ -1,4 +1,4 @@
-"""The results schema (issue 21): every column the store writes is documented, nothing
+"""The results schema: every column the store writes is documented, nothing
 documented is unknown to it, and results/SCHEMA.md is the generated text."""
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def rows(tmp_path_factory):
     ):
         row = execute_run(check_runnable(cfg), cache_root=cache)
         row.update(experiment="schema", profile="smoke", ensemble_size=1)
-        out.append(_store._jsonable(row))
+        out.append(_store.jsonable(row))
     return out
 
 

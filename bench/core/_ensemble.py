@@ -1,26 +1,9 @@
-"""Ensembles: runs that differ only in seed, learning rate or noise train as one program.
-
-M members with parameters p_m, optimiser states s_m, training sets D_m and learning rates
-lr_m take the step of :func:`bench.core._train.make_step`, vmapped over m::
-
-    (p_m, s_m) <- step(p_m, s_m; D_m[batch_m], lr_m)        for m = 1..M, in one lax.scan
-
-Every member keeps its own ``dead``/``good`` flags, so a member whose loss or gradient goes
-non-finite at step t is frozen there, recorded ``diverged`` at t, and the others go on
-unchanged (vmap never mixes members). Each member draws its batches from its own seed exactly
-as a single run does, so member m of an ensemble is the single run of its config up to
-float32 round-off (batched matmuls may sum in another order).
-
-Rows: a member's row is the row :func:`bench.core._execute.execute_run` writes for its config (the
-same columns, ``config_hash`` and ``train_hash``; its parameters go to the same params cache),
-plus ``ensemble_size`` (1 for a run trained alone). ``train_seconds`` and
-``compile_seconds`` of a member are its share (1/M) of the ensemble's.
-
-Grouping (:func:`plan_groups`): pending runs whose every field except ``ENSEMBLE_FIELDS``
-and ``eval_*`` agree form one group (cut into groups of at most ``max_size``). Runs whose
-parameters are already cached, and second runs of one ``train_hash``, run alone. Not grouped:
-``loss`` (a static choice of the loss function) and options held by the model (e.g. a
-regulariser weight inside ``model_options``, a static field of the model).
+"""Ensembles: runs that differ only in seed, learning rate or noise train as one program: the
+one training step (:func:`bench.core._train.make_step`) vmapped over members in one
+``lax.scan``. Each member keeps its own batches and divergence flags, so member m is the single
+run of its config up to float32 round-off. An ensemble is a variant of a run's train step
+(:func:`bench.core._execute.ensemble_member`): a member's row is the row of its single run, plus
+``ensemble_size``, with 1/M of the ensemble's ``train_seconds`` and ``compile_seconds``.
 """
 
 from __future__ import annotations
@@ -38,7 +21,7 @@ import systems
 
 from ._errors import one_line, storage_error
 from ._experiments import RunConfig, check_choice
-from ._rows import cached_params_meta
+from ._params import cached_params_meta, params_dir
 
 MODES = ("auto", "on", "off")
 # RunConfig fields that may differ between the members of one ensemble (no shape changes).
@@ -265,9 +248,12 @@ def plan_groups(
 ) -> list[list[RunConfig]]:
     """Cut pending runs into ensembles (lists of >= 1 run), order kept within each group.
 
-    Runs whose parameters are cached under ``cache_root``, second runs of one
-    ``train_hash`` (they differ only in evaluation) and trivial predictors (nothing to train)
-    come last, alone: they load the parameters, or need none, instead of training.
+    Runs whose every field except ``ENSEMBLE_FIELDS`` and ``eval_*`` agree form one group (cut
+    into groups of at most ``max_size``). Runs whose parameters are cached under ``cache_root``,
+    second runs of one ``train_hash`` (they differ only in evaluation), trivial predictors
+    (nothing to train) and pixel runs come last, alone. Not grouped: ``loss`` (a static choice
+    of the loss function) and options held by the model (e.g. a regulariser weight inside
+    ``model_options``, a static field of the model).
     """
     if isinstance(max_size, bool) or not isinstance(max_size, int) or max_size < 1:
         raise ValueError(f"ensemble size must be an integer >= 1; got {max_size!r}")
@@ -277,7 +263,7 @@ def plan_groups(
     for c in configs:
         cached = (
             cache_root is not None
-            and cached_params_meta(Path(cache_root) / "params" / c.train_hash) is not None
+            and cached_params_meta(params_dir(cache_root, c.train_hash)) is not None
         )
         # pixel runs train their own way (bench.core._pixels): alone
         pixels = c.observation != "state"
@@ -299,7 +285,7 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
     Member m rolls out ``models[m]`` from its own test states ``datasets[m].z_test[:, 0]``
     with the evaluation integrator of ``configs[m]`` (all members must share it). Returns,
     per member, ``(pred, stats, rollout_seconds, eval_compile_seconds)`` as
-    :func:`bench.core._execute._evaluate` takes them (seconds: 1/M of the ensemble's).
+    :func:`bench.core._evaluate.evaluate_state` takes them (seconds: 1/M of the ensemble's).
     """
     import equinox as eqx
     import jax
@@ -307,7 +293,7 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
 
     import models as M
 
-    from ._execute import eval_integrator
+    from ._evaluate import eval_integrator
 
     c = configs[0]
     integ = eval_integrator(c)
@@ -347,7 +333,10 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     vmapped test rollouts fail, each member rolls out alone. A storage error (full disk)
     propagates, as in :func:`bench.core._execute.execute_run`.
     """
-    from . import _execute as R
+    from ._build import build_run
+    from ._execute import ensemble_member, execute_run, run_steps
+    from ._fit import train_config
+    from ._params import store_trained
 
     cache_root = Path(cache_root or systems.cache_root())
     configs = list(configs)
@@ -359,12 +348,12 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
             models, datasets = [], []
             for c in configs:
                 c.validate()
-                _, data, _, model = R.build_run(c, cache_root)
+                _, data, _, model = build_run(c, cache_root)
                 models.append(model)
                 datasets.append(data)
-            results = train_ensemble(models, datasets, [R.train_config(c) for c in configs])
+            results = train_ensemble(models, datasets, [train_config(c) for c in configs])
             trained = [
-                (res.model, R.store_trained(c, res, cache_root))
+                (res.model, store_trained(c, res, cache_root, train_config(c).checkpoints))
                 for c, res in zip(configs, results, strict=True)
             ]
         except Exception as e:
@@ -388,7 +377,10 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     shared = (time.process_time() - c_start) / len(configs)  # training and rollouts, split
     rows = []
     for c, t, r in zip(configs, trained, rolled, strict=True):
-        row = R.execute_run(c, cache_root=cache_root, trained=t, rolled=r)
+        if t is None:  # trained alone
+            row = execute_run(c, cache_root=cache_root)
+        else:  # the train step (and the test rollouts) done by the ensemble
+            row = run_steps(c, ensemble_member(t, r), cache_root)
         row["ensemble_size"] = 1 if t is None else len(configs)
         row["cpu_seconds"] = row.get("cpu_seconds", 0.0) + shared
         rows.append(row)

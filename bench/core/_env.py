@@ -86,7 +86,7 @@ def setup_process(n: int | None = None, cores: list[int] | None = None) -> int:
 
 # XLA's CPU backend maps every compiled program's code into memory regions of its own, and jax's
 # caches keep every program of the process alive. A sweep worker runs run after run in one
-# process: measured 2026-11-25, about 1200 maps per smoke run of a new model/system cell (24
+# process: measured at about 1200 maps per smoke run of a new model/system cell (24
 # runs: 3300 -> 30,200 maps) and 8,000-8,600 after 7 paper-core runs per worker. At the
 # kernel's vm.max_map_count (65530 here) LLVM fails with "Cannot allocate memory" and the
 # process segfaults (it did: the 60th run of tests/test_runner.py's all-models smoke sweep in

@@ -1,617 +1,134 @@
-"""Execute one run: data -> model -> training -> test rollouts -> metrics -> a row.
+"""One run as a pipeline of steps: build -> train -> evaluate -> record.
 
-``execute_run(config)`` never raises: every outcome is a row with ``status`` ``ok``,
-``diverged`` (training went non-finite at ``diverged_step``) or ``failed`` (``error`` holds the
-exception's message, the traceback is in the run's artifact directory).
-
-Caches under ``$DECON_CACHE`` (default ``./.cache/decon-bench``, git-ignored):
-
-- ``params/<train_hash>/model.eqx`` + ``train.json`` (with the sha256 of ``model.eqx`` and
-  the ``_rows.TRAIN_CODE`` fingerprint): runs that differ only in evaluation settings train once;
-  a params file whose checksum does not match, or that other code trained (``train_hash``
-  covers the configuration, not the code), is ignored and the model retrained;
-- ``runs/<config_hash>/``: ``config.json``, ``metrics.json``, ``curves.npz`` (per trajectory
-  and time), ``traceback.txt`` for failures;
-- ``floors/<dataset hash>.json``: the perturbed-ground-truth floor of a test set (with the
-  same fingerprint; recomputed when it differs).
-
-Sweeps over many runs are :mod:`bench.core._runner`'s.
+``execute_run(config)`` never raises (a storage error, which stops a sweep, aside): every
+outcome is a row with ``status`` ``ok``, ``diverged`` (training went non-finite at
+``diverged_step``) or ``failed`` (``error`` holds the message, the traceback is in the run's
+artifact folder). The observation kinds, state and pixels, are variants of the build, train and
+evaluate steps (:class:`Steps`); an ensemble's member is a variant of the train step.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
-import os
+import functools
 import time
-import traceback
+from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
 
 import systems
 
-from . import _metrics as M
-from ._errors import one_line, storage_error
+from ._build import build_run
+from ._errors import storage_error
+from ._evaluate import evaluate_state
 from ._experiments import RunConfig
-from ._provenance import provenance
-from ._rows import (  # noqa: F401 - re-exported
-    EVAL_MAX_STEPS,
+from ._fit import train_cached
+from ._record import (
     artifact_dir,
     base_row,
-    cached_params_meta,
-    code_fingerprint,
-    eval_integrator,
-)
-from ._rows import sha256_file as _sha256
-from ._rows import write_json as _write_json
-
-TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends
-# Test states used for the symplectic error (a Jacobian per state: keep it small).
-_SYMPLECTIC_STATES = 64
-
-
-# -------------------------------------------------------------------------------- one run
-def build_run(config: RunConfig, cache_root: Path):
-    import jax
-
-    import models
-
-    system = systems.make(config.system, **config.system_kwargs())
-    dcfg = config.dataset_config()
-    scene = models.Scene(
-        dof=system.dof,
-        angular=tuple(system.angular),
-        n_args=system.n_args if config.random_args else 0,
-        damped=config.friction > 0,
-        canonical=config.coordinates == "momentum",
-    )
-    model = models.make(
-        config.model,
-        scene,
-        key=jax.random.PRNGKey(config.seed),
-        width=config.width,
-        depth=config.depth,
-        activation=config.activation,
-        dtype=config.dtype,
-        dissipation=config.dissipation,
-        **dict(config.model_options),
-    )
-    data = systems.make_dataset(dcfg, cache_dir=cache_root)
-    if config.train_target == "derivative":
-        clean = None
-        if dcfg.noise > 0:  # the same trajectories and windows without the observation noise
-            clean = systems.make_dataset(dataclasses.replace(dcfg, noise=0.0), cache_root)
-        data = WithDerivatives(data, system, canonical=scene.canonical, clean=clean)
-    return system, data, scene, model
-
-
-class WithDerivatives:
-    """A dataset plus ``dz_train``: the true dz/dt of its training states, in the run's
-    coordinates (:func:`systems.derivatives`; for ``train_target="derivative"``).
-
-    With observation noise (``clean``: the same dataset without it) the seeds' protocol: the
-    inputs are the noisy states and the targets the true field at the clean ones (the HNN
-    seed's data.py: noise added to q and p after dz/dt is computed), so a model is asked for
-    the field at where the system really was, from a noisy reading of it."""
-
-    def __init__(self, data, system, canonical: bool, clean=None):
-        self._data = data
-        args = np.asarray(data.args_train)
-        self.z_train_clean = data.z_train if clean is None else clean.z_train
-        self.dz_train = systems.derivatives(
-            system, self.z_train_clean, args if args.shape[-1] else None, canonical=canonical
-        )
-
-    def __getattr__(self, name):
-        return getattr(self._data, name)
-
-
-def train_cached(config: RunConfig, model, data, cache_root: Path, progress):
-    """Train, or load the parameters cached under ``train_hash`` when their checksum holds."""
-    import equinox as eqx
-
-    import models
-
-    from ._train import train
-
-    if isinstance(model, models.AbstractTrivialModel):  # no parameters: nothing to train
-        meta = {
-            "status": "ok",
-            "diverged_step": None,
-            "train_seconds": 0.0,
-            "compile_seconds": 0.0,
-            "steps_done": 0,
-            "final_loss": None,
-            "flops_per_step": 0.0,
-            "train_cached": False,
-        }
-        return model, meta
-    tcfg = train_config(config)
-    pdir = Path(cache_root) / "params" / config.train_hash
-    meta = cached_params_meta(pdir)
-    if meta is not None:
-        try:
-            loaded = eqx.tree_deserialise_leaves(pdir / "model.eqx", like=model)
-            meta["_snapshots"] = _load_snapshots(pdir, meta, tcfg, model, loaded)
-            meta["train_cached"] = True
-            return loaded, meta
-        except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
-            pass
-    res = train(model, data, tcfg, progress=progress)
-    return res.model, store_trained(config, res, cache_root)
-
-
-def _load_snapshots(pdir: Path, meta: dict, tcfg, like, final) -> tuple:
-    """The cached snapshots of a training whose checkpoints were ``tcfg.checkpoints``
-    (ValueError, so that the run retrains, when they were others or their file is damaged)."""
-    import equinox as eqx
-
-    from ._train import Snapshot
-
-    if not tcfg.checkpoints:
-        return ()
-    if meta.get("checkpoints") != list(tcfg.checkpoints):
-        raise ValueError("the cached training kept other checkpoints")
-    kept = meta.get("snapshots") or []
-    inner = [s for s in kept if s[0] < meta["steps_done"] or meta["status"] != "ok"]
-    models = []
-    if inner:
-        sfile = pdir / "snapshots.eqx"
-        if meta.get("snapshots_sha256") != _sha256(sfile):
-            raise ValueError("the cached snapshots are damaged")
-        models = eqx.tree_deserialise_leaves(sfile, like=[like] * len(inner))
-    out = [Snapshot(int(a), float(b), m) for (a, b), m in zip(inner, models, strict=True)]
-    if len(kept) > len(inner):  # the last snapshot is the final model
-        out.append(Snapshot(int(kept[-1][0]), float(kept[-1][1]), final))
-    return tuple(out)
-
-
-def train_config(config: RunConfig):
-    """The :class:`bench.TrainConfig` of a run."""
-    import models
-
-    from ._train import TrainConfig, checkpoint_steps
-
-    return TrainConfig(
-        steps=config.steps,
-        batch=config.batch,
-        lr=config.lr,
-        loss=config.loss,
-        integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
-        dtype=config.dtype,
-        seed=config.seed,
-        steps_per_call=TRAIN_BLOCK,
-        checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, TRAIN_BLOCK),
-        target=config.train_target,
-    )
-
-
-def store_trained(config: RunConfig, res, cache_root: Path) -> dict:
-    """Write a :class:`bench.TrainResult` to ``params/<train_hash>/``; return its meta."""
-    import equinox as eqx
-
-    pdir = Path(cache_root) / "params" / config.train_hash
-    losses = np.asarray(res.losses, dtype=np.float64)
-    meta = {
-        "status": res.status,
-        "diverged_step": res.diverged_step,
-        "train_seconds": float(res.train_seconds),
-        "compile_seconds": float(res.compile_seconds),
-        "steps_done": int(res.steps_done),
-        "flops_per_step": float(res.flops_per_step),
-        "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
-        "code": code_fingerprint(),
-    }
-    pdir.mkdir(parents=True, exist_ok=True)
-    tmp = pdir / f".tmp-{os.getpid()}.eqx"
-    eqx.tree_serialise_leaves(tmp, res.model)
-    os.replace(tmp, pdir / "model.eqx")
-    meta["sha256"] = _sha256(pdir / "model.eqx")
-    snaps = tuple(getattr(res, "snapshots", ()))
-    meta["checkpoints"] = list(train_config(config).checkpoints)
-    meta["snapshots"] = [[s.step, float(s.train_seconds)] for s in snaps]
-    inner = [s for s in snaps if s.step < res.steps_done or res.status != "ok"]
-    if inner:  # the final model is model.eqx already
-        tmp = pdir / f".tmp-{os.getpid()}-snapshots.eqx"
-        eqx.tree_serialise_leaves(tmp, [s.model for s in inner])
-        os.replace(tmp, pdir / "snapshots.eqx")
-        meta["snapshots_sha256"] = _sha256(pdir / "snapshots.eqx")
-    _write_json(pdir / "train.json", meta)
-    np.save(pdir / "losses.npy", losses)
-    meta["train_cached"] = False
-    meta["_snapshots"] = snaps
-    return meta
-
-
-def _floor(system, data, config: RunConfig, cache_root: Path) -> float:
-    path = Path(cache_root) / "floors" / f"{data.config.hash()}.json"
-    try:
-        stored = json.loads(path.read_text())
-        if stored["code"] == code_fingerprint():
-            return float(stored["floor"])
-    except (OSError, ValueError, KeyError, TypeError):
-        pass
-    args = data.args_test if config.random_args else None
-    value = M.perturbed_floor(
-        system,
-        data.z_test,
-        data.ts_test,
-        args,
-        key=config.seed,
-        coordinates=config.coordinates,
-        sim_points=getattr(data.config, "n_points", None),
-    )
-    _write_json(path, {"floor": value, "code": code_fingerprint()})
-    return value
-
-
-def _nan_if_none(x) -> float:
-    return float("nan") if x is None else float(x)
-
-
-def _true_maps(system):
-    """The TRUE system's (q, p) <-> (q, qdot) maps, as the trivial predictors take them
-    (args of shape (0,) mean the system's defaults)."""
-    import jax.numpy as jnp
-
-    def fix(a):
-        return None if a is None or jnp.size(a) == 0 else a
-
-    def velocity(q, p, a):
-        return system.velocity(q, p, fix(a))
-
-    def momentum(q, v, a):
-        return system.momentum(jnp.concatenate([q, v]), fix(a))
-
-    return velocity, momentum
-
-
-def to_velocity(system, zs, args=None) -> np.ndarray:
-    """States (N, T, 2d) in (q, p) mapped to (q, qdot) with the TRUE ``system.velocity``;
-    ``args`` None (the system's defaults) or (N, n_args). Non-finite states stay non-finite."""
-    return systems.to_velocity(system, zs, args)
-
-
-def _predictor(model, system, roll):
-    """f(z0s, ts, args) -> (predictions, stats): the model's rollout, or a trivial
-    predictor's closed form (compiled once, so the second call times the prediction alone)."""
-    import jax
-
-    import models
-
-    if isinstance(model, models.AbstractTrivialModel):
-        velocity, momentum = _true_maps(system)
-        fn = jax.jit(
-            lambda z0s, ts, args: model.predict_batch(
-                z0s, ts, args, velocity=velocity, momentum=momentum
-            )
-        )
-        return lambda z0s, ts, args: (fn(z0s, ts, args), {})
-    return lambda z0s, ts, args: roll(model, z0s, ts, args)
-
-
-def _test_inputs(config: RunConfig, data):
-    """(initial states, times, args or None) of the test trajectories, in the run's dtype."""
-    import jax.numpy as jnp
-
-    dtype = jnp.dtype(config.dtype)
-    z0s = jnp.asarray(data.z_test[:, 0], dtype=dtype)
-    ts = jnp.asarray(data.ts_test, dtype=dtype)
-    args = jnp.asarray(data.args_test, dtype=dtype) if config.random_args else None
-    return z0s, ts, args
-
-
-def _roller(config: RunConfig):
-    """``roll(model, z0s, ts, args) -> (predictions, stats)`` with the run's evaluation
-    integrator, jitted: one compile serves every model of one structure (checkpoints)."""
-    import equinox as eqx
-
-    import models
-
-    integ = eval_integrator(config)
-
-    @eqx.filter_jit
-    def roll(m, z0s, ts, args):
-        return models.rollout_batch(m, z0s, ts, args, integ, return_stats=True)
-
-    return roll
-
-
-def _score(config: RunConfig, system, data, zhat: np.ndarray):
-    """The metrics of test predictions ``zhat`` (N, T, 2d) that checkpoints also record
-    (:data:`CHECKPOINT_METRICS`), and the per-trajectory, per-time errors and energy
-    violations ``err_t``, ``ev_t`` (N, T)."""
-    z = data.z_test
-    angular = tuple(system.angular)
-    h_args = data.args_test if config.random_args else None
-    err_t = M.relative_error(zhat, z, angular)
-    h_true = M.energies(system, z, h_args, config.coordinates)
-    h_pred = M.energies(system, zhat, h_args, config.coordinates)
-    ev_t = M.energy_violation_curve(h_pred, h_true)
-    # Momentum-coordinate runs are also scored on (q, qdot), decoded with the TRUE velocity map
-    # (so models fed (q, p) and (q, qdot) can be compared on one footing).
-    err_velocity, mse_velocity = float("nan"), float("nan")
-    if config.coordinates == "momentum":
-        zv_hat, zv = to_velocity(system, zhat, h_args), to_velocity(system, z, h_args)
-        err_velocity = float(M.geometric_mean(M.relative_error(zv_hat, zv, angular)[..., 1:]))
-        mse_velocity = M.mse(zv_hat, zv, angular)
-    scores = {
-        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
-        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
-        "mse": M.mse(zhat, z, angular),
-        "valid_time": float(np.mean(M.valid_prediction_time(err_t, data.ts_test))),
-        "rollout_error_velocity": err_velocity,
-        "mse_velocity": mse_velocity,
-    }
-    return scores, err_t, ev_t, h_pred, h_true
-
-
-# The metrics recorded at every learning-curve checkpoint (row field "checkpoints").
-CHECKPOINT_METRICS = (
-    "rollout_error",
-    "energy_violation",
-    "mse",
-    "valid_time",
-    "rollout_error_velocity",
-    "mse_velocity",
+    close_row,
+    open_artifacts,
+    record_failure,
+    save_arrays,
+    training_columns,
 )
 
 
-def _evaluate(config, system, data, model, cache_root, rolled=None, roll=None):
-    """Metrics, curves and full curves of a trained model on the test set.
+@dataclasses.dataclass(frozen=True)
+class Steps:
+    """The steps of one kind of run, each a function of plain values:
 
-    ``rolled``: ``(pred, stats, rollout_seconds, eval_compile_seconds)`` of test rollouts done
-    elsewhere (an ensemble's, vmapped over members: ``bench.core._ensemble``); ``roll``: the
-    jitted rollout to use (:func:`_roller`; made here when None).
+    - ``build(config, cache_root) -> built``: checks the configuration and makes the run's
+      system, data and untrained model (``built``, a tuple whose layout is the kind's own);
+    - ``train(config, built, cache_root, progress) -> (model, meta)``: the trained model and
+      the training's record (:func:`bench.core._params.cached_training`);
+    - ``evaluate(config, built, model, meta, cache_root) -> (columns, arrays)``: the row's
+      metric columns (with ``curves``) and the arrays saved as ``curves.npz`` (may be empty).
     """
-    import jax
-    import jax.numpy as jnp
 
-    # An adaptive evaluation of a stiff learned field can take millions of steps; a test
-    # trajectory that needs more than EVAL_MAX_STEPS is recorded as failed from where it stopped
-    # (non-finite states) instead of holding the sweep.
-    dtype = jnp.dtype(config.dtype)
-    z0s, ts, args = _test_inputs(config, data)
-
-    if rolled is None:
-        predict = _predictor(model, system, roll or _roller(config))
-        t0 = time.perf_counter()
-        jax.block_until_ready(predict(z0s, ts, args))  # compile + first run
-        t1 = time.perf_counter()
-        pred, stats = jax.block_until_ready(predict(z0s, ts, args))
-        t2 = time.perf_counter()
-        rollout_seconds = t2 - t1
-        eval_compile_seconds = max(0.0, (t1 - t0) - rollout_seconds)
-    else:
-        pred, stats, rollout_seconds, eval_compile_seconds = rolled
-    zhat = np.asarray(pred, dtype=np.float64)
-    z = data.z_test
-    angular = tuple(system.angular)
-    h_args = data.args_test if config.random_args else None
-    scores, err_t, ev_t, h_pred, h_true = _score(config, system, data, zhat)
-    finite = bool(np.all(np.isfinite(zhat)))
-
-    states = z.reshape(-1, z.shape[-1])
-    pick = np.linspace(0, len(states) - 1, min(_SYMPLECTIC_STATES, len(states))).astype(int)
-    s_args = None
-    if config.random_args:
-        s_args = jnp.asarray(np.repeat(data.args_test, z.shape[1], axis=0)[pick], dtype=dtype)
-    try:
-        nfe = float(np.mean(np.asarray(stats["nfe"])))
-    except Exception:
-        nfe = float("nan")
-    metrics = {
-        "rollout_error": scores["rollout_error"],
-        "energy_violation": scores["energy_violation"],
-        "mse": scores["mse"],
-        "valid_time": scores["valid_time"],
-        "rollout_error_ref": M.rollout_error(zhat, z, angular, reference_compatible=True),
-        "energy_violation_ref": M.energy_violation(h_pred, h_true, reference_compatible=True),
-        "energy_pct_max_pe": M.energy_pct_max_pe(
-            h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
-        ),
-        "energy_pct_max_pe_last": M.energy_pct_max_pe_last(
-            h_pred, h_true, system.potential_range(None if h_args is None else h_args[0])
-        ),
-        "energy_mse": M.energy_mse(h_pred, h_true),
-        **_derivative_mse(config, system, data, model),
-        "rollout_error_velocity": scores["rollout_error_velocity"],
-        "mse_velocity": scores["mse_velocity"],
-        "symplectic_error": M.symplectic_error(
-            model, jnp.asarray(states[pick], dtype=dtype), s_args
-        ),
-        "floor": _floor(system, data, config, cache_root),
-        "rollout_finite": finite,
-        "eval_compile_seconds": eval_compile_seconds,
-        "rollout_seconds": rollout_seconds,
-        "rollout_seconds_per_traj": rollout_seconds / max(1, len(zhat)),
-        "nfe": nfe,
-        "n_params": M.n_params(model),
-    }
-    curves = {
-        "t": (data.ts_test - data.ts_test[0]).tolist(),
-        "rel_error": M.geometric_mean(err_t, axis=0).tolist(),
-        "energy_violation": M.geometric_mean(ev_t, axis=0).tolist(),
-        "z_true": z[0].tolist(),
-        "z_pred": zhat[0].tolist(),
-    }
-    full = {"err": err_t, "energy_violation": ev_t, "z_pred": zhat[:4], "z_true": z[:4]}
-    return metrics, curves, full
+    build: Callable
+    train: Callable
+    evaluate: Callable
 
 
-_DERIVATIVE_STATES = 2048  # states per split at most for the derivative MSEs
+def _build_state(config: RunConfig, cache_root: Path):
+    config.validate()
+    return build_run(config, cache_root)
 
 
-def _derivative_mse(config, system, data, model) -> dict:
-    """The HNN seed's train and test losses, whatever the run trained on: the mean squared
-    difference between the model's field and the true dz/dt (:func:`systems.derivatives`, in
-    the run's coordinates) at up to :data:`_DERIVATIVE_STATES` training states (noisy where the
-    data are) and test states (noise-free). Computed for derivative-target runs only (the
-    seeds' protocol; it costs a compile per run); NaN otherwise and for a model without a
-    vector field."""
-    import jax
-    import jax.numpy as jnp
-
-    import models
-
-    if (
-        config.train_target != "derivative"
-        or isinstance(model, models.AbstractDiscreteModel)
-        or not hasattr(model, "vector_field")
-    ):
-        return {"derivative_mse_train": float("nan"), "derivative_mse_test": float("nan")}
-    out = {}
-    dtype = jnp.dtype(config.dtype)
-    canonical = config.coordinates == "momentum"
-    field = jax.jit(jax.vmap(lambda zz, a: model.vector_field(0.0, zz, a)))
-    for split in ("train", "test"):
-        z, args = getattr(data, f"z_{split}"), np.asarray(getattr(data, f"args_{split}"))
-        # targets at the clean states (training: the noise-free twin, as in training)
-        clean = getattr(data, "z_train_clean", z) if split == "train" else z
-        states = z.reshape(-1, z.shape[-1])
-        clean = clean.reshape(-1, z.shape[-1])
-        a = np.repeat(args, z.shape[1], axis=0)
-        pick = np.linspace(0, len(states) - 1, min(_DERIVATIVE_STATES, len(states))).astype(int)
-        states, clean, a = states[pick], clean[pick], a[pick]
-        true = systems.derivatives(system, clean, a if a.shape[-1] else None, canonical)
-        pred = np.asarray(
-            field(jnp.asarray(states, dtype), jnp.asarray(a, dtype)), dtype=np.float64
-        )
-        d = pred - np.asarray(true, dtype=np.float64)
-        out[f"derivative_mse_{split}"] = (
-            float(np.mean(d**2)) if np.all(np.isfinite(d)) else float("nan")
-        )
-    return out
+def _train_state(config: RunConfig, built, cache_root: Path, progress: bool):
+    _, data, _, model = built
+    return train_cached(config, model, data, cache_root, progress)
 
 
-def _checkpoints(config, system, data, meta, final_metrics, final_curves, roll) -> dict | None:
-    """The learning curve of a run: :data:`CHECKPOINT_METRICS` at each of its training
-    checkpoints (``bench.core._train.checkpoint_steps``), on the whole test set with the
-    evaluation integrator, as columns (lists, one entry per checkpoint) plus the per-time
-    curves ``rel_error_t``, ``energy_violation_t`` (geometric mean over trajectories).
+def _build_pixels(config: RunConfig, cache_root: Path):
+    from ._pixels import build, check_pixels
 
-    The checkpoint at the full budget of a run that trained to the end IS the final model: it
-    takes the final metrics (so the curve ends on the row's numbers exactly). A checkpoint at or
-    after a divergence is ``status`` ``diverged`` with the final (last finite) model's metrics,
-    as the row of a diverged run. None when the run has no checkpoints (or nothing trained).
-    """
-    import jax
-
-    targets = train_config(config).checkpoints
-    snaps = {s.step: s for s in meta.get("_snapshots") or ()}
-    if not targets or meta.get("steps_done") is None or "_snapshots" not in meta:
-        return None
-    z0s, ts, args = _test_inputs(config, data)
-    out: dict = {"step": [], "fraction": [], "train_seconds": [], "status": []}
-    for key in (*CHECKPOINT_METRICS, "rel_error_t", "energy_violation_t"):
-        out[key] = []
-    for target in targets:
-        snap = next((snaps[k] for k in sorted(snaps) if k >= target), None)
-        final = snap is None or (snap.step >= config.steps and meta["status"] == "ok")
-        if final:
-            scores = {k: final_metrics[k] for k in CHECKPOINT_METRICS}
-            rel, ev = final_curves["rel_error"], final_curves["energy_violation"]
-            status = meta["status"] if snap is None else "ok"
-            seconds = meta["train_seconds"] if snap is None else snap.train_seconds
-        else:
-            pred, _ = jax.block_until_ready(roll(snap.model, z0s, ts, args))
-            scores, err_t, ev_t, _, _ = _score(config, system, data, np.asarray(pred, np.float64))
-            rel = M.geometric_mean(err_t, axis=0).tolist()
-            ev = M.geometric_mean(ev_t, axis=0).tolist()
-            status, seconds = "ok", snap.train_seconds
-        out["step"].append(int(target))
-        out["fraction"].append(target / config.steps)
-        out["train_seconds"].append(float(seconds))
-        out["status"].append(status)
-        for k in CHECKPOINT_METRICS:
-            out[k].append(float(scores[k]))
-        out["rel_error_t"].append(list(rel))
-        out["energy_violation_t"].append(list(ev))
-    return out
+    check_pixels(config)
+    return build(config)
 
 
-NAN_METRICS = (
-    "rollout_error",
-    "rollout_error_velocity",
-    "energy_violation",
-    "mse",
-    "mse_velocity",
-    "valid_time",
-    "rollout_error_ref",
-    "energy_violation_ref",
-    "energy_pct_max_pe",
-    "energy_pct_max_pe_last",
-    "symplectic_error",
-)
+def _train_pixels(config: RunConfig, built, cache_root: Path, progress: bool):
+    from ._pixels import train_cached_pixels
+
+    _, data, model = built
+    return train_cached_pixels(config, model, data, cache_root, progress)
 
 
-def execute_run(
-    config: RunConfig, cache_root=None, progress=False, trained=None, rolled=None
-) -> dict:
-    """Run one configuration end to end and return its row (never raises).
+def _evaluate_pixels(config: RunConfig, built, model, meta: dict, cache_root: Path):
+    from ._pixel_eval import evaluate_pixels
 
-    The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
-    ``diverged_step``, ``error``, the metrics, the costs, ``curves`` (small per-time
-    curves, stored in the row file and expanded into curves.parquet) and, for a trained run
-    with ``eval_checkpoints``, ``checkpoints`` (its learning curve, :func:`_checkpoints`,
-    expanded into checkpoints.parquet) with ``checkpoint_seconds``, the time they took.
+    system, data, _ = built
+    metrics, curves = evaluate_pixels(config, system, data, model)
+    return {**metrics, "curves": curves}, {}
 
-    ``trained``: ``(model, meta)`` of a training done elsewhere (an ensemble member, see
-    ``bench.core._ensemble``; meta as :func:`store_trained` returns it) instead of training here;
-    ``rolled``: its test rollouts, done with the ensemble's (see :func:`_evaluate`).
-    """
-    if config.observation == "pixels":  # frames, an autoencoder, latent dynamics (issue 22)
-        from ._pixels import execute_pixels
 
-        return execute_pixels(config, cache_root, progress)
+STATE = Steps(build=_build_state, train=_train_state, evaluate=evaluate_state)
+PIXELS = Steps(build=_build_pixels, train=_train_pixels, evaluate=_evaluate_pixels)
+OBSERVATIONS = {"state": STATE, "pixels": PIXELS}  # RunConfig.observation -> its steps
+
+
+def ensemble_member(trained: tuple, rolled=None) -> Steps:
+    """The state steps of an ensemble's member, trained by the ensemble: ``trained`` is its
+    ``(model, meta)`` (meta as :func:`bench.core._params.store_trained` returns it),
+    ``rolled`` its test rollouts when the ensemble did them (:mod:`bench.core._ensemble`)."""
+    return dataclasses.replace(
+        STATE,
+        train=lambda *_: trained,
+        evaluate=functools.partial(evaluate_state, rolled=rolled),
+    )
+
+
+def run_steps(config: RunConfig, steps: Steps, cache_root=None, progress=False) -> dict:
+    """Build, train and evaluate one run with ``steps``, and record its row (never raises,
+    except for a storage error: a full disk stops the sweep, recording nothing)."""
     cache_root = Path(cache_root or systems.cache_root())
     row = base_row(config)
     art = artifact_dir(config.config_hash, cache_root)
     t_start, c_start = time.perf_counter(), time.process_time()
     try:
-        art.mkdir(parents=True, exist_ok=True)
-        _write_json(art / "config.json", config.to_dict())
-        (art / "traceback.txt").unlink(missing_ok=True)
-        config.validate()
-        system, data, _, model = build_run(config, cache_root)
-        if trained is None:
-            model, meta = train_cached(config, model, data, cache_root, progress)
-        else:
-            model, meta = trained
-        row.update(
-            status=meta["status"],
-            diverged_step=meta.get("diverged_step"),
-            train_seconds=meta["train_seconds"],
-            compile_seconds=meta["compile_seconds"],
-            steps_done=meta.get("steps_done"),
-            final_loss=meta.get("final_loss"),
-            flops_per_step=_nan_if_none(meta.get("flops_per_step")),
-            train_cached=meta["train_cached"],
-        )
-        roll = _roller(config)
-        metrics, curves, full = _evaluate(config, system, data, model, cache_root, rolled, roll)
-        if row["status"] == "diverged" and not metrics["rollout_finite"]:
-            # A model that went non-finite in training has no meaningful prediction.
-            metrics.update(dict.fromkeys(NAN_METRICS, float("nan")))
-        row.update(metrics)
-        row["curves"] = curves
-        t_check = time.perf_counter()
-        checkpoints = _checkpoints(config, system, data, meta, metrics, curves, roll)
-        if checkpoints is not None:
-            row["checkpoints"] = checkpoints
-            row["checkpoint_seconds"] = time.perf_counter() - t_check
-        np.savez_compressed(art / "curves.npz", **full)
+        open_artifacts(config, art)
+        built = steps.build(config, cache_root)
+        model, meta = steps.train(config, built, cache_root, progress)
+        row.update(training_columns(meta))
+        columns, arrays = steps.evaluate(config, built, model, meta, cache_root)
+        row.update(columns)
+        if arrays:
+            save_arrays(art, arrays)
     except Exception as e:  # one run never stops the sweep...
-        if storage_error(e):  # ...but a full disk does (bench.core._errors), recording nothing
+        if storage_error(e):  # ...but a full disk does (bench.core._errors)
             raise
-        row["status"] = "failed"
-        row["error"] = one_line(e, 500)
-        (art / "traceback.txt").write_text(traceback.format_exc())
-    row["wall_seconds"] = time.perf_counter() - t_start
-    row["cpu_seconds"] = time.process_time() - c_start  # every thread of the process
-    row.update(provenance())  # versions, device and commit: bench.core._provenance
-    _write_json(
-        art / "metrics.json", {a: b for a, b in row.items() if a not in ("curves", "checkpoints")}
-    )
-    return row
+        record_failure(row, art, e)
+    return close_row(row, art, t_start, c_start)
+
+
+def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
+    """Run one configuration end to end and return its row (never raises).
+
+    The row holds every RunConfig field, ``config_hash``, ``train_hash``, ``status``,
+    ``diverged_step``, ``error``, the metrics, the costs, ``curves`` (small per-time curves,
+    stored in the row file and expanded into curves.parquet) and, for a trained state run with
+    ``eval_checkpoints``, ``checkpoints`` (its learning curve, expanded into
+    checkpoints.parquet) with ``checkpoint_seconds``, the time they took.
+    """
+    steps = OBSERVATIONS.get(config.observation, STATE)  # an unknown one fails validation
+    return run_steps(config, steps, cache_root, progress)

@@ -84,7 +84,7 @@ class RunConfig:
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
     train_target: str = "rollout"
     # what the models observe: "state" (z itself) or "pixels" (rendered frames of the state,
-    # an autoencoder and latent dynamics: bench.core._pixels; issue 22)
+    # an autoencoder and latent dynamics: bench.core._pixels)
     observation: str = "state"
 
     def __post_init__(self):
@@ -306,11 +306,11 @@ PROFILES: dict[str, dict[str, object]] = {
 }
 # Selections: name -> the profile whose runs they select from (see the module docstring).
 # paper-core: the paper's per-run budget and seeds on the cells each verdict needs at k = 2,
-# what a 2-core CPU can finish in a background campaign (issue 24; `make paper-core`).
+# what a 2-core CPU can finish in a background campaign (`make paper-core`).
 SELECTIONS: dict[str, str] = {"paper-core": "paper"}
 for _sel, _base in SELECTIONS.items():
     PROFILES[_sel] = dict(PROFILES[_base])
-# A verdict counts when it replicates (issue 20): each profile's claims are judged again on a
+# A verdict counts when it replicates: each profile's claims are judged again on a
 # disjoint seed set, stored beside the profile's own runs (`make replicate` at quick; the
 # paper-core campaign runs them after its own seeds). A selection has its base profile's.
 REPLICATION_SEEDS: dict[str, tuple[int, ...]] = {"quick": (5, 6, 7, 8, 9), "paper": (5, 6, 7, 8, 9)}

@@ -1,36 +1,8 @@
-"""Provenance of a result: the software and hardware that produced a run.
-
-Every run row (and ``bench_meta.json``) carries :data:`PROVENANCE_COLUMNS`:
-
-- ``python_version`` and ``<package>_version`` for each of :data:`PACKAGES` (the installed
-  distribution's version, from its metadata);
-- ``backend`` (``jax.default_backend()``: ``cpu``, ``gpu``, ``tpu``) and ``device`` (the GPU's
-  ``device_kind``, e.g. ``NVIDIA H100 80GB HBM3``, or on CPU the processor's model name);
-- the arithmetic: ``cpu_vendor`` (e.g. ``AuthenticAMD``), ``cpu_family_model`` (``family/model``
-  from ``/proc/cpuinfo``, e.g. ``25/1``), ``cpu_simd`` (the SIMD extensions of the CPU that XLA's
-  CPU code generator may use, from :data:`SIMD_FLAGS`, space-separated) and ``xla_flags`` (the
-  ``XLA_FLAGS`` environment variable, empty when unset) and ``cpu_cores`` (the cores the process
-  may run on, its affinity mask, which sizes XLA's CPU thread pools: a sweep worker is pinned
-  to its own): float32 round-off differs between CPU types (another vector width, another fused
-  reduction) and between core counts (XLA splits a reduction over its threads), so rows from
-  two CPUs, or from one CPU on 1 and on 2 cores, agree to round-off only, while rows from one
-  CPU type on one core count with one lock file are bit-identical. Round-off can decide a
-  training run's fate: ``bench.studies.paper._hnn_diagnosis`` replays a plain-HNN spring run
-  that stalls on one core and learns on two;
-- ``git_commit`` (the full hash of this checkout's ``HEAD``) and ``git_dirty`` (whether the
-  working tree differs from it outside ``results/``; ``None`` when not known).
-
-A value that could not be determined is :data:`UNKNOWN`. :func:`provenance` computes them once
-per process. Rows written before provenance existed simply lack the columns (NaN in the runs
-table); :func:`provenance_markdown` counts them as "not recorded" and :func:`compare_provenance`
-says so, without guessing.
-
-Command line (``python -m bench.provenance``):
-
-``show``                     this process's provenance as JSON
-``compare DIR_A DIR_B``      warnings where two results folders differ in versions or devices
-``backfill DIR KEY=VALUE..`` give the rows of DIR that lack provenance the values known for
-                             them (the rest ``unknown``) and rebuild its tables
+"""Provenance of a result: the software and hardware that produced a run, as the columns
+:data:`PROVENANCE_COLUMNS` of every row and of ``bench_meta.json`` (:func:`provenance`, once
+per process), and the tools that compare and backfill them (``python -m bench.provenance show |
+compare DIR_A DIR_B | backfill DIR KEY=VALUE..``). Rows from two CPU types or core counts agree
+to float32 round-off only; from one CPU type, core count and lock file they are bit-identical.
 """
 
 from __future__ import annotations
@@ -51,6 +23,24 @@ DEVICE_COLUMNS = ("backend", "device")
 CPU_COLUMNS = ("cpu_vendor", "cpu_family_model", "cpu_simd", "xla_flags", "cpu_cores")
 GIT_COLUMNS = ("git_commit", "git_dirty")
 PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *CPU_COLUMNS, *GIT_COLUMNS)
+# What they hold:
+# - python_version and <package>_version for each of PACKAGES (the installed distribution's);
+# - backend (jax.default_backend(): cpu, gpu, tpu) and device (the GPU's device_kind, e.g.
+#   "NVIDIA H100 80GB HBM3", or on CPU the processor's model name);
+# - the arithmetic: cpu_vendor (e.g. AuthenticAMD), cpu_family_model ("family/model" from
+#   /proc/cpuinfo, e.g. 25/1), cpu_simd (the SIMD extensions of SIMD_FLAGS that the CPU has,
+#   which XLA's CPU code generator may use, space-separated), xla_flags ($XLA_FLAGS, empty when
+#   unset) and cpu_cores (the cores the process may run on, its affinity mask, which sizes XLA's
+#   CPU thread pools: a sweep worker is pinned to its own). float32 round-off differs between
+#   CPU types (another vector width, another fused reduction) and core counts (XLA splits a
+#   reduction over its threads), and round-off can decide a training run's fate:
+#   bench.studies.paper._hnn_diagnosis replays a plain-HNN spring run that stalls on one core
+#   and learns on two;
+# - git_commit (the full hash of this checkout's HEAD) and git_dirty (whether the working tree
+#   differs from it outside results/; None when not known).
+# A value that could not be determined is UNKNOWN. Rows written before provenance existed lack
+# the columns (NaN in the runs table): provenance_markdown counts them as "not recorded" and
+# compare_provenance says so, without guessing.
 # x86 and Arm vector extensions LLVM can target from XLA's CPU backend (``/proc/cpuinfo`` names)
 SIMD_FLAGS = (
     "sse4_1",

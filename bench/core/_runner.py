@@ -21,15 +21,10 @@ import systems
 from . import _store
 from ._env import bound_compiled_programs, cpu_count
 from ._errors import StorageError, WorkerDied, one_line, storage_error
-from ._execute import (
-    EVAL_MAX_STEPS,
-    artifact_dir,
-    base_row,
-    eval_integrator,
-    execute_run,
-    to_velocity,
-)
+from ._evaluate import EVAL_MAX_STEPS, eval_integrator, to_velocity
+from ._execute import execute_run
 from ._experiments import RunConfig
+from ._record import artifact_dir, base_row
 
 __all__ = [
     "EVAL_MAX_STEPS",

@@ -1,4 +1,4 @@
-"""The results tables' columns, in one place: name, unit, meaning (issue 21).
+"""The results tables' columns, in one place: name, unit, meaning.
 
 :data:`COLUMNS` maps each table of a results folder (``runs``, ``curves``, ``checkpoints``,
 ``checkpoint_curves``; the ``.parquet`` files the store rebuilds from ``.rows/``) to its

@@ -1,30 +1,7 @@
-"""Training a model on a dataset's chunks by backpropagation through its rollout.
-
-Loss on a batch of B chunks z (B, C, 2d) observed at ts (C,):
-
-    L = mean_{b, c, i} e(rollout(model, z[b, 0], ts, args[b])[c, i] - z[b, c, i])
-        + mean_b model.penalty(rollout states of b, args[b])
-
-with e(x) = x^2 ("l2") or |x| ("l1"). With ``target="derivative"`` (the HNN and LNN seeds'
-protocol: no rollout) the loss is on the instantaneous time derivatives instead,
-
-    L = mean_{b, c, i} e(F(z[b, c], args[b])_i - zdot[b, c, i]) + mean_b penalty(z[b], args[b])
-
-with F the model's vector field and zdot the true one at the same states (the dataset's
-``dz_train``, from :func:`systems.derivatives`); a discrete model has no vector field and cannot
-train so. Optimiser: clip_by_global_norm(clip) then AdamW with a
-cosine decay of the learning rate from lr to lr * lr_floor over ``steps``.
-
-Checkpoints: ``TrainConfig.checkpoints`` names training steps at which a copy of the parameters
-is kept (:class:`Snapshot`, taken at the end of the first compiled block that reaches the step,
-so steps that are multiples of ``steps_per_call`` are exact: :func:`checkpoint_steps`). Taking
-a snapshot copies the parameters between blocks and changes nothing in the training: the final
-parameters are those of the same run without checkpoints, bit for bit (a test).
-
-Speed: the steps run ``steps_per_call`` at a time inside one compiled ``lax.scan`` (the data
-stay on the device, the batch indices of the whole block come in as one array), which removes
-the Python dispatch between steps. The compiled block is cached per configuration and shapes,
-so seeds and repeated runs of one configuration compile once.
+"""The one training loop: a model fitted to a dataset's chunks by backpropagation through its
+rollout (or, with ``target="derivative"``, to the true time derivatives), ``steps_per_call``
+steps at a time in one compiled ``lax.scan`` (:func:`train`; the loss is :func:`loss_fn`). The
+compiled block is cached per configuration and shapes: seeds and repeats compile once.
 """
 
 from __future__ import annotations
@@ -44,12 +21,18 @@ from models._integrators import Integrator, rollout_batch
 
 LOSSES = ("l2", "l1")
 DTYPES = ("float32", "float64")
-TARGETS = ("rollout", "derivative")  # what the loss compares (module docstring)
+TARGETS = ("rollout", "derivative")  # what the loss compares (:func:`loss_fn`)
 
 
 @dataclass(frozen=True)
 class TrainConfig:
-    """Optimisation settings of one training run (see the module docstring for the loss)."""
+    """Optimisation settings of one training run (the loss: :func:`loss_fn`).
+
+    ``checkpoints`` names training steps at which a copy of the parameters is kept
+    (:class:`Snapshot`, taken at the end of the first compiled block that reaches the step, so
+    steps that are multiples of ``steps_per_call`` are exact: :func:`checkpoint_steps`). Taking
+    a snapshot changes nothing in the training: the final parameters are those of the same run
+    without checkpoints, bit for bit (a test)."""
 
     steps: int = 8000
     batch: int = 200
@@ -64,7 +47,7 @@ class TrainConfig:
     log_every: int = 100  # progress-bar refresh, in steps (rounded up to whole blocks)
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
     checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
-    target: str = "rollout"  # "rollout" or "derivative" (module docstring)
+    target: str = "rollout"  # "rollout" or "derivative" (:func:`loss_fn`)
 
     def __post_init__(self):
         for name in ("steps", "batch", "log_every", "steps_per_call"):
@@ -171,8 +154,19 @@ def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
 
 
 def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):
-    """The batch loss of the module docstring; z (B, C, 2d), args (B, P), ts (C,); ``dz``
-    (B, C, 2d) the true time derivatives at ``z`` (``target="derivative"`` only)."""
+    """The loss on a batch of B chunks z (B, C, 2d) observed at ts (C,), args (B, P)::
+
+        L = mean_{b, c, i} e(rollout(model, z[b, 0], ts, args[b])[c, i] - z[b, c, i])
+            + mean_b model.penalty(rollout states of b, args[b])
+
+    with e(x) = x^2 ("l2") or |x| ("l1"). With ``target="derivative"`` (the HNN and LNN seeds'
+    protocol: no rollout) the loss is on the time derivatives instead::
+
+        L = mean_{b, c, i} e(F(z[b, c], args[b])_i - dz[b, c, i]) + mean_b penalty(z[b], args[b])
+
+    with F the model's vector field and ``dz`` (B, C, 2d) the true one at the same states (the
+    dataset's ``dz_train``, from :func:`systems.derivatives`); a discrete model has no vector
+    field and cannot train so."""
     if config.target == "derivative":
         field = jax.vmap(
             jax.vmap(lambda zz, a: model.vector_field(0.0, zz, a), in_axes=(0, None)), (0, 0)

@@ -56,7 +56,7 @@ import pandas as pd  # noqa: E402
 
 import models  # noqa: E402
 
-from ..core._execute import CHECKPOINT_METRICS as SCORES  # noqa: E402 - what a checkpoint replaces
+from ..core._evaluate import CHECKPOINT_METRICS as SCORES  # noqa: E402 - what a checkpoint replaces
 from ..core._experiments import PROFILES, Experiment  # noqa: E402
 from ..core._query import load_tables, select  # noqa: E402
 from ..core._store import load_checkpoints  # noqa: E402

@@ -148,7 +148,8 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
     import jax
     import jax.numpy as jnp
 
-    from ...core._execute import build_run, train_config
+    from ...core._build import build_run
+    from ...core._fit import train_config
     from ...core._train import Batches, compiled_block, optimizer, prepare
 
     if variant not in VARIANTS:

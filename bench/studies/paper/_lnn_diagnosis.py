@@ -140,7 +140,7 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ...core._execute import build_run
+    from ...core._build import build_run
 
     seeds, _, steps = SIZES[profile]
     rows = []
@@ -237,7 +237,8 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ...core._execute import build_run, train_cached
+    from ...core._build import build_run
+    from ...core._fit import train_cached
 
     rows = []
     for label, cfg in _trained_models(profile, cache_root):

@@ -32,7 +32,8 @@ import numpy as np
 import pandas as pd
 
 from ...core._experiments import expand
-from ...core._pixels import CC_LOSS, build, evaluate_pixels, train_pixels
+from ...core._pixel_eval import evaluate_pixels
+from ...core._pixels import CC_LOSS, build, train_pixels
 from ...core._store import read_rows
 from ._plot import _gmean as _gm
 

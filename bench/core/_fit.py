@@ -1,0 +1,62 @@
+"""The train step of a state run: its :class:`bench.TrainConfig`, and training through the
+parameter cache (:mod:`bench.core._params`) with the one training loop (:func:`bench.train`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ._experiments import RunConfig
+from ._params import cached_training
+
+TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends
+
+# The meta of a model without parameters (a trivial predictor): nothing trained, nothing cached.
+UNTRAINED = {
+    "status": "ok",
+    "diverged_step": None,
+    "train_seconds": 0.0,
+    "compile_seconds": 0.0,
+    "steps_done": 0,
+    "final_loss": None,
+    "flops_per_step": 0.0,
+    "train_cached": False,
+}
+
+
+def train_config(config: RunConfig):
+    """The :class:`bench.TrainConfig` of a run."""
+    import models
+
+    from ._train import TrainConfig, checkpoint_steps
+
+    return TrainConfig(
+        steps=config.steps,
+        batch=config.batch,
+        lr=config.lr,
+        loss=config.loss,
+        integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
+        dtype=config.dtype,
+        seed=config.seed,
+        steps_per_call=TRAIN_BLOCK,
+        checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, TRAIN_BLOCK),
+        target=config.train_target,
+    )
+
+
+def train_cached(config: RunConfig, model, data, cache_root: Path, progress):
+    """``(model, meta)``: ``model`` trained on ``data``, or its parameters loaded from the
+    cache (:func:`bench.core._params.cached_training`)."""
+    import models
+
+    from ._train import train
+
+    if isinstance(model, models.AbstractTrivialModel):  # no parameters: nothing to train
+        return model, dict(UNTRAINED)
+    tcfg = train_config(config)
+    return cached_training(
+        config,
+        model,
+        cache_root,
+        lambda: train(model, data, tcfg, progress=progress),
+        checkpoints=tcfg.checkpoints,
+    )

@@ -1,0 +1,133 @@
+"""The parameter cache, shared by state and pixel runs: ``<cache>/params/<train_hash>/`` holds a
+trained model (``model.eqx``), its record (``train.json``: the training's outcome, the sha256 of
+``model.eqx``, the fingerprint of the code that trained it), the losses and the checkpoint
+snapshots. Runs that differ only in evaluation train once; an entry whose checksum fails, or
+that other code trained (``train_hash`` covers the configuration, not the code), is retrained."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from systems._dataset import source_fingerprint
+
+from ._atomic import atomic_write, write_json
+from ._experiments import RunConfig
+
+# The packages whose source cached parameters and floors depend on (the models, the data's
+# physics, training and metrics). A cache entry records their fingerprint and is discarded when
+# any of their files changed since.
+TRAIN_CODE = ("models", "systems", "bench.core")
+
+
+def code_fingerprint() -> str:
+    """:func:`systems._dataset.source_fingerprint` of :data:`TRAIN_CODE`."""
+    return source_fingerprint(*TRAIN_CODE)
+
+
+def sha256_file(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def params_dir(cache_root, train_hash: str) -> Path:
+    """``<cache_root>/params/<train_hash>/``."""
+    return Path(cache_root) / "params" / train_hash
+
+
+def cached_params_meta(pdir: Path) -> dict | None:
+    """The ``train.json`` of the parameters cached in ``pdir``, or None where there are none,
+    ``model.eqx`` fails its checksum, or other code trained them (:func:`code_fingerprint`)."""
+    pfile, meta_file = Path(pdir) / "model.eqx", Path(pdir) / "train.json"
+    try:
+        meta = json.loads(meta_file.read_text())
+        if meta.get("code") == code_fingerprint() and meta.get("sha256") == sha256_file(pfile):
+            return meta
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _load_snapshots(pdir: Path, meta: dict, checkpoints: tuple, like, final) -> tuple:
+    """The cached snapshots of a training whose checkpoints were ``checkpoints`` (ValueError,
+    so that the run retrains, when they were others or their file is damaged)."""
+    import equinox as eqx
+
+    from ._train import Snapshot
+
+    if not checkpoints:
+        return ()
+    if meta.get("checkpoints") != list(checkpoints):
+        raise ValueError("the cached training kept other checkpoints")
+    kept = meta.get("snapshots") or []
+    inner = [s for s in kept if s[0] < meta["steps_done"] or meta["status"] != "ok"]
+    models = []
+    if inner:
+        sfile = pdir / "snapshots.eqx"
+        if meta.get("snapshots_sha256") != sha256_file(sfile):
+            raise ValueError("the cached snapshots are damaged")
+        models = eqx.tree_deserialise_leaves(sfile, like=[like] * len(inner))
+    out = [Snapshot(int(a), float(b), m) for (a, b), m in zip(inner, models, strict=True)]
+    if len(kept) > len(inner):  # the last snapshot is the final model
+        out.append(Snapshot(int(kept[-1][0]), float(kept[-1][1]), final))
+    return tuple(out)
+
+
+def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple = ()) -> dict:
+    """Write a :class:`bench.TrainResult` (trained keeping ``checkpoints``) to
+    ``params/<train_hash>/``; return its meta, as :func:`cached_training` returns it."""
+    import equinox as eqx
+
+    pdir = params_dir(cache_root, config.train_hash)
+    losses = np.asarray(res.losses, dtype=np.float64)
+    meta = {
+        "status": res.status,
+        "diverged_step": res.diverged_step,
+        "train_seconds": float(res.train_seconds),
+        "compile_seconds": float(res.compile_seconds),
+        "steps_done": int(res.steps_done),
+        "flops_per_step": float(res.flops_per_step),
+        "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
+        "code": code_fingerprint(),
+    }
+    atomic_write(pdir / "model.eqx", lambda tmp: eqx.tree_serialise_leaves(tmp, res.model))
+    meta["sha256"] = sha256_file(pdir / "model.eqx")
+    snaps = tuple(getattr(res, "snapshots", ()))
+    meta["checkpoints"] = list(checkpoints)
+    meta["snapshots"] = [[s.step, float(s.train_seconds)] for s in snaps]
+    inner = [s for s in snaps if s.step < res.steps_done or res.status != "ok"]
+    if inner:  # the final model is model.eqx already
+        models = [s.model for s in inner]
+        atomic_write(pdir / "snapshots.eqx", lambda tmp: eqx.tree_serialise_leaves(tmp, models))
+        meta["snapshots_sha256"] = sha256_file(pdir / "snapshots.eqx")
+    write_json(pdir / "train.json", meta)
+    atomic_write(pdir / "losses.npy", lambda tmp: np.save(tmp, losses))
+    meta["train_cached"] = False
+    meta["_snapshots"] = snaps
+    return meta
+
+
+def cached_training(
+    config: RunConfig, like, cache_root: Path, fit: Callable, checkpoints: tuple = ()
+) -> tuple:
+    """``(model, meta)``: the parameters cached under ``config.train_hash`` (with the snapshots
+    of ``checkpoints``; ``like`` gives their structure) where they hold, else those of
+    ``fit()`` (a :class:`bench.TrainResult`), stored. ``meta["train_cached"]`` says which;
+    ``meta["_snapshots"]`` holds the checkpoint snapshots."""
+    import equinox as eqx
+
+    pdir = params_dir(cache_root, config.train_hash)
+    meta = cached_params_meta(pdir)
+    if meta is not None:
+        try:
+            loaded = eqx.tree_deserialise_leaves(pdir / "model.eqx", like=like)
+            meta["_snapshots"] = _load_snapshots(pdir, meta, checkpoints, like, loaded)
+            meta["train_cached"] = True
+            return loaded, meta
+        except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
+            pass
+    res = fit()
+    return res.model, store_trained(config, res, cache_root, checkpoints)

@@ -1,0 +1,145 @@
+"""The evaluate step of a pixel run: encode the first observation of each test trajectory,
+roll the latent state out with the evaluation integrator, decode every state, and score the
+frames against the truth and the states read off them (:func:`evaluate_pixels`)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from . import _metrics as M
+from ._evaluate import eval_integrator
+from ._experiments import RunConfig
+from ._pixels import LATENT_DT, _gather, _jit, _windows, seed_loss
+
+N_FRAMES_KEPT = 8  # decoded frames of the first test trajectory kept in the row (figure)
+_LOSS_WINDOWS = 512  # windows at most for the reported train / test losses
+
+
+def _loss_on(model, frames, chunk: int, integ, seed: int) -> float:
+    """The seed's loss on up to :data:`_LOSS_WINDOWS` windows of ``frames`` (N, T, S, S)."""
+    import jax.numpy as jnp
+
+    w = _windows(*frames.shape[:2], chunk)
+    if len(w) > _LOSS_WINDOWS:
+        w = w[np.random.default_rng(seed).choice(len(w), _LOSS_WINDOWS, replace=False)]
+    f = _gather(jnp.asarray(frames, jnp.dtype(model.autoencoder.dtype)), w, chunk)
+    return float(_loss_jit(model, f, integ))
+
+
+@_jit
+def _loss_jit(model, frames, integ):
+    return seed_loss(model, frames, integ)[0]
+
+
+@_jit
+def _roll(m, x0, n_t: int, integ):
+    """Latent rollouts of n_t frame steps from observations x0 and their decoded frames."""
+    import jax
+    import jax.numpy as jnp
+
+    ts = jnp.arange(n_t, dtype=x0.dtype) * LATENT_DT
+    zs = jax.vmap(lambda x: m.rollout(m.encode(x), ts, integ))(x0)
+    return zs, jax.vmap(jax.vmap(m.decode))(zs)
+
+
+def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
+    """``(metrics, curves)`` of a trained latent model on the test trajectories.
+
+    ``pixel_mse``: mean over t >= 1, pixels and trajectories of (x_hat - x)^2
+    (``pixel_mse_late`` over the last third of the horizon; ``pixel_mse_static`` the same for
+    holding the first observation, the trivial predictor); ``recon_mse``: the autoencoder
+    alone on the test observations; ``pixel_loss_train`` / ``pixel_loss_test``: the seed's
+    loss on training / test windows; ``latent_energy_drift``: the learned conserved scalar
+    along the latent rollouts, mean over trajectories of max_t E - min_t E over the spread
+    (std) of E over the test starts (NaN for models without one). From the angle read off each
+    decoded frame (``systems.read_state``: q from the first frame, qdot the difference to the
+    second over dt): ``rollout_error``, ``energy_violation``, ``mse`` and
+    ``decoded_energy_mse`` (mean of (H(read x_hat) - H(read x))^2, H the true energy), the
+    read-off truth scored by the same reader. ``curves`` also hold per-time ``pixel_mse`` and
+    a few decoded frames of the first test trajectory (``frames_true``, ``frames_pred``, at
+    ``frame_index``) for the figure.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    import models
+
+    dtype = jnp.dtype(c.dtype)
+    integ = eval_integrator(c)
+    obs = np.asarray(data.observations(data.frames_test), dtype=np.float64)  # (N, T-1, 2, S, S)
+    n_t = obs.shape[1]
+
+    def roll(m, x0):
+        return _roll(m, x0, n_t, integ)
+
+    x0 = jnp.asarray(obs[:, 0], dtype)
+    t0 = time.perf_counter()
+    jax.block_until_ready(roll(model, x0))
+    t1 = time.perf_counter()
+    zs, pred = jax.block_until_ready(roll(model, x0))
+    t2 = time.perf_counter()
+    zs, pred = np.asarray(zs, np.float64), np.asarray(pred, np.float64)
+    finite = bool(np.all(np.isfinite(pred)))
+    sq = (pred - obs) ** 2
+    pixel_t = sq.mean(axis=(0, 2, 3, 4))
+    recon = jax.vmap(jax.vmap(lambda x: model.decode(model.encode(x))))(jnp.asarray(obs, dtype))
+    recon_mse = float(np.mean((np.asarray(recon, np.float64) - obs) ** 2))
+    static = float(np.mean((obs[:, :1] - obs[:, 1:]) ** 2))
+
+    # the learned conserved scalar along the latent rollouts
+    drift = float("nan")
+    energy_first = [float("nan")] * n_t
+    if model.has_energy:
+        e = np.asarray(
+            jax.vmap(jax.vmap(model.latent_energy))(jnp.asarray(zs, dtype)), dtype=np.float64
+        )
+        spread = float(np.std(e[:, 0]))
+        if np.all(np.isfinite(e)) and spread > 0:
+            drift = float(np.mean(e.max(axis=1) - e.min(axis=1)) / spread)
+        energy_first = e[0].tolist()
+
+    # states and true energies read off the decoded and the true frames
+    z_hat, z_true = data.read_states(pred), data.read_states(obs)
+    energy = jax.jit(jax.vmap(jax.vmap(system.energy)))
+    h_hat, h_true = np.asarray(energy(z_hat)), np.asarray(energy(z_true))
+    angular = tuple(system.angular)
+    err_t = M.relative_error(z_hat, z_true, angular)
+    ev_t = M.energy_violation_curve(h_hat, h_true)
+    d_h = (h_hat - h_true) ** 2
+    decoded_energy_mse = float(np.mean(d_h)) if np.all(np.isfinite(d_h)) else float("nan")
+
+    train_integ = models.Integrator(c.train_integrator, substeps=c.train_substeps)
+    metrics = {
+        "pixel_mse": float(pixel_t[1:].mean()) if finite else float("nan"),
+        "pixel_mse_late": float(pixel_t[-max(1, n_t // 3) :].mean()) if finite else float("nan"),
+        "pixel_mse_static": static,
+        "recon_mse": recon_mse,
+        "pixel_loss_train": _loss_on(model, data.frames_train, c.chunk, train_integ, c.seed),
+        "pixel_loss_test": _loss_on(model, data.frames_test, c.chunk, train_integ, c.seed),
+        "latent_energy_drift": drift,
+        "decoded_energy_mse": decoded_energy_mse,
+        "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
+        "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
+        "mse": M.mse(z_hat, z_true, angular),
+        "rollout_finite": finite,
+        "eval_compile_seconds": max(0.0, (t1 - t0) - (t2 - t1)),
+        "rollout_seconds": t2 - t1,
+        "rollout_seconds_per_traj": (t2 - t1) / max(1, len(obs)),
+        "n_params": M.n_params(model),
+    }
+    keep = np.unique(np.linspace(0, n_t - 1, N_FRAMES_KEPT).round().astype(int))
+    curves = {
+        "t": (np.arange(n_t) * c.dt).tolist(),
+        "rel_error": M.geometric_mean(err_t, axis=0).tolist(),
+        "energy_violation": M.geometric_mean(ev_t, axis=0).tolist(),
+        "z_true": z_true[0].tolist(),
+        "z_pred": z_hat[0].tolist(),
+        "pixel_mse": pixel_t.tolist(),
+        "latent_energy": energy_first,
+        "frame_index": keep.tolist(),
+        "frames_true": np.round(obs[0, keep, 0], 3).tolist(),
+        "frames_pred": np.round(pred[0, keep, 0], 3).tolist(),
+    }
+    return metrics, curves
