@@ -65,7 +65,7 @@ from ._figure import save_figure  # noqa: E402
 from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides  # noqa: E402
 from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
 from .paper._rules import claim_studies, evaluate_claims, restrict  # noqa: E402
-from .paper._stats import MODEL_LABELS  # noqa: E402
+from .paper.kit import MODEL_LABELS  # noqa: E402
 
 # The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
 # runs share system, k and model with them)

@@ -66,14 +66,8 @@ from ._common import (  # noqa: E402
     SYSTEMS,
     TRIVIAL_MODELS,
 )
-from ._rules import (  # noqa: E402
-    CLAIM_TITLES,
-    claim_studies,
-    discrimination,
-    evaluate_claims,
-    succeeds,
-)
-from ._stats import MODEL_LABELS, TRIVIAL_FACTOR, VERDICTS, Verdict, scored  # noqa: E402
+from ._rules import CLAIM_TITLES, claim_studies, evaluate_claims  # noqa: E402
+from .kit import MODEL_LABELS, TRIVIAL_FACTOR, VERDICTS, Verdict, discrimination, scored, succeeds  # noqa: E402
 from .relativistic import RELATIVISTIC_CELLS, RELATIVISTIC_EXTRAS, velocity_scores  # noqa: E402
 
 _MODULES = (energy, symplectic, second_order, coordinates, damped, loss, relativistic)

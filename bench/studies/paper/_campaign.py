@@ -79,7 +79,7 @@ def replication_order(results_dir, profile: str = "paper-core") -> tuple[int, ..
     claims go with the first claim that reads them, as in the first phase."""
     from ...core._query import load_tables
     from ._replication import judge
-    from ._stats import NOT_REPRODUCED, PARTLY, REPRODUCED
+    from .kit import NOT_REPRODUCED, PARTLY, REPRODUCED
 
     signed: set[int] = set()
     if results_dir is not None and holds_runs(Path(results_dir)):

@@ -12,6 +12,22 @@ PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
 # the parameter-free reference predictors, in the registry's order
 TRIVIAL_MODELS = tuple(models.trivial_models())
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
+# The models' names in tables and figures.
+MODEL_LABELS = {
+    "node": "NODE",
+    "node_so": "NODE+SO",
+    "hnn": "HNN",
+    "hnn_so": "HNN+SO",
+    "hnn_so_diss": "HNN+SO + Rayleigh dissipation",
+    "mixture_hnn": "mixture HNN (paper's damped HNN)",
+    "node_symreg": "NODE + symplectic reg.",
+    "node_so_symreg": "NODE+SO + symplectic reg.",
+    "lnn": "LNN",
+    "vin": "VIN",
+    "resnet": "ResNet",
+    "constant_velocity": "constant velocity (trivial)",
+    "at_rest": "at rest (trivial)",
+}
 # Fig. 3's grid: log-spaced from 1e-6 to 1e3 (REFERENCE.md), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
 # paper-core (issue 24): five points spanning the paper's grid at the paper budget; quick: three

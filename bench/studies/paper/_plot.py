@@ -21,7 +21,7 @@ import pandas as pd  # noqa: E402
 from ...core._query import aggregate, variant  # noqa: E402
 from .._figure import save_figure  # noqa: E402
 from ._common import TRIVIAL_MODELS  # noqa: E402
-from ._stats import MODEL_LABELS  # noqa: E402
+from .kit import MODEL_LABELS  # noqa: E402
 
 SYSTEM_LABELS = {
     "chain_pendulum": "chain pendulum",

@@ -47,8 +47,18 @@ from ...core._store import load_runs
 from ...core._studies import Study, register_study
 from .._figure import save_figure
 from . import policy
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
-from ._stats import _at_most, _bad, _greater, _paired, condition, gated
+from ._rules import CLAIM_TITLES
+from .kit import (
+    at_most,
+    bad_rows,
+    condition,
+    gated,
+    greater,
+    learned_cell,
+    paired,
+    per_system_discrimination,
+    verdict,
+)
 
 SYSTEMS = ("mass_spring", "pendulum", "two_body")
 # (model, coordinates) of the study: the seed's two models on (q, p), NODE+SO and the trivial
@@ -185,22 +195,22 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     if len(r) and "train_target" in r:
         r = r[r["train_target"] == "derivative"]
     if not len(r):
-        return _verdict(10, CLAIM_TITLES[10], [], None, 0, "log energy-MSE ratio")
+        return verdict(10, CLAIM_TITLES[10], [], None, 0, "log energy-MSE ratio")
     r = r.assign(rollout_error_any=_rollout_any(r))
     parts, seeds, extra = [], [], []
     for system in SYSTEMS:
         rs = r[r["system"] == system]
         if not len(rs):
             continue
-        e = _paired(rs, BASELINE, HNN, "energy_mse")
-        loss = _paired(rs, HNN, BASELINE, "derivative_mse_test")
-        similar = _at_most(
+        e = paired(rs, BASELINE, HNN, "energy_mse")
+        loss = paired(rs, HNN, BASELINE, "derivative_mse_test")
+        similar = at_most(
             f"(b) {system}: log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss")
         )
         mg = TWO_BODY_ENERGY if system == "two_body" else policy.margin("energy", squared=True)
         parts.append(
             gated(
-                _greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
+                greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
                 condition(similar),
                 learned_cell(rs, HNN, f"HNN on {system}", "rollout_error_any"),
                 learned_cell(rs, BASELINE, f"MLP on {system}", "rollout_error_any"),
@@ -208,16 +218,16 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         )
         parts.append(similar)
         seeds.append(min(len(e), len(loss)))
-        so_e = _paired(rs, NODE_SO, HNN, "energy_mse")
-        so_r = _paired(rs, NODE_SO, HNN, "rollout_error_any")
+        so_e = paired(rs, NODE_SO, HNN, "energy_mse")
+        so_r = paired(rs, NODE_SO, HNN, "rollout_error_any")
         if len(so_e) and len(so_r):
             extra.append(
                 f"{system}: NODE+SO / HNN energy MSE {math.exp(so_e.mean()):.3g}x, "
                 f"rollout error {math.exp(so_r.mean()):.3g}x"
             )
     head = parts[0] if parts else None
-    n_failed = int(_bad(r[r["model"] != "constant_velocity"], "energy_mse").sum())
-    return _verdict(
+    n_failed = int(bad_rows(r[r["model"] != "constant_velocity"], "energy_mse").sum())
+    return verdict(
         10,
         CLAIM_TITLES[10],
         parts,
@@ -225,7 +235,9 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         min(seeds) if seeds else 0,
         "log energy-MSE ratio MLP / HNN (mass-spring)",
         ("Deconstructing view, not tested: " + "; ".join(extra)) if extra else "",
-        discs=_per_system_disc(r.assign(rollout_error=r["rollout_error_any"]), "rollout_error"),
+        discs=per_system_discrimination(
+            r.assign(rollout_error=r["rollout_error_any"]), "rollout_error"
+        ),
         n_failed=n_failed,
     )
 
@@ -281,7 +293,7 @@ def section(results_dir) -> str:
     if not len(rows):
         return "\n".join([*lines, "| (no runs) | | | | | | |"])
     for system in SYSTEMS:
-        rs = rows[(rows["system"] == system) & ~_bad(rows, "energy_mse")]
+        rs = rows[(rows["system"] == system) & ~bad_rows(rows, "energy_mse")]
         if not len(rs):
             continue
         cell = {
@@ -310,7 +322,7 @@ def figure(results_dir) -> list[Path]:
     import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
-    rows = rows[~_bad(rows, "energy_mse")] if len(rows) else rows
+    rows = rows[~bad_rows(rows, "energy_mse")] if len(rows) else rows
     if not len(rows):
         return []
     models = (("MLP", BASELINE), ("HNN", HNN), ("NODE+SO", NODE_SO))

@@ -69,8 +69,18 @@ from ...core._studies import Study, register_study
 from .._figure import save_figure
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
-from ._stats import _at_most, _bad, _greater, _paired, condition, gated
+from ._rules import CLAIM_TITLES
+from .kit import (
+    at_most,
+    bad_rows,
+    condition,
+    gated,
+    greater,
+    learned_cell,
+    paired,
+    per_system_discrimination,
+    verdict,
+)
 
 # Costs measured on this 2-core machine, the paper-core campaign paused (other
 # sessions' processes running): ms per training step at the paper's size (width 500, 3 hidden
@@ -203,28 +213,28 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """
     r0 = _seed_rows(runs)
     if not len(r0):
-        return _verdict(9, CLAIM_TITLES[9], [], None, 0, "log energy-% ratio baseline / LNN")
-    n_failed = int(_bad(r0[r0["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
+        return verdict(9, CLAIM_TITLES[9], [], None, 0, "log energy-% ratio baseline / LNN")
+    n_failed = int(bad_rows(r0[r0["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
     r = _worst_for_failed(r0)
-    e = _paired(r, BASELINE, LNN, "energy_pct_max_pe")
-    loss = _paired(r, LNN, BASELINE, "derivative_mse_test")
-    similar = _at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), policy.margin("loss"))
+    e = paired(r, BASELINE, LNN, "energy_pct_max_pe")
+    loss = paired(r, LNN, BASELINE, "derivative_mse_test")
+    similar = at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), policy.margin("loss"))
     energy = gated(
-        _greater("(a) log(energy % baseline / LNN)", e.to_numpy(), policy.margin("energy")),
+        greater("(a) log(energy % baseline / LNN)", e.to_numpy(), policy.margin("energy")),
         condition(similar),
         learned_cell(r0, LNN, "pure LNN"),
         learned_cell(r0, BASELINE, "NODE+SO (baseline)"),
     )
     parts = [energy, similar]
     last = (
-        _paired(r, BASELINE, LNN, "energy_pct_max_pe_last")
+        paired(r, BASELINE, LNN, "energy_pct_max_pe_last")
         if "energy_pct_max_pe_last" in r
         else None
     )
     extra = ""
     if last is not None and len(last):
         extra = f"last-step energy % (the notebook's) baseline / LNN {math.exp(last.mean()):.3g}x"
-    return _verdict(
+    return verdict(
         9,
         CLAIM_TITLES[9],
         parts,
@@ -232,7 +242,7 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         min(len(e), len(loss)),
         "log energy-% ratio baseline / LNN",
         extra,
-        discs=_per_system_disc(r, "rollout_error"),
+        discs=per_system_discrimination(r, "rollout_error"),
         n_failed=n_failed,
     )
 
@@ -289,7 +299,7 @@ def section(results_dir) -> str:
         g = rows[rows["model"] == model]
         if not len(g):
             continue
-        ok = g[~_bad(g, "energy_pct_max_pe")]
+        ok = g[~bad_rows(g, "energy_pct_max_pe")]
         e = pd.to_numeric(ok["energy_pct_max_pe"], errors="coerce")
         rng = f" [{_f(e.min())}, {_f(e.max())}]" if len(e) else ""
         lines.append(
@@ -317,7 +327,7 @@ def figure(results_dir) -> list[Path]:
     import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
-    rows = rows[~_bad(rows, "energy_pct_max_pe")] if len(rows) else rows
+    rows = rows[~bad_rows(rows, "energy_pct_max_pe")] if len(rows) else rows
     if not len(rows):
         return []
     fig, axes = plt.subplots(1, 2, figsize=(8, 3.2))

@@ -58,17 +58,19 @@ from ...core._store import read_rows
 from ...core._studies import Study, register_study
 from .._figure import save_figure
 from . import _vin_diagnosis, policy
-from ._rules import CLAIM_TITLES, _Disc, _verdict
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
+    Discrimination,
     Gate,
-    _at_most,
-    _bad,
-    _greater,
-    _paired,
+    at_most,
+    bad_rows,
     condition,
     gated,
+    greater,
     learned,
+    paired,
     scored,
+    verdict,
 )
 
 # The HNN seed's pixel-pendulum row (greydanus/hamiltonian-nn README, baseline -> HNN)
@@ -148,10 +150,10 @@ def _pixels(runs: pd.DataFrame, models: tuple[str, ...]) -> pd.DataFrame:
     return runs[(runs["observation"] == "pixels") & runs["model"].isin(models)]
 
 
-def _disc(r: pd.DataFrame) -> list[_Disc]:
+def _disc(r: pd.DataFrame) -> list[Discrimination]:
     """Discriminating: the best model (lowest mean log pixel MSE) beats holding the first
     observation by the learning margin (squared: an MSE) on every seed."""
-    ok = r[~_bad(r, "pixel_mse")]
+    ok = r[~bad_rows(r, "pixel_mse")]
     if not len(ok):
         return []
     per = np.log(pd.to_numeric(ok["pixel_mse"])).groupby([ok["model"], ok["seed"]]).mean()
@@ -160,10 +162,10 @@ def _disc(r: pd.DataFrame) -> list[_Disc]:
     triv = np.log(pd.to_numeric(ok["pixel_mse_static"])).groupby(ok["seed"]).mean()
     m = (triv - per.loc[best]).dropna()
     if not len(m):
-        return [_Disc("pixels", "unknown")]
+        return [Discrimination("pixels", "unknown")]
     worst = float(m.min())
     status = "yes" if worst >= policy.margin("learning", squared=True).test else "no"
-    return [_Disc("pixels", status, best, worst, float(np.exp(triv).mean()))]
+    return [Discrimination("pixels", status, best, worst, float(np.exp(triv).mean()))]
 
 
 def _learned(r: pd.DataFrame, model: str) -> Gate:
@@ -189,11 +191,11 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     where both models learned the motion. Failed runs score the worst value. Headline (a)."""
     r = _pixels(runs, ("hnn", "node"))
     if not len(r):
-        return _verdict(11, CLAIM_TITLES[11], [], None, 0, "log energy-MSE ratio")
-    e = _paired(r, BASELINE, HNN, "decoded_energy_mse")
-    loss = _paired(r, HNN, BASELINE, "pixel_loss_test")
-    similar = _at_most("(b) log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss"))
-    energy = _greater(
+        return verdict(11, CLAIM_TITLES[11], [], None, 0, "log energy-MSE ratio")
+    e = paired(r, BASELINE, HNN, "decoded_energy_mse")
+    loss = paired(r, HNN, BASELINE, "pixel_loss_test")
+    similar = at_most("(b) log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss"))
+    energy = greater(
         "(a) log(decoded energy MSE MLP / HNN)",
         e.to_numpy(),
         policy.margin("energy", squared=True),
@@ -201,7 +203,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     parts = [gated(energy, condition(similar), _learned(r, "hnn"), _learned(r, "node")), similar]
     drift = pd.to_numeric(r[r["model"] == "hnn"]["latent_energy_drift"], errors="coerce")
     extra = f"HNN latent H drift (range / spread over starts) {np.nanmean(drift):.3g}"
-    return _verdict(
+    return verdict(
         11,
         CLAIM_TITLES[11],
         parts,
@@ -210,7 +212,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         "log decoded-energy-MSE ratio MLP / HNN",
         extra,
         discs=_disc(r),
-        n_failed=int(_bad(r, "decoded_energy_mse").sum()),
+        n_failed=int(bad_rows(r, "decoded_energy_mse").sum()),
     )
 
 
@@ -220,18 +222,18 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     where both models learned the motion. Headline (a)."""
     r = _pixels(runs, ("vin", "resnet"))
     if not len(r):
-        return _verdict(12, CLAIM_TITLES[12], [], None, 0, "log pixel-MSE ratio")
-    a = _paired(r, RESNET, VIN_CELL, "pixel_mse")
-    b = _paired(r, RESNET, VIN_CELL, "pixel_mse_late")
+        return verdict(12, CLAIM_TITLES[12], [], None, 0, "log pixel-MSE ratio")
+    a = paired(r, RESNET, VIN_CELL, "pixel_mse")
+    b = paired(r, RESNET, VIN_CELL, "pixel_mse_late")
     mg = policy.margin("error", squared=True)
     gates = (_learned(r, "vin"), _learned(r, "resnet"))
     parts = [
-        gated(_greater("(a) log(pixel MSE ResNet / VIN)", a.to_numpy(), mg), *gates),
-        gated(_greater("(b) log(late pixel MSE ResNet / VIN)", b.to_numpy(), mg), *gates),
+        gated(greater("(a) log(pixel MSE ResNet / VIN)", a.to_numpy(), mg), *gates),
+        gated(greater("(b) log(late pixel MSE ResNet / VIN)", b.to_numpy(), mg), *gates),
     ]
     drift = pd.to_numeric(r[r["model"] == "vin"]["latent_energy_drift"], errors="coerce")
     extra = f"VIN latent energy drift (range / spread over starts) {np.nanmean(drift):.3g}"
-    return _verdict(
+    return verdict(
         12,
         CLAIM_TITLES[12],
         parts,
@@ -240,7 +242,7 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         "log pixel-MSE ratio ResNet / VIN",
         extra,
         discs=_disc(r),
-        n_failed=int(_bad(r, "pixel_mse").sum()),
+        n_failed=int(bad_rows(r, "pixel_mse").sum()),
     )
 
 
@@ -300,7 +302,7 @@ def section(results_dir) -> str:
 
     seed = {"node": SEED_ENERGY_MSE[0], "hnn": SEED_ENERGY_MSE[1]}
     for model in ("hnn", "node", "vin", "resnet"):
-        g = t[(t["model"] == model) & ~_bad(t, "pixel_mse")]
+        g = t[(t["model"] == model) & ~bad_rows(t, "pixel_mse")]
         if not len(g):
             continue
         cells = [

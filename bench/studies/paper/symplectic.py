@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -33,22 +34,19 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _k,
-    _per_system_disc,
-    _trivial_log,
-    _verdict,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     MODEL_LABELS,
     Verdict,
-    _at_most,
-    _n_bad,
-    _paper_spring,
+    at_most,
     gated,
     learned,
+    n_bad,
+    paper_spring,
+    per_system_discrimination,
     scored,
+    trivial_log,
+    verdict,
 )
 
 
@@ -102,6 +100,10 @@ SYMPLECTIC = Experiment(
 SYMREG_MODELS = ("node_so_symreg", "node_symreg")
 
 
+def _k(k) -> str:
+    return "-" if k is None or (isinstance(k, float) and math.isnan(k)) else str(int(k))
+
+
 def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """Claim 2 (Fig. 3): the symplectic regulariser on models of canonical (q, p) states
     (``node_so_symreg``, the reference's NODE+SO with a learned mass matrix, and
@@ -119,18 +121,18 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     Discrimination: per system, the best regularised model against constant velocity in (q, p).
     """
     p = select(runs, ok=False, coordinates="momentum", noise=0.0, friction=0.0)
-    p = _paper_spring(p)
+    p = paper_spring(p)
     sr = p[p["model"].isin(SYMREG_MODELS)] if len(p) else p
     if not len(sr):
-        return _verdict(2, CLAIM_TITLES[2], [], None, 0, "log(err_0 / err_w), best w")
+        return verdict(2, CLAIM_TITLES[2], [], None, 0, "log(err_0 / err_w), best w")
     rows = pd.concat([sr, p[p["model"].isin(TRIVIAL_MODELS)]])
-    discs = _per_system_disc(rows)
+    discs = per_system_discrimination(rows)
     sr = sr.assign(weight=option(sr, "weight").astype(float), _e=np.log(scored(sr)))
     parts = []
     seeds: set = set()
     for (model, system, k), g in sr.groupby(["model", "system", "k"], dropna=False):
         base = g[g["weight"] == 0].groupby("seed")["_e"].mean()
-        triv = _trivial_log(p[(p["system"] == system) & p["model"].isin(TRIVIAL_MODELS)])
+        triv = trivial_log(p[(p["system"] == system) & p["model"].isin(TRIVIAL_MODELS)])
         gate = learned(
             f"{MODEL_LABELS.get(model, model)} w=0 on {system}", base, triv if len(triv) else None
         )
@@ -138,7 +140,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             d = (base - gw.groupby("seed")["_e"].mean()).dropna()
             seeds |= set(d.index)
             name = f"{model} {system} k={_k(k)} w={w:g}: gain"
-            parts.append(gated(_at_most(name, d.to_numpy(), policy.margin("error")), gate))
+            parts.append(gated(at_most(name, d.to_numpy(), policy.margin("error")), gate))
     best = max(parts, key=lambda q: q.point) if parts else None
     extra = ""
     if "symplectic_error" in sr:
@@ -148,7 +150,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         if ok.sum() > 2:
             r = np.corrcoef(x[ok], y[ok])[0, 1]
             extra = f"corr(log achieved symplectic error, log err) = {r:.2f}"
-    return _verdict(
+    return verdict(
         2,
         CLAIM_TITLES[2],
         parts,
@@ -157,7 +159,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         "log(err_0 / err_w) of the best weight",
         extra,
         discs=discs,
-        n_failed=_n_bad(sr),
+        n_failed=n_bad(sr),
         universal=True,  # "negligible even at an optimally chosen strength" (Sec. 4)
     )
 
