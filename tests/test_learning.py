@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 
 import models
+from bench.studies._along import SCORES
 from bench.studies.learning import (
-    SCORES,
     settling,
     settling_table,
     verdicts_along_curve,

@@ -6,7 +6,6 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -16,7 +15,7 @@ from ...core._query import (
     variant,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     SPRING_PAPER,
@@ -216,7 +215,7 @@ def fig_damped(runs, curves, outdir: Path) -> list[Path]:
     systems_ = _order(df["system"], SYSTEM_ORDER)
     members = _order(df["variant"], MODEL_ORDER)
     lab = lambda m: "HNN+SO (no dissipation)" if m == "hnn_so" else _label(m)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    fig, axes = subplots(1, 3, figsize=(15, 4))
     for ax, metric, ylabel, log in (
         (axes[0], "rollout_error", "rollout error", True),
         (axes[1], "n_params", "parameters", False),

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -15,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     PAPER_MODELS,
@@ -219,7 +218,7 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
     runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4.2))
     markers = {"chain_pendulum": "o", "spring_pendulum": "s"}
     for s, g in trivial.groupby("system"):  # the trivial predictors' error: vertical lines
         for m, gm in g.groupby("model"):

@@ -45,7 +45,7 @@ from ...core._experiments import Experiment, RunConfig
 from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._rules import CLAIM_TITLES
 from .kit import (
@@ -319,14 +319,13 @@ def section(results_dir) -> str:
 def figure(results_dir) -> list[Path]:
     """Energy MSE and test loss per task and model (geometric mean, min-max over seeds), the
     seed's numbers as black marks."""
-    import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
     rows = rows[~bad_rows(rows, "energy_mse")] if len(rows) else rows
     if not len(rows):
         return []
     models = (("MLP", BASELINE), ("HNN", HNN), ("NODE+SO", NODE_SO))
-    fig, axes = plt.subplots(1, 2, figsize=(9.5, 3.4))
+    fig, axes = subplots(1, 2, figsize=(9.5, 3.4))
     for ax, metric, key, label in (
         (axes[0], "derivative_mse_test", "test_loss", "test loss on dz/dt"),
         (axes[1], "energy_mse", "energy_mse", "energy MSE along rollouts"),

@@ -66,7 +66,7 @@ from ...core._experiments import Experiment, RunConfig
 from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
 from ._rules import CLAIM_TITLES
@@ -324,13 +324,12 @@ def _diagnosis(results_dir: Path) -> list[str]:
 def figure(results_dir) -> list[Path]:
     """Energy % of max PE (mean over time) and test loss per model, seeds as dots, the seed's
     numbers (on our scale) as black marks."""
-    import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
     rows = rows[~bad_rows(rows, "energy_pct_max_pe")] if len(rows) else rows
     if not len(rows):
         return []
-    fig, axes = plt.subplots(1, 2, figsize=(8, 3.2))
+    fig, axes = subplots(1, 2, figsize=(8, 3.2))
     names = (("lnn", "LNN"), ("node_so", "baseline"), ("constant_velocity", "const. vel."))
     for ax, metric, key, label in (
         (axes[0], "energy_pct_max_pe", "energy_pct", "energy error, % of max V - min V"),

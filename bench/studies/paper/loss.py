@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -15,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     PAPER_MODELS,
@@ -224,7 +223,7 @@ def fig_loss(runs, curves, outdir: Path) -> list[Path]:
     if not len(runs):
         return []
     ag = _agg(runs, ["model", "loss"], "rollout_error")
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     _trivial_lines(ax, trivial)
     _bars(
         ax,

@@ -56,7 +56,7 @@ from ...core._experiments import Experiment
 from ...core._query import experiment_rows, pick_profile
 from ...core._store import read_rows
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import new_figure, save_figure
 from . import _vin_diagnosis, policy
 from ._rules import CLAIM_TITLES
 from .kit import (
@@ -335,7 +335,6 @@ def _vin_diagnosis_lines(results_dir: Path) -> list[str]:
 def figure(results_dir) -> list[Path]:
     """Predicted frames against the truth (first test trajectory of the lowest seed, first
     frame of each observation at a few times) and pixel MSE against time per model."""
-    import matplotlib.pyplot as plt
 
     rows, _, _ = _rows(Path(results_dir))
     rows = [
@@ -350,7 +349,7 @@ def figure(results_dir) -> list[Path]:
     picked = list(first.values())
     c0 = picked[0]["curves"]
     n = len(c0["frame_index"])
-    fig = plt.figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
+    fig = new_figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
     # n frame columns, a spacer, the curves
     grid = fig.add_gridspec(len(picked) + 1, n + 2, width_ratios=[1] * n + [0.3, 3.2])
     dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0

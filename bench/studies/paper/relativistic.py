@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -14,7 +13,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     RELATIVISTIC_TEST_PARAMS,
@@ -247,7 +246,7 @@ def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
         return []
     df = runs.assign(variant=_coord_label(runs))
     ag = _agg(df, ["system", "variant"], "score")
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     vs = list(dict.fromkeys(df["variant"]))
     _trivial_lines(a, trivial, "score", ["relativistic_particle"])
     _bars(

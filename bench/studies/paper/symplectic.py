@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -15,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     SPRING_PAPER,
@@ -171,7 +170,7 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
     if not len(runs):
         return []
     df = runs.assign(weight=option(runs, "weight").astype(float))
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     _trivial_lines(a, trivial)
     _trivial_lines(b, trivial)
     for (s, model), g in df.groupby(["system", "model"]):

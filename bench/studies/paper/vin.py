@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import pandas as pd
 
 from ...core._experiments import Experiment, RunConfig
@@ -12,7 +11,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     TRIVIAL_MODELS,
@@ -177,7 +176,7 @@ def fig_vin(runs, curves, outdir: Path) -> list[Path]:
     runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     _trivial_lines(a, trivial)
     for (m, noise), g in runs.groupby(["model", "noise"]):
         ag = _agg(g, ["n_train"], "rollout_error").sort_values("n_train")
