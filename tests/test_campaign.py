@@ -1,4 +1,4 @@
-"""The paper-core selection and its campaign (issue 24): the selection's runs are paper runs
+"""The paper-core selection and its campaign: the selection's runs are paper runs
 (same hashes), every claim has cells, the order settles the unsettled claims first, and the
 plan counts what is stored."""
 

@@ -4,7 +4,7 @@ The tables come from ``tests/_synthetic.py``: every paper experiment expanded in
 profile with five seeds (0-4, what a verdict needs), the store's own row format, errors built so
 that each claim passes ("reproduce"), fails ("contradict") or cannot be decided (too few seeds,
 huge noise, trivial predictors that win), with per-run log-normal noise. Every part of every
-claim (issue 20: one-sided t tests against a margin) is pinned by a table on which it holds,
+claim (a one-sided t test against a margin) is pinned by a table on which it holds,
 one on which it is contradicted and one on which it is undecided: the latter are the
 "reproduce" table with one cell's per-seed errors set to a stated ratio of another's.
 """

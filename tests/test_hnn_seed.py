@@ -1,4 +1,4 @@
-"""Claim 10 (the HNN seed's tasks, issue 22): its declarations, and its verdict rule on
+"""Claim 10 (the HNN seed's tasks): its declarations, and its verdict rule on
 synthetic tables built to pass, to fail and to be undecided (no training), plus the table
 beside the seed's numbers and the figure from a synthetic results folder."""
 

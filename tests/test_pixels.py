@@ -1,4 +1,4 @@
-"""Learning from pixels (issue 22): the renderer against the state it draws, the autoencoder,
+"""Learning from pixels: the renderer against the state it draws, the autoencoder,
 the latent HNN's Hamiltonian structure, a smoke sweep through the store, and claims 11 and
 12's verdict rules on synthetic tables that pass, fail and stay undecided."""
 

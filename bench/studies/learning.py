@@ -53,8 +53,8 @@ LEARNING = Experiment(
     name="learning_curves",
     title="Learning curves: NODE+SO and HNN+SO past the quick budget (chain, spring)",
     axes={"system": SYSTEMS, "k": (2,), "model": LEARNING_MODELS},
-    # quick: the shared 1000-step cells (no training of its own since issue 20, whose five
-    # seeds it pays for; the longer runs are the paper-core campaign's, results/reference/paper/)
+    # quick: the shared 1000-step cells (no training of its own, which pays for quick's five
+    # seeds; the longer runs are the paper-core campaign's, results/reference/paper/)
     profile_overrides=shared_overrides({"smoke": {"steps": 40}}),
     include=_learning_cell,
 )

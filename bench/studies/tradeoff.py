@@ -25,7 +25,7 @@ from ._pareto import ERROR, aggregate_seeds, cheapest_within, pareto_front
 
 MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
 # The LNN's evaluations were two thirds of the quick trade-off's cost (821 of 1248 s of run time
-# on 2026-11-22: every adaptive and implicit evaluation solves its Hessian at each stage), so at
+# measured at quick: every adaptive and implicit evaluation solves its Hessian at each stage), so at
 # quick it runs in the paper profile only and the 30-minute budget of `make bench` holds.
 PROFILE_MODELS = {"smoke": MODELS, "quick": ("node", "node_so", "hnn_so", "vin"), "paper": MODELS}
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
@@ -77,8 +77,8 @@ SUBSTEPS = (1, 2, 4, 8)
 # chain: the whole trade-off must fit beside the paper experiments in ``make bench``.
 TRAIN_VARIANTS = {
     "smoke": {"models": (), "systems": (), "own_eval": False},
-    # quick: NODE+SO only since issue 20 (HNN+SO's width and integrator variants were 106 s of
-    # the trade-off's 274 s of run time; the five seeds of the verdicts needed the time)
+    # quick: NODE+SO only (HNN+SO's width and integrator variants were 106 s of the trade-off's
+    # 274 s of run time, which the five seeds of the verdicts need)
     "quick": {"models": ("node_so",), "systems": ("chain_pendulum",), "own_eval": False},
     "paper": {"models": MODELS, "systems": SYSTEMS, "own_eval": True},
 }
@@ -144,8 +144,8 @@ def include(cfg: RunConfig) -> bool:
     return True
 
 
-# quick evaluates on the chain only since issue 20 (the spring's evaluations were 78 s of run
-# time; the paper profile keeps both)
+# quick evaluates on the chain only (the spring's evaluations were 78 s of run time; the paper
+# profile keeps both)
 PROFILE_SYSTEMS = {"smoke": SYSTEMS, "quick": ("chain_pendulum",), "paper": SYSTEMS}
 
 

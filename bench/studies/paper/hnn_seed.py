@@ -1,36 +1,9 @@
-"""The HNN seed's own tasks (Greydanus et al. 2019): mass-spring, pendulum and two-body
-from states, its protocol, claim 10's verdict rule, its table beside the seed's numbers and a
-figure.
+"""The HNN seed's own tasks (Greydanus et al. 2019): mass-spring, pendulum and two-body from
+states, claim 10's verdict rule, its table beside the seed's numbers and a figure.
 
-**The seed's protocol** (greydanus/hamiltonian-nn, experiment-*/data.py and train.py), and ours:
-
-- data in canonical coordinates z = (q, p); the seed's H (mass-spring q^2 + p^2, pendulum
-  3 (1 - cos q) + p^2, two-body unit masses, G = 1) and its initial-state draws (``systems``);
-- mass-spring: 50 trajectories of 30 points on [0, 3] s, half for training; pendulum: 50 of 45
-  points on [0, 3] s; both with Gaussian noise 0.1 on q and p. Two-body: 1000 orbits of 50
-  points on [0, 20] s, 80% for training, no noise. Ours: the same counts, grids and noise, the
-  training window of each trajectory starting anywhere in a 20 s trajectory (the seed's start
-  at t = 0; for these periodic systems with uniformly drawn phases the windows are alike), and
-  test windows of about 18 s (mass-spring, pendulum) or 20 s (two-body) from held-out initial
-  states, where the seed rolls out its test states over 20-25 s;
-- training on time-derivative targets (``train_target="derivative"``), MLPs of width 200, two
-  hidden layers, tanh, Adam at lr 1e-3, full batch (two-body: 200 states a step), 2000 steps
-  (two-body 10000). Ours: AdamW with the suite's cosine decay and gradient clipping (the seed:
-  constant lr, L2 weight decay 1e-4); the targets are the true field AT the noisy states (the
-  seed's: at the clean states, so its inputs carry the noise and its targets do not);
-- models: the seed's baseline (``node``, dz/dt = MLP(q, p)) and HNN (``hnn``, J grad H(q, p)),
-  plus the Deconstructing paper's NODE+SO (``node_so`` on (q, qdot)) and the constant-velocity
-  predictor;
-- metrics: the train and test losses on derivatives (``derivative_mse_train/test``) and the
-  energy MSE along rollouts (``energy_mse``: the mean of (H(zhat) - H(z))^2 with the true H),
-  rollouts with RK4 (3/8 rule) on the data grid (two-body: 2 substeps). The seed's pendulum
-  notebook scores energy as q^2 + p^2, the mass-spring's H, not the pendulum's (a defect: ours
-  uses the pendulum's H), so its pendulum number is not the same quantity.
-
-Budgets: ``paper`` (and the ``paper-core`` campaign) is the seed's; ``quick`` the seed's data
-with 1000 steps (the seed: 2000, two-body 10000) and 200 two-body orbits (the seed: 800), inside
-``make bench``; ``smoke`` tiny.
-Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are in ``pixels.py``.
+The seed's baseline and HNN (plus NODE+SO) are trained on time-derivative targets in canonical
+coordinates and scored by the energy MSE of their rollouts. The seed's protocol, ours and the
+budgets: docs/studies/hnn_seed.md. Pixels are in ``pixels.py``.
 """
 
 from __future__ import annotations

@@ -66,9 +66,9 @@ LOSS = Experiment(
     profile_overrides=shared_overrides(),
     include=_loss_include,
     claim=6,
-    # Not at quick (issue 20): its verdict is inconclusive at every checkpoint of quick's
-    # learning curves, so the five-seed quick budget is spent where it decides; the paper-core
-    # campaign runs claim 6 first (issue 24).
+    # Not at quick: its verdict is inconclusive at every checkpoint of quick's learning curves,
+    # so the five-seed quick budget is spent where it decides; the paper-core campaign runs
+    # claim 6 first.
     profiles=("smoke", "paper", "paper-core"),
 )
 

@@ -1,47 +1,10 @@
-"""Learning from pixels (issue 22): the HNN seed's pixel pendulum (claim 11) and the VIN seed's
-pixel forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and a figure
-of predicted frames against the truth.
+"""Learning from pixels: the HNN seed's pixel pendulum (claim 11) and the VIN seed's pixel
+forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and a figure of
+predicted frames against the truth.
 
-**The task** (``observation="pixels"``; data, loss and metrics in :mod:`bench.core._pixels`):
-the suite's ``pendulum`` (H = 3 (1 - cos q) + p^2) rendered to 28 x 28 grey frames
-(``systems.render``), each observation a frame stacked with its successor; starts with |q0| <
-pi/6 and qdot0 ~ U(-1, 1) (the seed's Pendulum-v0 starts); dt = 0.08 s, 32 frames per small-angle
-period as the seed's Pendulum-v0 (dt 0.05 s, its faster pendulum) has. The seed (its text and
-greydanus/hamiltonian-nn experiment-pixels/): 200 trajectories of 100 frames (80/20 split),
-an autoencoder of four fully connected residual relu layers of 200 units each way with a latent
-of 2, the HNN (or the baseline MLP field) of width 200 on the latent, loss = pixel L2 + the
-auxiliary latent loss + 0.1 x the latent dynamics loss, Adam at lr 1e-3, weight decay 1e-5,
-batch 200, 10000 steps. Ours at ``paper``: the same, with AdamW, the suite's cosine decay and
-clipping, and an RK4 step in the dynamics loss (the seed trains with an Euler step and tests
-with RK4).
-
-**Models**: ``models.LatentModel`` = ``models.Autoencoder`` + a registered dynamics model on the
-2-number latent: ``hnn`` (J grad H on z = (q, p)) against the seed's baseline ``node`` (an MLP
-field), and the VIN seed's ``vin`` (velocity Verlet of a learned L on z = (q, qdot)) against its
-``resnet`` (z + MLP(z)). The VIN seed encodes frames to q and infers qdot; ours encodes the
-two-frame observation to (q, qdot) with the HNN seed's auxiliary loss (one encoder for all four
-models).
-
-**Claims.** 11 (HNN seed, Table 1's pixel row): the HNN's energy MSE far below the baseline's
-at comparable losses; ours is the true pendulum energy of the state read off the decoded
-frames (``systems.read_state``), the same quantity for every model. 12 (VIN seed): the VIN's
-pixel forecasts beat the residual network's, over the whole horizon and its last third. Each
-comparison is judged only where its models learned the motion (pixel MSE against holding the
-first frame, at the policy's learning margin squared); see :func:`claim_11`, :func:`claim_12`.
-
-Budgets: ``paper`` the seed's (above; 4 x 5 runs of 10000 steps: about 2.4 CPU hours here, a
-few GPU minutes, see :data:`PAPER_CPU_S`); ``quick`` 40 trajectories of 4 s (50 frames), width
-128, batch 64, 1500 steps, test horizon 60 frames (make bench's budget); ``smoke`` tiny.
-At quick's 1500 steps the latent HNN does not learn the motion (a budget, not a defect; seed 0,
-measured with the HNN's dz/dt against the encoded latent's frame-to-frame motion and the
-Hessian of its H at the latent origin, which should approach diag(omega^2, 1), omega = 2 pi /
-32 per frame): after 1500 steps |f| / |dz| = 0.01, after 3000 0.25, after 5000 1.0 with
-d2H/dq2 = 0.004 (a tenth of omega^2: the arm drifts, pixel MSE 0.035 vs 0.027 holding the first
-frame), after 10000 (the seed's) |f| / |dz| = 1.0, cos 0.98, Hessian diag(0.040, 1.02), pixel
-MSE 0.0066, 4x below holding the first frame (seed 1 at 10000: 0.00046, 62x). An Euler step,
-lr 3e-3, Adam eps 1e-12 or the seed's init (gain 1, nonzero biases: ours is odd in z, so its H
-has zero curvature at the origin at init) do not make 1500 steps enough; the MLP field learns
-in 1500.
+An autoencoder maps two stacked 28 x 28 frames of the pendulum to a 2-number latent on which a
+registered dynamics model (HNN, MLP field, VIN, ResNet) runs. The task, the models, the budgets
+and why quick's latent HNN does not learn the motion: docs/studies/pixels.md.
 """
 
 from __future__ import annotations

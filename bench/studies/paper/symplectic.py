@@ -88,10 +88,10 @@ SYMPLECTIC = Experiment(
     },
     include=_symplectic_include,
     claim=2,
-    # Not at quick (2026-11-25, the make bench budget): quick's claim-2 verdict did not
-    # replicate (inconclusive on seeds 0-4, reproduced on 5-9, changed without seed 2), and its
-    # 20 runs were 488 s of run time (~4 min of make bench) that the pixel tasks and claim 9
-    # needed; the paper-core campaign runs claim 2 at five weights (issue 24).
+    # Not at quick (the make bench budget): quick's claim-2 verdict did not replicate
+    # (inconclusive on seeds 0-4, reproduced on 5-9, changed without seed 2), and its 20 runs
+    # were 488 s of run time (~4 min of make bench) that the pixel tasks and claim 9 need; the
+    # paper-core campaign runs claim 2 at five weights.
     profiles=("smoke", "paper", "paper-core"),
 )
 
