@@ -212,7 +212,7 @@ def test_contradicting_table_gives_not_reproduced(contradicting, key):
     # Claim 4's contradicting table keeps the chain edge and breaks the spring one: "partly".
     expected = R.PARTLY if key.startswith("4") else R.NOT_REPRODUCED
     assert v.verdict == expected, v.detail
-    assert "contradicts" in v.detail
+    assert "contradicts" in [p.status for p in v.parts]
     assert v.n_seeds == 5
 
 
@@ -227,7 +227,7 @@ def test_four_seeds_are_inconclusive_unless_four_are_required():
     assert R.required_seeds() == R.MIN_SEEDS == 5
     for v in _claims(runs, curves):
         assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
-        assert v.n_seeds == 4 and "fewer than 5 paired seeds" in v.detail
+        assert v.n_seeds == 4 < R.required_seeds()
         # the parts are tested, but a part on fewer seeds than a verdict needs decides nothing
         assert all(p.status == "undecided" for p in v.parts), v.detail
         assert all("on 4 < 5 seeds" in p.note for p in v.parts if p.n == 4), v.detail
@@ -252,7 +252,6 @@ def test_trivial_predictor_that_wins_makes_every_claim_inconclusive():
     for v in _claims(*synthetic_tables("smoke", scenario="trivial_wins")):
         assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
         assert v.discriminating is False
-        assert "NOT DISCRIMINATING" in v.detail
 
 
 def test_without_trivial_runs_discrimination_is_unknown(tables):
@@ -262,7 +261,6 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
         assert v.discriminating is None, v.key
         # claim 7's parts (b)-(d) compare with the trivial predictor: without it only (a) is left
         assert v.verdict == R.REPRODUCED, (v.key, v.detail)
-        assert "discriminating unknown" in v.detail
     v7 = C.CLAIMS[7](runs, curves)
     assert [p.name[:3] for p in v7.parts] == ["(a)", "(e)", "(f)"]
 
@@ -311,7 +309,10 @@ def test_failed_runs_count_as_error_one_not_dropped(tables):
     v = C.CLAIMS[3](_fail(runs, runs["model"] == "node_so"), curves)
     assert v.n_failed == 10
     assert _status(v, "chain", "(a) log(NODE / NODE+SO)") == "not tested"
-    assert "did not learn" in _part(v, "chain", "(a) log(NODE / NODE+SO)").note
+    closed = [
+        g.label for g in _part(v, "chain", "(a) log(NODE / NODE+SO)").gates if g.open is False
+    ]
+    assert closed == ["node_so on chain_pendulum"]
 
 
 def test_scored_sets_failures_to_the_worst_error():
@@ -565,7 +566,7 @@ def test_a_closed_gate_makes_a_part_not_tested_and_never_against_the_claim():
     bad = R.Gate("VIN", False, "VIN did not learn")
     part = R.gated(R.greater("x", _around(-1.0), ERR), bad)  # would contradict
     v = R.verdict(9, "t", [part, R.greater("y", _around(1.0), ERR)], None, 5, "e")
-    assert part.status == "not tested" and "VIN did not learn" in part.note
+    assert part.status == "not tested" and part.gates == (bad,)
     assert v.verdict == R.INCONCLUSIVE  # not "partly reproduced"
     ok = R.gated(R.greater("x", _around(1.0), ERR), R.Gate("VIN", True, "learned"))
     assert R.verdict(9, "t", [ok], None, 5, "e").verdict == R.REPRODUCED
@@ -814,7 +815,7 @@ def test_claim_3_b_is_judged_only_where_hnn_so_has_an_advantage(tables):
     cond = _part(v, spring, "HNN+SO beats NODE")
     assert cond.role == "condition" and cond.status == "contradicts"
     b = _part(v, spring, "(b)")
-    assert b.status == "not tested" and "HNN+SO beats NODE" in b.note
+    assert b.status == "not tested" and cond.name in [g.label for g in b.gates if g.open is False]
     assert v.verdict != R.NOT_REPRODUCED
 
 
