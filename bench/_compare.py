@@ -178,7 +178,7 @@ def _cell_label(row: pd.Series) -> str:
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
     from .core._experiments import RunConfig
     from .core._query import cell_key
-    from .studies.paper._stats import scored
+    from .studies.paper.kit import scored
 
     def prep(df):
         df = df.assign(

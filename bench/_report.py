@@ -185,7 +185,7 @@ def _parts_table(j) -> list[str]:
     the margins at which it holds and is contradicted, its test and level, its status on each
     seed set, and whether dropping one seed reverses it."""
     from .studies.paper._replication import seed_span
-    from .studies.paper._stats import margin_ranges
+    from .studies.paper.kit import margin_ranges
 
     ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
     out = [

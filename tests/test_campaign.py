@@ -1,4 +1,4 @@
-"""The paper-core selection and its campaign (issue 24): the selection's runs are paper runs
+"""The paper-core selection and its campaign: the selection's runs are paper runs
 (same hashes), every claim has cells, the order settles the unsettled claims first, and the
 plan counts what is stored."""
 
@@ -228,7 +228,7 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     ones (which no replication can change) after them, each group in campaign order."""
     from bench.core import _query
     from bench.studies.paper import _replication
-    from bench.studies.paper._stats import Verdict
+    from bench.studies.paper.kit import Verdict
 
     def v(claim, verdict, pending=None):
         return Verdict(claim, "t", verdict, 0.0, 0.0, 0.0, 5, "d", pending=pending)

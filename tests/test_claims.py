@@ -4,7 +4,7 @@ The tables come from ``tests/_synthetic.py``: every paper experiment expanded in
 profile with five seeds (0-4, what a verdict needs), the store's own row format, errors built so
 that each claim passes ("reproduce"), fails ("contradict") or cannot be decided (too few seeds,
 huge noise, trivial predictors that win), with per-run log-normal noise. Every part of every
-claim (issue 20: one-sided t tests against a margin) is pinned by a table on which it holds,
+claim (a one-sided t test against a margin) is pinned by a table on which it holds,
 one on which it is contradicted and one on which it is undecided: the latter are the
 "reproduce" table with one cell's per-seed errors set to a stated ratio of another's.
 """
@@ -19,8 +19,8 @@ from scipy import stats
 
 from bench.core._query import initial_state, option, params_of
 from bench.studies import paper as C
-from bench.studies.paper import _rules, policy
-from bench.studies.paper import _stats as R
+from bench.studies.paper import kit as R
+from bench.studies.paper import policy
 
 ERR = policy.margin("error")  # 1.25x
 TWO = policy.margin("learning")  # 2x
@@ -212,7 +212,7 @@ def test_contradicting_table_gives_not_reproduced(contradicting, key):
     # Claim 4's contradicting table keeps the chain edge and breaks the spring one: "partly".
     expected = R.PARTLY if key.startswith("4") else R.NOT_REPRODUCED
     assert v.verdict == expected, v.detail
-    assert "contradicts" in v.detail
+    assert "contradicts" in [p.status for p in v.parts]
     assert v.n_seeds == 5
 
 
@@ -227,7 +227,7 @@ def test_four_seeds_are_inconclusive_unless_four_are_required():
     assert R.required_seeds() == R.MIN_SEEDS == 5
     for v in _claims(runs, curves):
         assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
-        assert v.n_seeds == 4 and "fewer than 5 paired seeds" in v.detail
+        assert v.n_seeds == 4 < R.required_seeds()
         # the parts are tested, but a part on fewer seeds than a verdict needs decides nothing
         assert all(p.status == "undecided" for p in v.parts), v.detail
         assert all("on 4 < 5 seeds" in p.note for p in v.parts if p.n == 4), v.detail
@@ -252,7 +252,6 @@ def test_trivial_predictor_that_wins_makes_every_claim_inconclusive():
     for v in _claims(*synthetic_tables("smoke", scenario="trivial_wins")):
         assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
         assert v.discriminating is False
-        assert "NOT DISCRIMINATING" in v.detail
 
 
 def test_without_trivial_runs_discrimination_is_unknown(tables):
@@ -262,7 +261,6 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
         assert v.discriminating is None, v.key
         # claim 7's parts (b)-(d) compare with the trivial predictor: without it only (a) is left
         assert v.verdict == R.REPRODUCED, (v.key, v.detail)
-        assert "discriminating unknown" in v.detail
     v7 = C.CLAIMS[7](runs, curves)
     assert [p.name[:3] for p in v7.parts] == ["(a)", "(e)", "(f)"]
 
@@ -311,7 +309,10 @@ def test_failed_runs_count_as_error_one_not_dropped(tables):
     v = C.CLAIMS[3](_fail(runs, runs["model"] == "node_so"), curves)
     assert v.n_failed == 10
     assert _status(v, "chain", "(a) log(NODE / NODE+SO)") == "not tested"
-    assert "did not learn" in _part(v, "chain", "(a) log(NODE / NODE+SO)").note
+    closed = [
+        g.label for g in _part(v, "chain", "(a) log(NODE / NODE+SO)").gates if g.open is False
+    ]
+    assert closed == ["node_so on chain_pendulum"]
 
 
 def test_scored_sets_failures_to_the_worst_error():
@@ -421,7 +422,7 @@ def test_around_helper_has_the_stated_spread():
 )
 def test_greater_and_at_most_mirror_each_other(mean, greater, at_most):
     x = _around(mean)
-    g, a = R._greater("x", x, ERR), R._at_most("x", x, ERR)
+    g, a = R.greater("x", x, ERR), R.at_most("x", x, ERR)
     assert (g.status, a.status) == (greater, at_most)
     assert (g.kind, a.kind) == ("greater", "at most") and g.margin == a.margin == "1.25x"
     assert g.n == a.n == 5 and g.point == pytest.approx(mean)
@@ -430,16 +431,16 @@ def test_greater_and_at_most_mirror_each_other(mean, greater, at_most):
 
 def test_margins_other_than_the_default():
     x = _around(0.5)  # 1.65x: more than 1.25x, not shown to be 2x
-    assert R._greater("x", x, ERR).status == "holds"
-    assert R._greater("x", x, TWO).status == "contradicts"
-    assert R._at_most("x", x, TWO).status == "holds"
-    assert R._at_most("x", x, TWO).margin == "2x"
-    assert R._greater("x", _around(DELTA_2), TWO).status == "undecided"
+    assert R.greater("x", x, ERR).status == "holds"
+    assert R.greater("x", x, TWO).status == "contradicts"
+    assert R.at_most("x", x, TWO).status == "holds"
+    assert R.at_most("x", x, TWO).margin == "2x"
+    assert R.greater("x", _around(DELTA_2), TWO).status == "undecided"
 
 
 def test_a_margin_not_from_the_policy_is_refused():
     with pytest.raises(TypeError, match="policy"):
-        R._greater("x", _around(0.5), math.log(1.25))
+        R.greater("x", _around(0.5), math.log(1.25))
     with pytest.raises(ValueError, match="error, energy"):
         policy.margin("errors")
 
@@ -457,14 +458,14 @@ def test_a_margin_not_from_the_policy_is_refused():
     ],
 )
 def test_equivalent_is_tost(mean, status):
-    p = R._equivalent("x", _around(mean), TWO)
+    p = R.equivalent("x", _around(mean), TWO)
     assert p.status == status and p.kind == "equivalent"
     assert p.margin == "1/2x to 2x"
-    assert R._equivalent("x", _around(mean), ERR).status == (
+    assert R.equivalent("x", _around(mean), ERR).status == (
         "holds" if abs(mean) < DELTA - H else "contradicts"
     )
     # a wide interval around 0 is not equivalence
-    assert R._equivalent("x", [-2.0, 2.0, 0.0, -1.0, 1.0], TWO).status == "undecided"
+    assert R.equivalent("x", [-2.0, 2.0, 0.0, -1.0, 1.0], TWO).status == "undecided"
 
 
 @pytest.mark.parametrize(
@@ -481,10 +482,10 @@ def test_equivalent_is_tost(mean, status):
     ],
 )
 def test_band(mean, status):
-    p = R._band("x", _around(mean), 1.0, SLOPE)
+    p = R.band("x", _around(mean), 1.0, SLOPE)
     assert p.status == status and p.kind == "band" and p.margin == "1 +- 0.5"
     # a band wider than the data's spread on both sides: only the mean matters
-    assert R._band("x", [-5.0, 5.0, 0.0, 1.0, -1.0], 0.0, SLOPE).status == "undecided"
+    assert R.band("x", [-5.0, 5.0, 0.0, 1.0, -1.0], 0.0, SLOPE).status == "undecided"
 
 
 @pytest.mark.parametrize(
@@ -492,43 +493,43 @@ def test_band(mean, status):
     [(0.5 + H + 0.02, "contradicts"), (0.5, "undecided"), (0.5 - H - 0.02, "holds")],
 )
 def test_below(mean, below):
-    p = R._below("x", _around(mean), 0.0, SLOPE)
+    p = R.below("x", _around(mean), 0.0, SLOPE)
     assert p.status == below and p.kind == "below"
 
 
 def test_share_of_a_gap():
     gap = np.full(5, 1.0)
-    most = R._share("x", _around(0.8), gap, policy.margin("share"))
+    most = R.share("x", _around(0.8), gap, policy.margin("share"))
     assert most.status == "holds" and most.point == pytest.approx(0.8)
     assert most.lo < most.point < most.hi
-    assert R._share("x", _around(0.2), gap, policy.margin("share")).status == "contradicts"
-    assert R._share("x", _around(0.5), gap, policy.margin("share")).status == "undecided"
+    assert R.share("x", _around(0.2), gap, policy.margin("share")).status == "contradicts"
+    assert R.share("x", _around(0.5), gap, policy.margin("share")).status == "undecided"
     # a negative gap (nothing to explain) keeps the interval ordered
-    neg = R._share("x", _around(0.2), -gap, policy.margin("share"))
+    neg = R.share("x", _around(0.2), -gap, policy.margin("share"))
     assert neg.lo <= neg.hi
 
 
-@pytest.mark.parametrize("rule", [R._greater, R._at_most, R._equivalent])
+@pytest.mark.parametrize("rule", [R.greater, R.at_most, R.equivalent])
 def test_one_value_or_none_is_undecided(rule):
     for x in ([0.9], [], [np.nan, np.nan]):
         p = rule("x", x, ERR)
         assert p.status == "undecided" and math.isnan(p.lo), x
-    assert R._band("x", [1.0], 1.0, SLOPE).status == "undecided"
-    assert R._below("x", [9.0], 0.0, SLOPE).status == "undecided"
+    assert R.band("x", [1.0], 1.0, SLOPE).status == "undecided"
+    assert R.below("x", [9.0], 0.0, SLOPE).status == "undecided"
 
 
 def test_parts_accept_precomputed_bounds():
     # (point, lo, hi, n): e.g. claim 1's jackknife bounds of a pooled regression
-    p = R._at_most("x", (0.1, 0.0, 0.2, 5), TWO)
+    p = R.at_most("x", (0.1, 0.0, 0.2, 5), TWO)
     assert (p.status, p.point, p.n) == ("holds", 0.1, 5)
     assert (p.lo, p.hi) == pytest.approx((0.0, 0.2))
-    assert R._at_most("x", (1.0, 0.9, 1.1, 5), TWO).status == "contradicts"
-    assert R._at_most("x", (0.7, 0.5, 0.9, 5), TWO).status == "undecided"
-    assert R._greater("x", (0.3, math.nan, math.nan), ERR).status == "undecided"
+    assert R.at_most("x", (1.0, 0.9, 1.1, 5), TWO).status == "contradicts"
+    assert R.at_most("x", (0.7, 0.5, 0.9, 5), TWO).status == "undecided"
+    assert R.greater("x", (0.3, math.nan, math.nan), ERR).status == "undecided"
 
 
 def _parts(*statuses):
-    return [R._Part(f"p{i}", s, 0.0, 0.0, 0.0, 5) for i, s in enumerate(statuses)]
+    return [R.Part(f"p{i}", s, 0.0, 0.0, 0.0, 5) for i, s in enumerate(statuses)]
 
 
 @pytest.mark.parametrize(
@@ -548,14 +549,14 @@ def _parts(*statuses):
 )
 def test_verdict_from_parts(statuses, verdict):
     parts = _parts(*statuses)
-    v = _rules._verdict(9, "t", parts, None, 5, "e")
+    v = R.verdict(9, "t", parts, None, 5, "e")
     assert v.verdict == verdict
     assert v.parts == tuple(parts)
     # with one seed fewer than required the verdict waits, whatever the parts say
-    v4 = _rules._verdict(9, "t", parts, None, 4, "e")
+    v4 = R.verdict(9, "t", parts, None, 4, "e")
     assert v4.verdict == R.INCONCLUSIVE
     with R.min_seeds(4):
-        assert _rules._verdict(9, "t", parts, None, 4, "e").verdict == verdict
+        assert R.verdict(9, "t", parts, None, 4, "e").verdict == verdict
 
 
 # --------------------------------------------------------------- gates, Holm, margin ranges
@@ -563,12 +564,12 @@ def test_verdict_from_parts(statuses, verdict):
 
 def test_a_closed_gate_makes_a_part_not_tested_and_never_against_the_claim():
     bad = R.Gate("VIN", False, "VIN did not learn")
-    part = R.gated(R._greater("x", _around(-1.0), ERR), bad)  # would contradict
-    v = _rules._verdict(9, "t", [part, R._greater("y", _around(1.0), ERR)], None, 5, "e")
-    assert part.status == "not tested" and "VIN did not learn" in part.note
+    part = R.gated(R.greater("x", _around(-1.0), ERR), bad)  # would contradict
+    v = R.verdict(9, "t", [part, R.greater("y", _around(1.0), ERR)], None, 5, "e")
+    assert part.status == "not tested" and part.gates == (bad,)
     assert v.verdict == R.INCONCLUSIVE  # not "partly reproduced"
-    ok = R.gated(R._greater("x", _around(1.0), ERR), R.Gate("VIN", True, "learned"))
-    assert _rules._verdict(9, "t", [ok], None, 5, "e").verdict == R.REPRODUCED
+    ok = R.gated(R.greater("x", _around(1.0), ERR), R.Gate("VIN", True, "learned"))
+    assert R.verdict(9, "t", [ok], None, 5, "e").verdict == R.REPRODUCED
 
 
 def test_learned_gate_is_the_geometric_mean_against_the_trivial_predictor():
@@ -582,9 +583,9 @@ def test_learned_gate_is_the_geometric_mean_against_the_trivial_predictor():
 
 
 def test_a_condition_gates_the_parts_it_qualifies():
-    similar = R._at_most("(b) loss", _around(3.0), policy.margin("loss"))  # contradicts
-    energy = R.gated(R._greater("(a) energy", _around(3.0), ERR), R.condition(similar))
-    v = _rules._verdict(9, "t", [energy, similar], None, 5, "e")
+    similar = R.at_most("(b) loss", _around(3.0), policy.margin("loss"))  # contradicts
+    energy = R.gated(R.greater("(a) energy", _around(3.0), ERR), R.condition(similar))
+    v = R.verdict(9, "t", [energy, similar], None, 5, "e")
     assert similar.role == "condition" and energy.status == "not tested"
     assert v.verdict == R.INCONCLUSIVE  # a failed condition is never "not reproduced"
 
@@ -592,21 +593,21 @@ def test_a_condition_gates_the_parts_it_qualifies():
 def test_holm_demotes_a_part_that_only_holds_uncorrected():
     # one part just past the margin at alpha 0.05, beside four that hold at any level
     just = _around(DELTA + H + 0.01)
-    strong = [R._greater(f"s{i}", _around(3.0), ERR) for i in range(4)]
-    weak = R._greater("weak", just, ERR)
+    strong = [R.greater(f"s{i}", _around(3.0), ERR) for i in range(4)]
+    weak = R.greater("weak", just, ERR)
     assert weak.status == "holds"  # uncorrected
     R.holm([*strong, weak])
     assert [p.status for p in strong] == ["holds"] * 4
     # the largest p-value is tested at alpha / 1: Holm keeps it
     assert weak.status == "holds"
-    weak2 = R._greater("weak2", just, ERR)
-    R.holm([weak2, R._greater("other", _around(DELTA), ERR)])
+    weak2 = R.greater("weak2", just, ERR)
+    R.holm([weak2, R.greater("other", _around(DELTA), ERR)])
     # now the weak part has the smallest p-value of two, tested at alpha / 2
     assert weak2.status == "undecided" and weak2.alpha == pytest.approx(0.025)
 
 
 def test_holm_applies_to_contradicts_alike():
-    parts = [R._greater(f"c{i}", _around(DELTA - H - 0.01), ERR) for i in range(3)]
+    parts = [R.greater(f"c{i}", _around(DELTA - H - 0.01), ERR) for i in range(3)]
     assert all(p.status == "contradicts" for p in parts)
     R.holm(parts)
     assert all(p.status == "undecided" for p in parts)
@@ -614,14 +615,14 @@ def test_holm_applies_to_contradicts_alike():
 
 def test_margin_range_of_a_greater_part():
     x = _around(math.log(1.5))  # interval [1.5 e^-H, 1.5 e^H]
-    p = R._greater("x", x, ERR)
+    p = R.greater("x", x, ERR)
     segs = R.margin_ranges(p)
     assert [s for s, *_ in segs] == ["holds", "undecided", "contradicts"]
     assert segs[0][2] == pytest.approx(1.5 * math.exp(-H), rel=1e-3)
     assert segs[2][1] == pytest.approx(1.5 * math.exp(H), rel=1e-3)
     p.ranges = segs
     assert p.range_text().startswith("holds below 1.36x; undecided 1.36x-1.65x")
-    q = R._at_most("x", x, ERR)
+    q = R.at_most("x", x, ERR)
     assert [s for s, *_ in R.margin_ranges(q)] == ["contradicts", "undecided", "holds"]
 
 
@@ -630,7 +631,7 @@ def test_a_verdict_that_flips_inside_the_band_is_margin_dependent():
     x = _around(math.log(1.5))
 
     def rule():
-        return _rules._verdict(9, "t", [R._greater("x", x, policy.margin("error"))], None, 5, "e")
+        return R.verdict(9, "t", [R.greater("x", x, policy.margin("error"))], None, 5, "e")
 
     assert rule().verdict == R.REPRODUCED
     with policy.override(error=2.0):
@@ -814,7 +815,7 @@ def test_claim_3_b_is_judged_only_where_hnn_so_has_an_advantage(tables):
     cond = _part(v, spring, "HNN+SO beats NODE")
     assert cond.role == "condition" and cond.status == "contradicts"
     b = _part(v, spring, "(b)")
-    assert b.status == "not tested" and "HNN+SO beats NODE" in b.note
+    assert b.status == "not tested" and cond.name in [g.label for g in b.gates if g.open is False]
     assert v.verdict != R.NOT_REPRODUCED
 
 

@@ -205,7 +205,7 @@ def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
     """*inconclusive* here and *inconclusive (does not replicate)* there agree (neither signs
     the claim, no cause to name); *partly reproduced* against either does not."""
     from bench._report import _comparison_section
-    from bench.studies.paper._stats import Verdict
+    from bench.studies.paper.kit import Verdict
 
     def v(verdict, claim=3):
         return Verdict(claim, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p")
@@ -222,7 +222,7 @@ def test_a_cause_shared_by_two_compared_folders_is_named_once():
     """Here against two folders that disagree with it for the same reason: the budget cause
     appears once, a failed-run count only where it differs."""
     from bench._report import _comparison_section
-    from bench.studies.paper._stats import Verdict
+    from bench.studies.paper.kit import Verdict
 
     def v(verdict, n_failed=0):
         return Verdict(3, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p", n_failed=n_failed)
@@ -241,7 +241,7 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
     Where the demoted reading's own seeds differ from the other folder, both are named."""
     from bench._report import _comparison_section
     from bench.studies.paper._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
-    from bench.studies.paper._stats import Verdict
+    from bench.studies.paper.kit import Verdict
 
     def v(verdict, claim, primary=None, readings=""):
         return Verdict(

@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 
 import models
+from bench.studies._along import SCORES
 from bench.studies.learning import (
-    SCORES,
     settling,
     settling_table,
     verdicts_along_curve,
@@ -79,7 +79,7 @@ def _keyed(verdicts):
     return {v.key: v.verdict for v in verdicts}
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on this CPU
 def test_verdict_at_each_checkpoint_is_the_rules_verdict_on_that_table(scenarios):
     runs, curves = scenarios["reproduce"]
     sequence = ("contradict", "reproduce", "reproduce")
@@ -97,7 +97,7 @@ def test_verdict_at_each_checkpoint_is_the_rules_verdict_on_that_table(scenarios
     assert np.allclose(sorted(along["step"].unique()), [5, 10, 20])
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on this CPU
 def test_settling_budget_finds_where_the_verdict_stops_changing(scenarios):
     runs, curves = scenarios["reproduce"]
     early = _keyed(evaluate_claims(*_hybrid(scenarios, "contradict"), PROFILE))

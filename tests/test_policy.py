@@ -14,19 +14,21 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench.studies import paper as C
-from bench.studies.paper import _stats as R
+from bench.studies.paper import kit as R
 from bench.studies.paper import policy
 
 RULES = Path(C.__file__).parent
-CONSTRUCTORS = {"_greater", "_at_most", "_equivalent", "_band", "_below", "_share", "_part"}
+CONSTRUCTORS = {"greater", "at_most", "equivalent", "band", "below", "share", "_part"}
+# the kit's modules that build parts and gates
+KIT = {"_stats.py", "_gates.py", "_discrimination.py", "_rules.py"}
 
 
 def _rule_modules():
-    """The modules that hold rules: the studies (public names) and the shared rule kit."""
+    """The modules that hold rules: the studies (public names) and the kit that builds parts."""
     return sorted(
         p
         for p in RULES.glob("*.py")
-        if (not p.name.startswith("_") and p.name != "policy.py") or p.name == "_rules.py"
+        if (not p.name.startswith("_") and p.name not in ("policy.py", "kit.py")) or p.name in KIT
     )
 
 
@@ -112,6 +114,6 @@ def test_every_part_moves_with_the_policy(tables):
 
 def test_part_constructors_refuse_a_number():
     with pytest.raises(TypeError):
-        R._at_most("x", [0.1, 0.2, 0.3], 2.0)
+        R.at_most("x", [0.1, 0.2, 0.3], 2.0)
     with pytest.raises(TypeError):
-        R._share("x", [1.0] * 5, [1.0] * 5, 0.5)
+        R.share("x", [1.0] * 5, [1.0] * 5, 0.5)

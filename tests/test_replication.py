@@ -11,8 +11,8 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench.core._experiments import PROFILES, REPLICATION_SEEDS
-from bench.studies.paper import _stats as R
 from bench.studies.paper import evaluate_claims
+from bench.studies.paper import kit as R
 from bench.studies.paper._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,

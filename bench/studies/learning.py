@@ -1,44 +1,9 @@
-"""Learning curves: every verdict as a function of the training budget (issue 16).
+"""Learning curves: every verdict as a function of the training budget.
 
-Every trained run of the ``quick`` and ``paper`` profiles keeps ``eval_checkpoints = 4``
-snapshots of its parameters, on the halving grid 1/8, 1/4, 1/2, 1 of its steps (rounded to the
-100-step training blocks: 100, 300, 500, 1000 at quick; 1000, 2000, 4000, 8000 at paper), and
-evaluates each on the whole test set after training (``checkpoints.parquet``). The last
-checkpoint is the final model, so a curve ends on its run's row.
-
-What a checkpoint is, and is not. The checkpoint at step s of a run trained for S steps is that
-run's model after s updates of a cosine schedule that decays over S steps: the learning rate is
-still high at s < S. It is therefore NOT the run one would get with a budget of s steps (whose
-schedule would have annealed by then); the section below measures the difference on the
-learning-curve cells (the quick 1000-step runs against the 1000-step checkpoint of the
-4000-step runs of the same seeds; at quick on 2026-11-22 the checkpoint of HNN+SO was the
-better of the two, 0.065 against 0.093 on the chain). Verdicts along the curve answer "from
-which point of THIS training does the verdict stop changing", not what a profile with a
-shorter schedule would conclude.
-
-Verdicts along the curve (:func:`verdicts_along_curve`): the runs table at checkpoint i is the
-runs table with every trained run's scores (``bench.core._execute.CHECKPOINT_METRICS``), status
-and training seconds replaced by those of its i-th checkpoint, and its per-time curves by the
-checkpoint's; trivial predictors (nothing to train) keep theirs. Each claim's own rule
-(``bench.studies.paper``) judges each of these tables. A claim whose trained runs lack
-checkpoints (rows stored before them) is left out. The *settling budget* (:func:`settling`) of
-a verdict is the first checkpoint from which it no longer changes; a verdict that changes at the
-last checkpoint is marked not settled (a longer budget may change it again).
-
-The dedicated experiment (``learning_curves``): NODE+SO and HNN+SO on the chain pendulum and
-on the spring pendulum from its physical equilibrium (k = 2: the cells of Figs. 2/4 and of
-Fig. 5, where claim 4's verdict differs between the budgets). Until issue 20 it trained them
-4000 steps at quick, 2 seeds, checkpoints at 500, 1000, 2000, 4000 (what follows describes
-that design); since issue 20 it has no training of its own at quick (its cells are the shared
-1000-step runs, and the five seeds of the verdicts needed its 7 minutes), and the longer runs
-are the paper-core campaign's (``results/reference/paper/``, 8000 steps, checkpoints at 1000, 2000,
-4000, 8000), whose report carries this section. Only runs longer than their profile's own
-steps count as "longer runs". The two models are those whose ratio
-decides claims 3 and 4 and whose quick errors sit furthest from the paper budget's (HNN+SO
-11-14x, NODE+SO about 3x, issue 16); 2 seeds are what fit beside the other quick experiments in
-``make bench``'s 30 minutes. They replace the trade-off's 300- and 3000-step training variants
-at quick. At ``paper`` the experiment is the Fig. 2/5 cells of the two models (the same runs,
-no new training).
+Each trained run keeps four checkpoints (1/8, 1/4, 1/2 and 1 of its steps); each claim's rule
+judges the runs at each checkpoint (:mod:`._along`), and the ``learning_curves`` experiment
+(NODE+SO and HNN+SO, chain and spring, k = 2) adds longer runs. A checkpoint is not a shorter
+run: its cosine schedule has not annealed. The design and its limits: docs/studies/learning.md.
 """
 
 from __future__ import annotations
@@ -46,26 +11,27 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-import models  # noqa: E402
-
-from ..core._evaluate import CHECKPOINT_METRICS as SCORES  # noqa: E402 - what a checkpoint replaces
-from ..core._experiments import PROFILES, Experiment  # noqa: E402
-from ..core._query import load_tables, select  # noqa: E402
-from ..core._store import load_checkpoints  # noqa: E402
-from ..core._studies import Study, register_study  # noqa: E402
-from ._figure import save_figure  # noqa: E402
-from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides  # noqa: E402
-from .paper._plot import COLORS, SYSTEM_LABELS  # noqa: E402
-from .paper._rules import claim_studies, evaluate_claims, restrict  # noqa: E402
-from .paper._stats import MODEL_LABELS  # noqa: E402
+from ..core._experiments import PROFILES, Experiment
+from ..core._query import load_tables, select
+from ..core._store import load_checkpoints
+from ..core._studies import Study, register_study
+from ._along import (
+    along_row,
+    curves_at,
+    is_trained,
+    runs_at,
+    settling,
+    settling_table,
+    verdicts_along_curve,
+)
+from ._figure import save_figure, subplots
+from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides
+from .paper._plot import COLORS, SYSTEM_LABELS
+from .paper._rules import claim_studies, restrict
+from .paper.kit import MODEL_LABELS
 
 # The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
 # runs share system, k and model with them)
@@ -87,122 +53,11 @@ LEARNING = Experiment(
     name="learning_curves",
     title="Learning curves: NODE+SO and HNN+SO past the quick budget (chain, spring)",
     axes={"system": SYSTEMS, "k": (2,), "model": LEARNING_MODELS},
-    # quick: the shared 1000-step cells (no training of its own since issue 20, whose five
-    # seeds it pays for; the longer runs are the paper-core campaign's, results/reference/paper/)
+    # quick: the shared 1000-step cells (no training of its own, which pays for quick's five
+    # seeds; the longer runs are the paper-core campaign's, results/reference/paper/)
     profile_overrides=shared_overrides({"smoke": {"steps": 40}}),
     include=_learning_cell,
 )
-
-
-# ------------------------------------------------------------------- runs at a checkpoint
-def _trained(runs: pd.DataFrame) -> pd.Series:
-    known = set(models.available())
-    return runs["model"].map(lambda m: not (m in known and models.spec(m).trivial))
-
-
-def runs_at(
-    runs: pd.DataFrame, checkpoints: pd.DataFrame, position: int
-) -> tuple[pd.DataFrame, set]:
-    """(the runs table at checkpoint ``position`` counted from each run's first, the
-    config hashes of trained runs that have no such checkpoint and were dropped)."""
-    out = runs.copy()
-    trained = _trained(out)
-    cp = checkpoints[checkpoints["config_hash"].isin(out["config_hash"])]
-    cp = cp.sort_values(["config_hash", "step"])
-    at = cp.groupby("config_hash").nth(position) if len(cp) else cp
-    at = at.set_index("config_hash") if len(at) else at
-    has = out["config_hash"].isin(at.index) if len(at) else pd.Series(False, index=out.index)
-    missing = set(out.loc[trained & ~has, "config_hash"])
-    out = out[~trained | has].copy()
-    rows = out["config_hash"].isin(at.index) if len(at) else pd.Series(False, index=out.index)
-    if rows.any():
-        src = at.loc[out.loc[rows, "config_hash"]]
-        for col in (*SCORES, "status", "train_seconds"):
-            if col in src.columns:
-                out.loc[rows, col] = src[col].to_numpy()
-        out.loc[rows, "checkpoint_step"] = src["step"].to_numpy()
-    return out.reset_index(drop=True), missing
-
-
-def curves_at(curves: pd.DataFrame, cp_curves: pd.DataFrame, runs_i: pd.DataFrame) -> pd.DataFrame:
-    """Per-time curves of ``runs_i`` (a :func:`runs_at` table): a trained run's at its
-    checkpoint step, a trivial predictor's own."""
-    if "checkpoint_step" not in runs_i:
-        return curves
-    steps = runs_i.dropna(subset=["checkpoint_step"])[["config_hash", "checkpoint_step"]]
-    parts = []
-    if len(steps) and len(cp_curves):
-        keyed = cp_curves.merge(
-            steps.rename(columns={"checkpoint_step": "step"}).astype({"step": int}),
-            on=["config_hash", "step"],
-        )
-        parts.append(keyed.drop(columns=["step"]))
-    rest = runs_i.loc[runs_i["checkpoint_step"].isna(), "config_hash"]
-    if len(curves):
-        parts.append(curves[curves["config_hash"].isin(rest)])
-    return pd.concat(parts, ignore_index=True) if parts else curves.iloc[0:0]
-
-
-def settling(verdicts) -> int:
-    """The first index from which ``verdicts`` no longer change (``len - 1`` when the last one
-    differs from the one before; 0 when all agree)."""
-    verdicts = list(verdicts)
-    i = len(verdicts) - 1
-    while i > 0 and verdicts[i - 1] == verdicts[-1]:
-        i -= 1
-    return max(i, 0)
-
-
-def _along_row(v, position: int, n: int, steps: pd.Series) -> dict:
-    """One row of a verdicts-along-the-curve table: verdict ``v`` at checkpoint ``position``
-    of ``n`` (nominal fraction 2^(position - n + 1)), at the median of ``steps``."""
-    return {
-        "key": v.key,
-        "claim": v.claim,
-        "position": position,
-        "fraction": 2.0 ** (position - n + 1),
-        "step": float(np.nanmedian(steps)) if len(steps) else math.nan,
-        "verdict": v.verdict,
-        "effect": v.effect,
-    }
-
-
-def verdicts_along_curve(
-    runs: pd.DataFrame,
-    curves: pd.DataFrame,
-    checkpoints: pd.DataFrame,
-    cp_curves: pd.DataFrame,
-    profile: str | None,
-) -> pd.DataFrame:
-    """One row per (verdict, checkpoint): key, claim, position, fraction (nominal, of the
-    budget), step (median over the claim's trained runs), verdict, effect. Claims whose trained
-    runs lack checkpoints are left out. Empty when no run has checkpoints."""
-    cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
-    if not len(checkpoints) or not len(runs):
-        return pd.DataFrame(columns=cols)
-    cp = checkpoints[checkpoints["config_hash"].isin(runs["config_hash"])]
-    if not len(cp):
-        return pd.DataFrame(columns=cols)
-    n = int(cp.groupby("config_hash").size().max())
-    judged = {}
-    for study in claim_studies():
-        mine = restrict(runs, study, profile)
-        if not len(mine):
-            continue
-        hashes = set(mine.loc[_trained(mine), "config_hash"])
-        per_run = cp[cp["config_hash"].isin(hashes)].groupby("config_hash").size()
-        if hashes and len(per_run) == len(hashes) and (per_run == n).all():
-            judged[study.claim] = hashes
-    out = []
-    for position in range(n):
-        runs_i, _ = runs_at(runs, cp, position)
-        curves_i = curves_at(curves, cp_curves, runs_i)
-        for v in evaluate_claims(runs_i, curves_i, profile):
-            if v.claim not in judged:
-                continue
-            steps = runs_i.loc[runs_i["config_hash"].isin(judged[v.claim]), "checkpoint_step"]
-            out.append(_along_row(v, position, n, steps))
-    return pd.DataFrame(out, columns=cols)
 
 
 def verdicts_along_learning(
@@ -241,7 +96,7 @@ def verdicts_along_learning(
             continue
         if study.claim not in LEARNING_CLAIMS:
             continue
-        trivial = mine[~_trained(mine)]
+        trivial = mine[~is_trained(mine)]
         same = [
             (a, b) in cells
             for a, b in zip(trivial["system"], trivial["system_params"].astype(str), strict=True)
@@ -253,29 +108,8 @@ def verdicts_along_learning(
             for v in got if isinstance(got, list) else [got]:
                 if v.n_seeds < 2:
                     continue
-                out.append(_along_row(v, position, n, runs_i["checkpoint_step"].dropna()))
+                out.append(along_row(v, position, n, runs_i["checkpoint_step"].dropna()))
     return pd.DataFrame(out, columns=cols)
-
-
-def settling_table(along: pd.DataFrame) -> pd.DataFrame:
-    """Per verdict key: the verdict at each checkpoint, the settling step and whether the
-    verdict changed at the last checkpoint (``settled`` False)."""
-    rows = []
-    for key, g in along.groupby("key", sort=False):
-        g = g.sort_values("position")
-        i = settling(g["verdict"])
-        rows.append(
-            {
-                "key": key,
-                "claim": int(g["claim"].iloc[0]),
-                "verdicts": list(g["verdict"]),
-                "steps": list(g["step"]),
-                "settles_at": float(g["step"].iloc[i]),
-                "settles_fraction": float(g["fraction"].iloc[i]),
-                "settled": bool(len(g) == 1 or i < len(g) - 1),
-            }
-        )
-    return pd.DataFrame(rows)
 
 
 # ------------------------------------------------------------------------ loading
@@ -347,7 +181,7 @@ def fig_learning_curves(results_dir) -> list[Path]:
     cols = ["config_hash", "cell", "model", "seed", "steps"]
     data = cp.merge(sel[cols], on="config_hash")
     cells = sorted(data["cell"].unique())
-    fig, axes = plt.subplots(
+    fig, axes = subplots(
         len(cells), 2, figsize=(10, 3.4 * len(cells)), squeeze=False, layout="constrained"
     )
     shortest = data["steps"].min()

@@ -1,33 +1,14 @@
 """The speed/accuracy trade-off: how rollout error buys compute, per model and scene.
 
-The ``tradeoff`` experiment trains node, node_so, hnn_so, lnn and vin on chain_pendulum k = 2
-and spring_pendulum k = 2 and evaluates each trained model under many integrators. Its runs
-are one-factor-at-a-time around a base point, not a full product:
-
-- base training: the paper's cell (``train_integrator`` rk4_38, the profile's ``width`` and
-  ``steps``), so that node, node_so and hnn_so share their base runs with Figs. 2, 4, 5;
-- on the base training, an evaluation grid (:data:`EVAL_GRID`): fixed-step euler, rk4, rk4_38,
-  leapfrog (the generalised, implicit Stormer-Verlet; ``leapfrog_explicit`` in ``paper``),
-  implicit_midpoint (symplectic for any learned H) at several substeps, and ``adaptive``
-  (tsit5) at several ``eval_rtol``. The runner
-  caches trained parameters by ``train_hash``, so these runs cost an evaluation each;
-- training variants that change one of ``width``, ``steps`` or ``train_integrator``, each
-  evaluated at the base evaluation (rk4_38 x 1) and with its own training integrator.
-
-Invalid combinations are dropped by ``include``: leapfrog for first-order models (also by
-``valid``), substeps or tolerances that do not apply to a method, any integrator other than
-the base label for the discrete vin (it is its own integrator), and more than one changed
-training factor. In ``quick`` the training variants run on chain_pendulum only and on seed 0.
-
-Analysis (pure functions of the runs DataFrame, tested on synthetic tables):
-:func:`pareto_front` (rows not dominated in (cost, error)), :func:`cheapest_within` (per scene,
-the cheapest configuration whose error is within 10% of the best), :func:`tradeoff_table`,
-:func:`tradeoff_section` (REPORT.md markdown) and :func:`tradeoff_figure`.
+The ``tradeoff`` experiment trains node, node_so, hnn_so, lnn and vin on the chain and spring
+pendulums (k = 2) and evaluates each trained model under many integrators, one factor at a time
+around the paper's cell (:data:`EVAL_GRID`, training variants of width, steps and integrator).
+The analysis is pure functions of the runs table (:mod:`._pareto`, :func:`tradeoff_table`).
+The design: docs/studies/tradeoff.md.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -35,23 +16,22 @@ import pandas as pd
 
 import models
 
-from ..core._experiments import PROFILES, Experiment, RunConfig, expand, field_names
-from ..core._query import aggregate, experiment_rows, pick_profile
+from ..core._experiments import PROFILES, Experiment, RunConfig, expand
+from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study
-from ._figure import save_figure
+from ._figure import save_figure, subplots
+from ._pareto import ERROR, aggregate_seeds, cheapest_within, pareto_front
 
 MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
 # The LNN's evaluations were two thirds of the quick trade-off's cost (821 of 1248 s of run time
-# on 2026-11-22: every adaptive and implicit evaluation solves its Hessian at each stage), so at
+# measured at quick: every adaptive and implicit evaluation solves its Hessian at each stage), so at
 # quick it runs in the paper profile only and the 30-minute budget of `make bench` holds.
 PROFILE_MODELS = {"smoke": MODELS, "quick": ("node", "node_so", "hnn_so", "vin"), "paper": MODELS}
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
 BASE_TRAIN_INTEGRATOR = "rk4_38"
 BASE_EVAL = ("rk4_38", 1)
 DEFAULT_RTOL = RunConfig.__dataclass_fields__["eval_rtol"].default
-COSTS = ("rollout_seconds_per_traj", "nfe", "train_seconds")
-ERROR = "rollout_error"
 
 # Fixed-step methods and the substeps evaluated per profile (adaptive: the rtol axis).
 EVAL_GRID: dict[str, dict[str, tuple[int, ...]]] = {
@@ -97,8 +77,8 @@ SUBSTEPS = (1, 2, 4, 8)
 # chain: the whole trade-off must fit beside the paper experiments in ``make bench``.
 TRAIN_VARIANTS = {
     "smoke": {"models": (), "systems": (), "own_eval": False},
-    # quick: NODE+SO only since issue 20 (HNN+SO's width and integrator variants were 106 s of
-    # the trade-off's 274 s of run time; the five seeds of the verdicts needed the time)
+    # quick: NODE+SO only (HNN+SO's width and integrator variants were 106 s of the trade-off's
+    # 274 s of run time, which the five seeds of the verdicts need)
     "quick": {"models": ("node_so",), "systems": ("chain_pendulum",), "own_eval": False},
     "paper": {"models": MODELS, "systems": SYSTEMS, "own_eval": True},
 }
@@ -164,8 +144,8 @@ def include(cfg: RunConfig) -> bool:
     return True
 
 
-# quick evaluates on the chain only since issue 20 (the spring's evaluations were 78 s of run
-# time; the paper profile keeps both)
+# quick evaluates on the chain only (the spring's evaluations were 78 s of run time; the paper
+# profile keeps both)
 PROFILE_SYSTEMS = {"smoke": SYSTEMS, "quick": ("chain_pendulum",), "paper": SYSTEMS}
 
 
@@ -251,98 +231,6 @@ def estimate(
 
 
 # ----------------------------------------------------------------------------- analysis
-def pareto_front(df: pd.DataFrame, cost: str, error: str = ERROR) -> pd.DataFrame:
-    """The rows of ``df`` that no other row dominates in (cost, error), sorted by cost.
-
-    Row a dominates b when cost_a <= cost_b and error_a <= error_b with one strictly smaller.
-    Rows with a missing or non-finite cost or error are ignored; of exact duplicates in
-    (cost, error) the first is kept.
-    """
-    for col in (cost, error):
-        if col not in df.columns:
-            raise ValueError(f"unknown column {col!r}; columns: {', '.join(map(str, df.columns))}")
-    c = pd.to_numeric(df[cost], errors="coerce")
-    e = pd.to_numeric(df[error], errors="coerce")
-    ok = np.isfinite(c) & np.isfinite(e)
-    d = df[ok].assign(_c=c[ok], _e=e[ok])
-    d = d.sort_values(["_c", "_e"], kind="mergesort")
-    keep, best = [], np.inf
-    for idx, err in zip(d.index, d["_e"], strict=True):
-        if err < best:  # cheapest-first: a row survives only by beating every cheaper one
-            keep.append(idx)
-            best = err
-    return d.loc[keep].drop(columns=["_c", "_e"])
-
-
-def aggregate_seeds(df: pd.DataFrame, error: str = ERROR, costs: Sequence[str] = COSTS):
-    """One row per configuration (every RunConfig field but ``seed``) over its ``ok`` runs,
-    from the seed aggregation (:func:`bench.core._query.aggregate`).
-
-    ``error``: geometric mean over seeds (errors are compared on a log scale); costs: mean;
-    ``n_seeds``: how many ok runs entered; ``diverged``: how many runs did not end ``ok``.
-    """
-    keys = [f for f in field_names() if f != "seed" and f in df.columns]
-    if not len(df):
-        return df.copy()
-    d = df.copy()
-    for col in keys:  # tuples and None group badly: group on their text
-        d[col] = d[col].map(lambda v: v if isinstance(v, int | float | str | bool) else str(v))
-    status = d["status"] if "status" in d else pd.Series("ok", index=d.index)
-    ok = status == "ok"
-    x = pd.to_numeric(d[error], errors="coerce")
-    d["_error"] = x.where(ok & np.isfinite(x) & (x > 0))  # only ok runs with a usable error
-    d["_diverged"] = (~ok).astype(float)
-
-    def agg(column: str) -> pd.DataFrame:
-        return aggregate(d, keys, column, bootstrap=False, sort=False)
-
-    err = agg("_error")
-    out = err[keys].copy()
-    out[error] = err["gmean"]
-    for col in costs:
-        if col in d:
-            d["_cost"] = pd.to_numeric(d[col], errors="coerce").where(ok)
-            out[col] = agg("_cost")["mean"]
-    out["n_seeds"] = err["n"]
-    div = agg("_diverged")  # mean of the 0/1 flags over all the runs of the configuration
-    out["diverged"] = (div["mean"] * div["n"]).round().astype(int)
-    return out
-
-
-def cheapest_within(
-    df: pd.DataFrame,
-    cost: str,
-    error: str = ERROR,
-    tolerance: float = 0.1,
-    by: Sequence[str] = ("system", "k"),
-) -> pd.DataFrame:
-    """Per scene (group of ``by``), the cheapest row whose error <= (1 + tolerance) * best.
-
-    ``best`` is the smallest finite error of the scene. The result has the chosen row's
-    columns plus ``best_error`` and ``error_ratio`` (its error / best). Ties in cost go to the
-    smaller error.
-    """
-    if not (np.isfinite(tolerance) and tolerance >= 0):
-        raise ValueError(f"tolerance must be a finite number >= 0; got {tolerance!r}")
-    for col in (cost, error, *by):
-        if col not in df.columns:
-            raise ValueError(f"unknown column {col!r}; columns: {', '.join(map(str, df.columns))}")
-    c = pd.to_numeric(df[cost], errors="coerce")
-    e = pd.to_numeric(df[error], errors="coerce")
-    ok = np.isfinite(c) & np.isfinite(e)
-    d = df[ok].assign(_c=c[ok], _e=e[ok])
-    out = []
-    for _, g in d.groupby(list(by), dropna=False, sort=True):
-        best = g["_e"].min()
-        cand = g[g["_e"] <= (1.0 + tolerance) * best]
-        pick = cand.sort_values(["_c", "_e"], kind="mergesort").iloc[0]
-        rec = pick.drop(labels=["_c", "_e"]).to_dict()
-        rec["best_error"] = float(best)
-        rec["error_ratio"] = float(pick["_e"] / best) if best > 0 else 1.0
-        out.append(rec)
-    return pd.DataFrame(out)
-
-
 def label(df: pd.DataFrame) -> pd.Series:
     """A short text per configuration: ``rk4x2``, ``adaptive@1e-09``, ``w256``, ``s3000``..."""
 
@@ -462,17 +350,13 @@ def tradeoff_section(results_dir="results", profile: str | None = None) -> str:
 
 def tradeoff_figure(results_dir="results", profile: str | None = None) -> list[Path]:
     """Error vs rollout cost and vs training cost per scene, each model's Pareto front drawn."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     runs, _ = _runs(results_dir, profile)
     if not len(runs):
         return []
     agg = aggregate_seeds(runs)
     scenes = sorted(agg["system"].unique())
-    fig, axes = plt.subplots(len(scenes), 2, figsize=(11, 4 * len(scenes)), squeeze=False)
+    fig, axes = subplots(len(scenes), 2, figsize=(11, 4 * len(scenes)), squeeze=False)
     for i, scene in enumerate(scenes):
         d = agg[agg["system"] == scene]
         for j, cost in enumerate(("rollout_seconds_per_traj", "train_seconds")):

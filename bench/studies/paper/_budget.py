@@ -35,8 +35,8 @@ PAPER_EXPERIMENTS: tuple[Experiment, ...] = (
 
 # Seconds of run time (``wall_seconds``: dataset, compile, training, test rollouts and the
 # learning-curve checkpoints) of one run at the quick profile, split as (training, everything
-# else), measured in the quick ``make bench`` of 2026-11-22 with checkpoints (commit bb0a68e,
-# results/runs.parquet: means over the 1000-step runs; 2-core machine, 2 workers). Keys are
+# else), measured in a quick ``make bench`` with checkpoints (results/runs.parquet: means
+# over the 1000-step runs; 2-core machine, 2 workers). Keys are
 # (model, system); (model, None) applies to any system.
 WALL_S: dict[tuple[str, str | None], tuple[float, float]] = {
     ("node", "chain_pendulum"): (3.1, 6.2),
@@ -75,21 +75,21 @@ MS_PER_STEP = {
 }
 
 
-# The stability study at quick in 2 processes (`make bench` of bb0a68e: 243 s, the long-horizon
-# case alone 210 s; since split by model over the processes), and the trade-off experiment's
-# run time at 2 workers (the quick rows of 5df3845: 274 s of run time, of which issue 20
-# removed HNN+SO's training variants, 106 s, and the spring's evaluations, 78 s).
+# The stability study at quick in 2 processes (a `make bench`: 243 s, the long-horizon case
+# alone 210 s, split by model over the processes), and the trade-off experiment's run time at
+# 2 workers (274 s of run time measured with HNN+SO's training variants, 106 s, and the
+# spring's evaluations, 78 s, which quick no longer runs).
 STABILITY_S = 243.0
 TRADEOFF_S = (274.0 - 106.0 - 78.0) / 2
 # The HNN seed's tasks at quick (derivative targets, not in WALL_S's rollout-trained costs):
 # 79 + 96 + 62 s wall for the three experiments, 2 workers, cold caches
-# (`python -m bench sweep hnn_seed_<system> --profile quick --workers 2`, 2026-11-24)
+# (`python -m bench sweep hnn_seed_<system> --profile quick --workers 2`)
 SEED_TASKS_S = 237.0
-# The pixel experiments at quick (issue 22; claims 11 and 12): 20 runs, 300 s summed
-# wall_seconds at 1 worker with the paper-core campaign paused (2026-11-25), /2 workers
+# The pixel experiments at quick (claims 11 and 12): 20 runs, 300 s summed wall_seconds at 1
+# worker with the paper-core campaign paused, /2 workers
 PIXELS_S = 300.0 / 2
-# The LNN seed's double pendulum at quick (issue 23; claim 9): 15 runs, 294 s of run time at 1
-# worker under load (lnn_seed.MEASURED, 2026-11-25), /2 workers
+# The LNN seed's double pendulum at quick (claim 9): 15 runs, 294 s of run time at 1 worker
+# under load (lnn_seed.MEASURED), /2 workers
 LNN_SEED_S = 294.0 / 2
 
 
@@ -98,7 +98,7 @@ LNN_SEED_S = 294.0 / 2
 # everything else but the data) at the sizes the profiles run, keyed (kind, model, width, batch),
 # kind "pixels" or "derivative". Pixels at paper-core (batch 200, width 200): the difference of
 # 200- and 600-step runs of `expand(..., "paper-core")`'s configs, one process, the campaign
-# paused (2026-11-25); at quick (batch 64, width 128): the quick rows' train_seconds / steps.
+# paused; at quick (batch 64, width 128): the quick rows' train_seconds / steps.
 # The LNN seed: lnn_seed.MEASURED at paper (width 500, 8 chunks of 4 states), the quick rows at
 # quick. Other sizes fall back to WALL_S's scaling (the HNN seed's tasks, whose estimate was
 # 0.14 CPU h against 0.19 h measured at paper-core).
@@ -115,8 +115,8 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("derivative", "node_so", 500, 8): (2.7, 5.0),
     ("derivative", "lnn", 128, 8): (1.9, 16.7),
     ("derivative", "node_so", 128, 8): (0.4, 4.4),
-    # Claim 2 at paper-core (chain-2, width 256, batch 200): the campaign's stored rows of
-    # 2026-11-25, (cpu_seconds - 12 s of evaluation) / 8000 steps; the penalty's Jacobian, and
+    # Claim 2 at paper-core (chain-2, width 256, batch 200): the campaign's stored rows,
+    # (cpu_seconds - 12 s of evaluation) / 8000 steps; the penalty's Jacobian, and
     # its gradient, cost more than the quick-to-paper scaling assumed (550 s a run), and at
     # weight 0 the model skips the penalty (280 s a run)
     ("rollout", "node_so_symreg", 256, 200): (112.0, 12.0),
@@ -129,8 +129,8 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
 DATA_MS_PER_S: dict[tuple[str, int | None], float] = {("chain_pendulum", 2): 0.87}
 
 
-# Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in the run
-# of bb0a68e, one pool per experiment (since then one pool for all, longest runs first).
+# Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in a quick
+# sweep with one pool per experiment (the runner now uses one pool, longest runs first).
 SWEEP_RATIO = 25.2 / 23.4
 
 

@@ -1,35 +1,9 @@
 """A campaign: the runs of a profile (usually the ``paper-core`` selection) swept claim by claim,
 in an order that settles first what the quick profile does not, resumable at any moment.
 
-``paper-core`` (issue 24) is the paper's per-run budget (800 trajectories, 8000 steps, width
-256, batch 200) at 5 seeds on the cells each verdict uses, at k = 2: claims 1, 3, 4 and 6 on the
-shared chain/spring cells (claim 4 with both spring starts), claim 2 on NODE+SO with the
-symplectic penalty in (q, p) on the chain at quick's five weights, claim 5 on the verdict's
-damped cells, claim 7 on the LNN seed's three models, claim 8 on every VIN cell. Extras that no
-verdict reads (the Rayleigh HNN, the learned-map HNN, the LNN with a kinetic prior, the plain
-NODE on damped data, k = 1, 3, 4) stay in the full ``paper`` profile, for a GPU or a cluster.
-
-Order (:data:`CAMPAIGN_CLAIMS`): the claims that the learning-curve study found unsettled at
-quick first (6, 4, 1, 3), then the HNN seed's cheap tasks (10), then 2, 5, 9, 7, 8; within a
-claim, the longest runs first. The replication phase (:func:`replication_order`) takes the
-claims with a signed verdict first: an inconclusive one cannot change by its replication.
-A run that several claims share is counted, and run, with the first of them. Runs are
-content-addressed, so a campaign killed at any moment loses only the runs in flight; run it
-again to resume. ``make paper-core`` then runs the same cells on the
-profile's replication seeds (``seeds=``: 5-9), so that each verdict is judged again on a
-disjoint seed set; :func:`plan` counts that phase apart.
-
-Hours: :func:`bench.studies.paper._budget.run_seconds` estimates a run from the measured quick
-costs scaled to the profile's steps, batch and width, or from costs measured at the run's own
-size for derivative-target and pixel runs (``_budget.STEP_COST``), plus the LNN seed's datasets
-once each (``_budget.data_seconds``). The stored runs' wall seconds are shown beside it but
-not used to rescale it: a run at nice 19 measures the time it waited for the CPU as well (the
-first runs of 2026-11-23 took 13x their estimate while quick sweeps ran). Their CPU time
-(``cpu_seconds``, no waiting) is: the ``cal`` columns rescale the hours left by the measured CPU
-time over the estimate of the stored runs that record it, per claim (the campaign's ratio for a
-claim with none). On 2026-11-25 it was 1.25x over 36 runs, the symplectic runs with a penalty
-1.65x and the one at weight 0 half the estimate; their costs are now measured at paper-core
-(``_budget.STEP_COST``), which brought it to 1.06x.
+Runs are content-addressed, so a killed campaign loses only the runs in flight; the replication
+phase judges each verdict again on the profile's disjoint replication seeds (:func:`plan` counts
+it apart). The selection, the order and how hours are estimated: docs/studies/campaign.md.
 """
 
 from __future__ import annotations
@@ -42,7 +16,7 @@ from ...core._experiments import available, expand, get
 from ...core._store import done_hashes, holds_runs, read_rows
 from ._budget import data_seconds, run_seconds, total_seconds
 
-# The row columns summed as the campaign's training and evaluation time (issue 24's "CPU
+# The row columns summed as the campaign's training and evaluation time (the "CPU
 # hours the campaign took"; wall seconds of each part: at nice 19 they include waiting).
 TRAIN_EVAL_COLUMNS = (
     "train_seconds",
@@ -52,7 +26,7 @@ TRAIN_EVAL_COLUMNS = (
     "checkpoint_seconds",
 )
 
-# The order in which a campaign settles the claims (issue 24).
+# The order in which a campaign settles the claims (docs/studies/campaign.md).
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12)
 
 
@@ -79,7 +53,7 @@ def replication_order(results_dir, profile: str = "paper-core") -> tuple[int, ..
     claims go with the first claim that reads them, as in the first phase."""
     from ...core._query import load_tables
     from ._replication import judge
-    from ._stats import NOT_REPRODUCED, PARTLY, REPRODUCED
+    from .kit import NOT_REPRODUCED, PARTLY, REPRODUCED
 
     signed: set[int] = set()
     if results_dir is not None and holds_runs(Path(results_dir)):
@@ -158,7 +132,7 @@ def plan(
     # training and evaluation: the steps, their compilation, the test rollouts and the
     # learning-curve checkpoints (wall_seconds less the data and setup)
     train_eval = _per_run(stored, TRAIN_EVAL_COLUMNS)
-    # the process CPU time of the runs that record it (cpu_seconds, since 2026-11-25)
+    # the process CPU time of the runs that record it (cpu_seconds; older rows lack it)
     cpu = _per_run(stored, ("cpu_seconds",))
     table = []
     # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose

@@ -12,11 +12,27 @@ PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
 # the parameter-free reference predictors, in the registry's order
 TRIVIAL_MODELS = tuple(models.trivial_models())
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
+# The models' names in tables and figures.
+MODEL_LABELS = {
+    "node": "NODE",
+    "node_so": "NODE+SO",
+    "hnn": "HNN",
+    "hnn_so": "HNN+SO",
+    "hnn_so_diss": "HNN+SO + Rayleigh dissipation",
+    "mixture_hnn": "mixture HNN (paper's damped HNN)",
+    "node_symreg": "NODE + symplectic reg.",
+    "node_so_symreg": "NODE+SO + symplectic reg.",
+    "lnn": "LNN",
+    "vin": "VIN",
+    "resnet": "ResNet",
+    "constant_velocity": "constant velocity (trivial)",
+    "at_rest": "at rest (trivial)",
+}
 # Fig. 3's grid: log-spaced from 1e-6 to 1e3 (REFERENCE.md), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
-# paper-core (issue 24): five points spanning the paper's grid at the paper budget; quick: three
-# of them, 0, the grid's log-midpoint 1e-3 and its largest 1e3 (issue 20 paid for quick's five
-# seeds with the other two: 6 of the 62 CPU minutes of quick's sweep on this machine)
+# paper-core: five points spanning the paper's grid at the paper budget; quick: three of them,
+# 0, the grid's log-midpoint 1e-3 and its largest 1e3 (the other two would cost 6 of the 62 CPU
+# minutes of quick's sweep on this machine, which quick's five seeds need)
 SYMREG_WEIGHTS_CORE = (0.0, 1e-6, 1e-3, 1.0, 1000.0)
 SYMREG_WEIGHTS_QUICK = (0.0, 1e-3, 1000.0)
 UNIT_DOUBLE_PENDULUM = (("lengths", (1.0, 1.0)), ("masses", (1.0, 1.0)))
@@ -25,15 +41,15 @@ SPRING_PAPER = (("initial", "paper"),)
 # system params, so they share config hashes with the trade-off experiment's spring cells and
 # with results older than the "initial" option.
 SPRING_EQUILIBRIUM = ()
-# Claim 7's test set must discriminate (issue 10): on the default data (start speeds up to
+# Claim 7's test set must discriminate: on the default data (start speeds up to
 # 0.9 c, g in [0.5, 2], 3 s windows anywhere in 10 s trajectories) the particle runs near light
 # speed, where the acceleration is tiny, and constant velocity scores like the models (quick,
 # seed 0: constant velocity 0.0072 vs HNN on (q, p) 0.0016 in (q, qdot), 4.4x). Slow particles
 # in a weak field stay in the regime where the relativistic dynamics bend the trajectory:
-# measured on 2026-11-22 at quick (float32, scored in (q, qdot)), constant velocity 0.022 /
-# 0.026 vs HNN on (q, p) 0.00064 / 0.00058 for seeds 0 / 1 (35x, 44x): the >= 10x that the
-# issue asks for. Speeds stay far below c = 1, which is the honest price: the test no longer
-# probes the ultra-relativistic regime, where no model can be told from a trivial one.
+# measured at quick (float32, scored in (q, qdot)), constant velocity 0.022 / 0.026 vs HNN on
+# (q, p) 0.00064 / 0.00058 for seeds 0 / 1 (35x, 44x): at least the 10x that a discriminating
+# test needs. Speeds stay far below c = 1, which is the honest price: the test no longer probes
+# the ultra-relativistic regime, where no model can be told from a trivial one.
 RELATIVISTIC_TEST_PARAMS = (("g_max", 0.3), ("g_min", 0.05), ("v0_max", 0.3))
 
 # Overrides of the profile defaults that every shared cell carries. Empty: the profile

@@ -1,42 +1,10 @@
 """Why the plain (non-separable) HNN on the spring pendulum stalls or diverges at the paper's
 budget (claims 1 and 3): the first training steps of its runs, replayed and probed.
 
-At ``paper-core`` two of the five seeds of ``hnn`` on the Cartesian spring (the paper's start)
-fail: seed 1 ends 8000 steps at the training loss of its first step (0.10), seed 2 diverges at
-step 972 from the same plateau; the GPU rows (``paper``) have one such seed too. This command
-replays the first :data:`PROBE_STEPS` steps of each seed's run through the trainer's own
-compiled block (its model, data, batches, optimizer and cosine schedule over the run's full
-``steps``) and probes the model before the first step and after every block (100 steps), on the
-first :data:`N_STATES` training states:
-
-- ``loss`` (the batch loss of the step at the probe), ``block_loss`` (the mean over the block
-  before it) and ``stored_loss`` (the stored run's loss at that step, from its parameter cache);
-  ``same_as_stored``: for how many leading steps the replay's losses equal the stored run's
-  (relative 1e-6);
-- ``mass_eig_min`` / ``mass_eig_max``: the extreme eigenvalues of the learned mass matrix
-  M(q) = C C^T over the states (close to 1 at initialisation: ``models._mass``);
-- ``motion``: rms of the model's dq/dt over rms of the true dq/dt (= qdot, the state's
-  velocity half); ``dq_error``: rms(dq/dt - qdot) / rms(qdot).
-
-A run is *stalled* when its mean loss over the last probed block is above :data:`STALL_RATIO`
-x its first step's: it has not left the plateau of a model that predicts little motion.
-
-Variants, each in a fresh process on the cores :data:`CORES` gives it (``cores`` column):
-``suite``, the run as the campaign's worker trained it (one core); ``suite_all_cores``, the
-same program on every core (XLA splits reductions over its threads: other rounding, same
-arithmetic); ``reference_init``, the reference code's PyTorch default biases,
-U(-1/sqrt(fan_in), 1/sqrt(fan_in)), on every layer but the mass network's output, as its
-``src/models/hnn.py`` builds them (weights orthogonal with gain 0.5 in both); ``lr_1e-3``, the
-suite's init at lr 1e-3 instead of the paper's 5e-3. Beside the ``suite`` rows the summary
-gives the stored run's outcome (status, final training loss, rollout error) from the results
-folder, by config hash.
-
-The suite's parametrisation differs from the reference's in one place: the reference learns
-M^-1 = L L^T + 1e-4 I (softplus diagonal), the suite M = C C^T (softplus diagonal + 1e-3,
-C close to the identity at initialisation). Both let M grow without bound.
-
-Every number comes from the replayed steps; none is typed in. ``python -m bench
-diagnose-hnn --profile paper-core`` writes ``hnn_diagnosis.csv`` into the results folder.
+Each seed's run is replayed through the trainer's own compiled block for :data:`PROBE_STEPS`
+steps, in several variants (:data:`VARIANTS`), and probed after every block (loss, the learned
+mass matrix's eigenvalues, the predicted motion). ``python -m bench diagnose-hnn`` writes
+``hnn_diagnosis.csv``; the probes and variants: docs/studies/hnn_diagnosis.md.
 """
 
 from __future__ import annotations

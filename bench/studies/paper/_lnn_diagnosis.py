@@ -1,32 +1,10 @@
-"""Why the suite's rollout-trained LNN fails on the unit double pendulum (issue 23): the learned
+"""Why the suite's rollout-trained LNN fails on the unit double pendulum: the learned
 d2L/dqdot2 along rollouts and at initialisation, computed from real (small) runs.
 
-Two parts, one table (``lnn_diagnosis.csv`` in the results folder; ``python -m bench
-diagnose-lnn --profile quick``):
-
-- ``init``: freshly initialised LNNs (width and depth of the profile, the appendix-B
-  initialisation) on the training chunks of the rollout-trained experiment
-  (``double_pendulum_energy``'s data at the profile's sizes), for an ablation over the kinetic
-  prior (0, 0.1), the solve (solve, pinv, regularised) and the activation (softplus, tanh):
-  the share of states whose Hessian H = d2L/dqdot2 is indefinite, its condition number
-  max|eig| / min|eig|, the largest |qddot| of the Euler-Lagrange solve, and whether the step-0
-  training loss (the RK4 rollout of every chunk, as the trainer computes it) is finite;
-- ``trained``: trained LNNs (the rollout-trained one with the suite's kinetic prior 0.1 and the
-  LU solve, the rollout-trained pure LNN with the seed's pseudo-inverse, and the seed's
-  protocol's pure LNN trained on derivatives, ``lnn_seed_double_pendulum``, and the same
-  with the kinetic prior 0.1 and with the notebook's initialisation, appendix B / 200:
-  ablations), per test
-  trajectory along the model's own rollout: the smallest eigenvalue and the largest condition
-  number of H, the first step at which H is indefinite or its condition exceeds
-  :data:`COND_LIMIT` ("singular_step"), and the first step at which the energy error exceeds the
-  potential's range or the state is non-finite ("blowup_step"); ``singular_before_blowup``
-  whether a near-singular H came first, ``coincide`` whether the blow-up follows it within
-  :data:`LAG` steps, ``cond_at_blowup`` / ``min_eig_at_blowup`` H in the steps before it;
-  ``blowup_step_adaptive`` the same blow-up test on a rollout of the same field with an
-  adaptive solver (tsit5, rtol 1e-6, at most :data:`ADAPTIVE_MAX_STEPS` steps; the seed's
-  odeint), which a fixed-step instability of RK4 would not survive.
-
-Every number comes from the trained or initialised models; none is typed in.
+Two parts, one table (``lnn_diagnosis.csv``; ``python -m bench diagnose-lnn``): ``init``, an
+ablation of freshly initialised LNNs (kinetic prior, solve, activation), and ``trained``, the
+Hessian along each trained model's own rollout against the step where it blows up. Every number
+comes from the models; what each column means: docs/studies/lnn_diagnosis.md.
 """
 
 from __future__ import annotations

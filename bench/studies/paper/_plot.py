@@ -10,18 +10,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ...core._query import aggregate, variant  # noqa: E402
-from .._figure import save_figure  # noqa: E402
+from .._figure import save_figure, subplots  # noqa: E402
 from ._common import TRIVIAL_MODELS  # noqa: E402
-from ._stats import MODEL_LABELS  # noqa: E402
+from .kit import MODEL_LABELS  # noqa: E402
 
 SYSTEM_LABELS = {
     "chain_pendulum": "chain pendulum",
@@ -184,7 +179,7 @@ def _model_bars(
         return []
     df = runs.assign(variant=variant(runs))
     ag = _agg(df, ["system", "variant"], metric)
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     groups = _order(df["system"], SYSTEM_ORDER)
     _trivial_lines(ax, trivial, metric, groups)
     _bars(

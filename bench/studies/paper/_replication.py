@@ -23,7 +23,7 @@ import pandas as pd
 
 from ...core._experiments import PROFILES, SELECTIONS, expand, profile_defaults, replication_seeds
 from ._rules import claim_studies, evaluate_claims, restrict_all
-from ._stats import INCONCLUSIVE, Verdict, min_seeds, required_seeds
+from .kit import INCONCLUSIVE, Verdict, min_seeds, required_seeds
 
 DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
 CHANGES_WITHOUT_A_SEED = "inconclusive (changes without a seed)"

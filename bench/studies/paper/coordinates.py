@@ -25,22 +25,20 @@ from ._common import (
 from ._plot import (
     _model_bars,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _models,
-    _verdict,
-    discrimination,
-    learned_cell,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
+    Part,
     Verdict,
-    _at_most,
-    _greater,
-    _n_bad,
-    _paired,
-    _Part,
+    at_most,
+    discrimination,
     gated,
+    greater,
+    learned_cell,
+    n_bad,
+    non_trivial,
+    paired,
     t_bounds,
+    verdict,
 )
 
 
@@ -86,7 +84,7 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
     p = select(plain(runs), loss="l2", ok=False)
     if not len(p):
         return [
-            _verdict(
+            verdict(
                 4, CLAIM_TITLES[4], [], None, 0, "spring edge minus chain edge (log)", variant=v
             )
             for v in ("geometric-mean error, spring from paper", "MSE, spring from paper")
@@ -98,7 +96,7 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
         ds = []
         for k, _ in rows.groupby("k", dropna=False):
             kk = {"k": k} if np.isfinite(k) else {}
-            ds.append(_paired(rows, {**kk, "model": "node_so"}, {**kk, "model": "hnn_so"}, metric))
+            ds.append(paired(rows, {**kk, "model": "node_so"}, {**kk, "model": "hnn_so"}, metric))
         return pd.concat(ds, axis=1).mean(axis=1).dropna() if ds else pd.Series(dtype=float)
 
     chain = p[p["system"] == "chain_pendulum"]
@@ -118,10 +116,10 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
                 for m in ("node_so", "hnn_so")
             ]
             parts = [
-                gated(_greater("chain edge log(NODE+SO/HNN+SO)", dc.to_numpy(), mg), *gates[:2])
+                gated(greater("chain edge log(NODE+SO/HNN+SO)", dc.to_numpy(), mg), *gates[:2])
             ]
             spring_part = gated(
-                _at_most("spring edge log(NODE+SO/HNN+SO)", ds.to_numpy(), mg), *gates[2:]
+                at_most("spring edge log(NODE+SO/HNN+SO)", ds.to_numpy(), mg), *gates[2:]
             )
             if not len(ds):
                 spring_part.note = "no runs"
@@ -129,15 +127,15 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
             both = pd.concat([ds, dc], axis=1).dropna()
             diff = (both.iloc[:, 0] - both.iloc[:, 1]).to_numpy() if len(both) else np.array([])
             hp, hl, hh = t_bounds(diff)
-            head = _Part("spring edge - chain edge", "", hp, hl, hh, len(diff))
+            head = Part("spring edge - chain edge", "", hp, hl, hh, len(diff))
             group = pd.concat([chain, spring])
             discs = [
                 discrimination(chain, "chain_pendulum", metric),
                 discrimination(spring, f"spring_pendulum ({state})", metric),
             ]
-            models = _models(group)
+            models = non_trivial(group)
             out.append(
-                _verdict(
+                verdict(
                     4,
                     CLAIM_TITLES[4],
                     parts,
@@ -145,7 +143,7 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
                     min(len(dc), len(ds)),
                     f"spring edge minus chain edge (log {mlabel})",
                     discs=[d for d in discs if len(group)],
-                    n_failed=_n_bad(models[models["model"].isin(["node_so", "hnn_so"])]),
+                    n_failed=n_bad(models[models["model"].isin(["node_so", "hnn_so"])]),
                     variant=f"{mlabel}, spring from {state}",
                 )
             )

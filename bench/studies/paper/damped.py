@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 
 from ...core._experiments import Experiment, RunConfig
@@ -13,7 +15,7 @@ from ...core._query import (
     variant,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     SPRING_PAPER,
@@ -32,23 +34,22 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _cost_part,
-    _models,
-    _verdict,
-    discrimination,
-    learned_cell,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
+    Part,
     Verdict,
-    _at_most,
-    _cell,
-    _greater,
-    _n_bad,
-    _paired,
-    _paper_spring,
+    at_most,
+    cell_rows,
+    discrimination,
     gated,
+    greater,
+    learned_cell,
+    n_bad,
+    non_trivial,
+    paired,
+    paper_spring,
+    undecided,
+    verdict,
 )
 
 # Extra rows of the damped experiment (no verdict): the Rayleigh HNN runs at seed 0 only at
@@ -103,6 +104,35 @@ DAMPED = Experiment(
 DAMPED_COMPARATOR = "mixture_hnn"
 
 
+def _cost_part(d: pd.DataFrame, so: Mapping, mix: Mapping, system: str) -> Part:
+    """Claim 5 (c): NODE+SO is cheaper than the mixture HNN: the per-seed
+    ``log(train s mixture / train s NODE+SO)`` exceeds the margin (1.25x, a *greater* part);
+    contradicted also when NODE+SO's FLOPs per step (where recorded) are not smaller."""
+    rs, rm = select(d, **so), select(d, **mix)  # finished runs only: cost of a failure is moot
+    name = f"{system}: (c) cost log(train s mixture HNN / NODE+SO)"
+    if not len(rs) or not len(rm) or "train_seconds" not in d:
+        return undecided(name, "no runs")
+    ts = np.log(rs.groupby("seed")["train_seconds"].mean().astype(float))
+    tm = np.log(rm.groupby("seed")["train_seconds"].mean().astype(float))
+    dt = (tm - ts).dropna()
+    flops = math.nan
+    if "flops_per_step" in d:
+        fs = pd.to_numeric(rs["flops_per_step"], errors="coerce").mean()
+        fm = pd.to_numeric(rm["flops_per_step"], errors="coerce").mean()
+        if np.isfinite(fs) and np.isfinite(fm) and fm > 0:
+            flops = fs / fm
+    note = (
+        f"FLOPs/step ratio NODE+SO / mixture {flops:.3g}"
+        if np.isfinite(flops)
+        else "no flops_per_step recorded"
+    ) + f"; params {rs['n_params'].mean():.0f} vs {rm['n_params'].mean():.0f}"
+    part = greater(name, dt.to_numpy(), policy.margin("cost"), note=note)
+    if np.isfinite(flops) and flops >= 1:  # more FLOPs per step: not cheaper, at any margin
+        part.decide = lambda value, alpha: "contradicts"
+        part.status = "contradicts"
+    return gated(part, learned_cell(d, so), learned_cell(d, mix))
+
+
 def claim_5(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """Claim 5 (Fig. 6): damped chain and spring (friction > 0, k = 2 where present), judged
     against the paper's damped HNN (``mixture_hnn``: separable HNN + a free MLP field on the
@@ -121,7 +151,7 @@ def claim_5(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """
     d = select(runs, ok=False, noise=0.0, coordinates="velocity", loss="l2")
     if len(d):
-        d = _paper_spring(d[d["friction"].astype(float) > 0])
+        d = paper_spring(d[d["friction"].astype(float) > 0])
     k = 2 if len(d) and 2 in set(d["k"].dropna()) else None
     base = {"k": k} if k is not None else {}
     parts, heads, seeds, discs, notes = [], [], [], [], []
@@ -131,26 +161,26 @@ def claim_5(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         plain_hnn = {**s, "model": "hnn_so", "dissipation": False}
         mix = {**s, "model": DAMPED_COMPARATOR}
         so = {**s, "model": "node_so"}
-        a = _paired(d, plain_hnn, so)
-        b = _paired(d, so, mix)
+        a = paired(d, plain_hnn, so)
+        b = paired(d, so, mix)
         if not len(a) and not len(b):
             continue
-        sysrows = _cell(d, s)
+        sysrows = cell_rows(d, s)
         discs.append(discrimination(sysrows, system))
-        n_failed += _n_bad(_models(sysrows))
+        n_failed += n_bad(non_trivial(sysrows))
         heads.append(a)
         seeds.append(min(len(a), len(b)))
         err = policy.margin("error")
         gate_so = learned_cell(sysrows, so, f"NODE+SO on {system}")
         gate_mix = learned_cell(sysrows, mix, f"mixture HNN on {system}")
         parts.append(
-            gated(_greater(f"{system}: (a) log(HNN plain / NODE+SO)", a.to_numpy(), err), gate_so)
+            gated(greater(f"{system}: (a) log(HNN plain / NODE+SO)", a.to_numpy(), err), gate_so)
         )
-        pb = _at_most(f"{system}: (b) log(NODE+SO / mixture HNN)", b.to_numpy(), err)
+        pb = at_most(f"{system}: (b) log(NODE+SO / mixture HNN)", b.to_numpy(), err)
         if not len(b):
             pb.note = "no mixture_hnn runs"
         parts.append(gated(pb, gate_so, gate_mix))
-        ray = _paired(d, so, {**s, "model": "hnn_so", "dissipation": True})
+        ray = paired(d, so, {**s, "model": "hnn_so", "dissipation": True})
         if len(ray):
             notes.append(
                 f"{system} extra: log(NODE+SO / HNN+SO + Rayleigh) = {ray.mean():.3g} "
@@ -160,10 +190,10 @@ def claim_5(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     head = None
     if heads:
         h = pd.concat(heads, axis=1).dropna().mean(axis=1).to_numpy()
-        head = _greater("mean log(HNN plain / NODE+SO)", h, policy.margin("error"))
+        head = greater("mean log(HNN plain / NODE+SO)", h, policy.margin("error"))
     if not parts:
-        return _verdict(5, CLAIM_TITLES[5], [], None, 0, "log(err HNN plain / err NODE+SO)")
-    return _verdict(
+        return verdict(5, CLAIM_TITLES[5], [], None, 0, "log(err HNN plain / err NODE+SO)")
+    return verdict(
         5,
         CLAIM_TITLES[5],
         parts,
@@ -185,7 +215,7 @@ def fig_damped(runs, curves, outdir: Path) -> list[Path]:
     systems_ = _order(df["system"], SYSTEM_ORDER)
     members = _order(df["variant"], MODEL_ORDER)
     lab = lambda m: "HNN+SO (no dissipation)" if m == "hnn_so" else _label(m)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4))
+    fig, axes = subplots(1, 3, figsize=(15, 4))
     for ax, metric, ylabel, log in (
         (axes[0], "rollout_error", "rollout error", True),
         (axes[1], "n_params", "parameters", False),

@@ -30,8 +30,8 @@ DOUBLE_PENDULUM_ENERGY = Experiment(
     },
     fixed={"system": "chain_pendulum", "k": 2, "system_params": UNIT_DOUBLE_PENDULUM},
     profile_overrides={"smoke": {"seeds": (0,)}},
-    # not at quick since issue 20 (no verdict; its one LNN run paid for the five seeds);
-    # issue 23 gives the LNN seed's protocol its own experiment
+    # not at quick: no verdict reads it (its one LNN run pays for quick's five seeds); the LNN
+    # seed's protocol has its own experiment (lnn_seed.py)
     profiles=("smoke", "paper"),
     include=_double_pendulum_include,
     claim=None,

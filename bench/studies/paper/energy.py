@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -15,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     PAPER_MODELS,
@@ -36,27 +35,25 @@ from ._plot import (
     _order,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
+from ._rules import CLAIM_TITLES
+from .kit import (
     LINEAR_SLOPE,
-    _curve_slopes,
-    _models,
-    _per_system_disc,
-    _verdict,
-    learned_cell,
-)
-from ._stats import (
     MODEL_LABELS,
+    Part,
     Verdict,
-    _at_most,
-    _band,
-    _n_bad,
-    _paper_spring,
-    _Part,
+    at_most,
+    band,
+    curve_slopes,
     gated,
+    learned_cell,
+    n_bad,
+    non_trivial,
+    paper_spring,
+    per_system_discrimination,
     scored,
     t_bounds_jackknife,
     undecided,
+    verdict,
 )
 
 ENERGY = Experiment(
@@ -79,7 +76,7 @@ ENERGY = Experiment(
 def energy_cells(runs: pd.DataFrame) -> pd.DataFrame:
     """Fig. 2 cells: the four paper models and the trivial predictors on undamped chain/spring
     (the paper's spring initial state where present), any k, L2 loss; failed rows kept."""
-    p = _paper_spring(plain(runs))
+    p = paper_spring(plain(runs))
     return select(
         p,
         ok=False,
@@ -139,16 +136,16 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """
     cells = energy_cells(runs)
     fig2 = cells[cells["model"].isin([*FIG2_NODES, *FIG2_HNNS, *TRIVIAL_MODELS])]
-    models = _models(fig2)
-    discs = _per_system_disc(fig2)
-    n_failed = _n_bad(models)
-    scored_cells = _models(cells).assign(
-        _err=scored(_models(cells), "rollout_error"),
-        _ev=scored(_models(cells), "energy_violation"),
+    models = non_trivial(fig2)
+    discs = per_system_discrimination(fig2)
+    n_failed = n_bad(models)
+    scored_cells = non_trivial(cells).assign(
+        _err=scored(non_trivial(cells), "rollout_error"),
+        _ev=scored(non_trivial(cells), "energy_violation"),
     )
     models = scored_cells[scored_cells["model"].isin([*FIG2_NODES, *FIG2_HNNS])]
     seeds = np.sort(models["seed"].unique()) if len(models) else np.array([])
-    parts: list[_Part] = []
+    parts: list[Part] = []
     notes = []
     head = None
     has = models["model"].isin(FIG2_HNNS) if len(models) else pd.Series(dtype=bool)
@@ -157,7 +154,7 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         factor = f"HNN+SO conserves energy {math.exp(point):.2g}x better at equal error" + (
             f" (90% CI {math.exp(lo):.2g}x to {math.exp(hi):.2g}x)" if np.isfinite(lo) else ""
         )
-        a = _at_most(
+        a = at_most(
             "(a) HNN+SO energy advantage at equal error, -c (log)",
             (point, lo, hi, n),
             policy.margin("energy"),
@@ -180,13 +177,13 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
                 f"extra, not judged: the non-separable HNN's advantage at equal error "
                 f"{math.exp(ep):.2g}x (90% CI {math.exp(el):.2g}x to {math.exp(eh):.2g}x)"
             )
-    sl = _curve_slopes(models, curves, t_min_frac=0.5)
+    sl = curve_slopes(models, curves, t_min_frac=0.5)
     for fam, members in FIG2_FAMILIES.items():
         s = sl[sl["model"].isin(members)] if len(sl) else sl
         if len(s):
             per_seed = s.groupby("seed")["slope"].mean()
             parts.append(
-                _band(
+                band(
                     f"(b) {fam}: late-half slope of log EV vs log t",
                     per_seed.to_numpy(),
                     LINEAR_SLOPE,
@@ -195,13 +192,13 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             )
         elif len(models) and models["model"].isin(members).any():
             parts.append(undecided(f"(b) {fam}: late-half slope", "no curves"))
-    all_sl = _curve_slopes(scored_cells[scored_cells["model"] == "hnn"], curves, t_min_frac=0.5)
+    all_sl = curve_slopes(scored_cells[scored_cells["model"] == "hnn"], curves, t_min_frac=0.5)
     if len(all_sl):
         notes.append(
             f"extra: non-separable HNN late-half slope {all_sl['slope'].mean():.3g} "
             f"(n={len(all_sl)} runs)"
         )
-    return _verdict(
+    return verdict(
         1,
         CLAIM_TITLES[1],
         parts,
@@ -221,7 +218,7 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
     runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4.2))
     markers = {"chain_pendulum": "o", "spring_pendulum": "s"}
     for s, g in trivial.groupby("system"):  # the trivial predictors' error: vertical lines
         for m, gm in g.groupby("model"):

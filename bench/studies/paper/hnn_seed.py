@@ -1,36 +1,9 @@
-"""The HNN seed's own tasks (Greydanus et al. 2019): mass-spring, pendulum and two-body
-from states, its protocol, claim 10's verdict rule, its table beside the seed's numbers and a
-figure.
+"""The HNN seed's own tasks (Greydanus et al. 2019): mass-spring, pendulum and two-body from
+states, claim 10's verdict rule, its table beside the seed's numbers and a figure.
 
-**The seed's protocol** (greydanus/hamiltonian-nn, experiment-*/data.py and train.py), and ours:
-
-- data in canonical coordinates z = (q, p); the seed's H (mass-spring q^2 + p^2, pendulum
-  3 (1 - cos q) + p^2, two-body unit masses, G = 1) and its initial-state draws (``systems``);
-- mass-spring: 50 trajectories of 30 points on [0, 3] s, half for training; pendulum: 50 of 45
-  points on [0, 3] s; both with Gaussian noise 0.1 on q and p. Two-body: 1000 orbits of 50
-  points on [0, 20] s, 80% for training, no noise. Ours: the same counts, grids and noise, the
-  training window of each trajectory starting anywhere in a 20 s trajectory (the seed's start
-  at t = 0; for these periodic systems with uniformly drawn phases the windows are alike), and
-  test windows of about 18 s (mass-spring, pendulum) or 20 s (two-body) from held-out initial
-  states, where the seed rolls out its test states over 20-25 s;
-- training on time-derivative targets (``train_target="derivative"``), MLPs of width 200, two
-  hidden layers, tanh, Adam at lr 1e-3, full batch (two-body: 200 states a step), 2000 steps
-  (two-body 10000). Ours: AdamW with the suite's cosine decay and gradient clipping (the seed:
-  constant lr, L2 weight decay 1e-4); the targets are the true field AT the noisy states (the
-  seed's: at the clean states, so its inputs carry the noise and its targets do not);
-- models: the seed's baseline (``node``, dz/dt = MLP(q, p)) and HNN (``hnn``, J grad H(q, p)),
-  plus the Deconstructing paper's NODE+SO (``node_so`` on (q, qdot)) and the constant-velocity
-  predictor;
-- metrics: the train and test losses on derivatives (``derivative_mse_train/test``) and the
-  energy MSE along rollouts (``energy_mse``: the mean of (H(zhat) - H(z))^2 with the true H),
-  rollouts with RK4 (3/8 rule) on the data grid (two-body: 2 substeps). The seed's pendulum
-  notebook scores energy as q^2 + p^2, the mass-spring's H, not the pendulum's (a defect: ours
-  uses the pendulum's H), so its pendulum number is not the same quantity.
-
-Budgets: ``paper`` (and the ``paper-core`` campaign) is the seed's; ``quick`` the seed's data
-with 1000 steps (the seed: 2000, two-body 10000) and 200 two-body orbits (the seed: 800), inside
-``make bench``; ``smoke`` tiny.
-Pixels (the seed's pixel pendulum, the VIN seed's pixel tasks) are in ``pixels.py``.
+The seed's baseline and HNN (plus NODE+SO) are trained on time-derivative targets in canonical
+coordinates and scored by the energy MSE of their rollouts. The seed's protocol, ours and the
+budgets: docs/studies/hnn_seed.md. Pixels are in ``pixels.py``.
 """
 
 from __future__ import annotations
@@ -45,10 +18,20 @@ from ...core._experiments import Experiment, RunConfig
 from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
-from ._stats import _at_most, _bad, _greater, _paired, condition, gated
+from ._rules import CLAIM_TITLES
+from .kit import (
+    at_most,
+    bad_rows,
+    condition,
+    gated,
+    greater,
+    learned_cell,
+    paired,
+    per_system_discrimination,
+    verdict,
+)
 
 SYSTEMS = ("mass_spring", "pendulum", "two_body")
 # (model, coordinates) of the study: the seed's two models on (q, p), NODE+SO and the trivial
@@ -185,22 +168,22 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     if len(r) and "train_target" in r:
         r = r[r["train_target"] == "derivative"]
     if not len(r):
-        return _verdict(10, CLAIM_TITLES[10], [], None, 0, "log energy-MSE ratio")
+        return verdict(10, CLAIM_TITLES[10], [], None, 0, "log energy-MSE ratio")
     r = r.assign(rollout_error_any=_rollout_any(r))
     parts, seeds, extra = [], [], []
     for system in SYSTEMS:
         rs = r[r["system"] == system]
         if not len(rs):
             continue
-        e = _paired(rs, BASELINE, HNN, "energy_mse")
-        loss = _paired(rs, HNN, BASELINE, "derivative_mse_test")
-        similar = _at_most(
+        e = paired(rs, BASELINE, HNN, "energy_mse")
+        loss = paired(rs, HNN, BASELINE, "derivative_mse_test")
+        similar = at_most(
             f"(b) {system}: log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss")
         )
         mg = TWO_BODY_ENERGY if system == "two_body" else policy.margin("energy", squared=True)
         parts.append(
             gated(
-                _greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
+                greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
                 condition(similar),
                 learned_cell(rs, HNN, f"HNN on {system}", "rollout_error_any"),
                 learned_cell(rs, BASELINE, f"MLP on {system}", "rollout_error_any"),
@@ -208,16 +191,16 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         )
         parts.append(similar)
         seeds.append(min(len(e), len(loss)))
-        so_e = _paired(rs, NODE_SO, HNN, "energy_mse")
-        so_r = _paired(rs, NODE_SO, HNN, "rollout_error_any")
+        so_e = paired(rs, NODE_SO, HNN, "energy_mse")
+        so_r = paired(rs, NODE_SO, HNN, "rollout_error_any")
         if len(so_e) and len(so_r):
             extra.append(
                 f"{system}: NODE+SO / HNN energy MSE {math.exp(so_e.mean()):.3g}x, "
                 f"rollout error {math.exp(so_r.mean()):.3g}x"
             )
     head = parts[0] if parts else None
-    n_failed = int(_bad(r[r["model"] != "constant_velocity"], "energy_mse").sum())
-    return _verdict(
+    n_failed = int(bad_rows(r[r["model"] != "constant_velocity"], "energy_mse").sum())
+    return verdict(
         10,
         CLAIM_TITLES[10],
         parts,
@@ -225,7 +208,9 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         min(seeds) if seeds else 0,
         "log energy-MSE ratio MLP / HNN (mass-spring)",
         ("Deconstructing view, not tested: " + "; ".join(extra)) if extra else "",
-        discs=_per_system_disc(r.assign(rollout_error=r["rollout_error_any"]), "rollout_error"),
+        discs=per_system_discrimination(
+            r.assign(rollout_error=r["rollout_error_any"]), "rollout_error"
+        ),
         n_failed=n_failed,
     )
 
@@ -281,7 +266,7 @@ def section(results_dir) -> str:
     if not len(rows):
         return "\n".join([*lines, "| (no runs) | | | | | | |"])
     for system in SYSTEMS:
-        rs = rows[(rows["system"] == system) & ~_bad(rows, "energy_mse")]
+        rs = rows[(rows["system"] == system) & ~bad_rows(rows, "energy_mse")]
         if not len(rs):
             continue
         cell = {
@@ -307,14 +292,13 @@ def section(results_dir) -> str:
 def figure(results_dir) -> list[Path]:
     """Energy MSE and test loss per task and model (geometric mean, min-max over seeds), the
     seed's numbers as black marks."""
-    import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
-    rows = rows[~_bad(rows, "energy_mse")] if len(rows) else rows
+    rows = rows[~bad_rows(rows, "energy_mse")] if len(rows) else rows
     if not len(rows):
         return []
     models = (("MLP", BASELINE), ("HNN", HNN), ("NODE+SO", NODE_SO))
-    fig, axes = plt.subplots(1, 2, figsize=(9.5, 3.4))
+    fig, axes = subplots(1, 2, figsize=(9.5, 3.4))
     for ax, metric, key, label in (
         (axes[0], "derivative_mse_test", "test_loss", "test loss on dz/dt"),
         (axes[1], "energy_mse", "energy_mse", "energy MSE along rollouts"),

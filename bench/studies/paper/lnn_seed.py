@@ -1,57 +1,10 @@
-"""The LNN seed's double pendulum as the seed ran it (Cranmer et al. 2020): the
-experiment, claim 9's verdict rule, its table beside the seed's numbers, and a figure.
+"""The LNN seed's double pendulum as the seed ran it (Cranmer et al. 2020): the experiment,
+claim 9's verdict rule, its table beside the seed's numbers, and a figure.
 
-**The seed's protocol** (its text, "Training details" and "Double pendulum"; its notebook, see
-``docs/lnn_seed_protocol.md``), and ours:
-
-- system: the unit double pendulum (masses and lengths 1; ``chain_pendulum`` k = 2 with
-  :data:`~._common.UNIT_DOUBLE_PENDULUM`; g = 9.81, the seed's notebook 9.8);
-- training on instantaneous accelerations (``train_target="derivative"``: the loss is the squared
-  error of the model's dz/dt against the true one at each state, the text's "learned the
-  instantaneous accelerations"; dq/dt = qdot is exact in both models, so the loss is half the
-  mean squared qddot error) at random states: ``paper`` 600,000 of them (the text's number; the
-  notebook drew 1,024,000 fresh ones per epoch);
-- **the state distribution** (a decision): ours are the suite's chain-pendulum states, four
-  consecutive points 0.1 s apart (a chunk of four: the dataset's shortest is two, and each
-  trajectory costs 8.7 ms of float64 ground truth, so four states per trajectory quarter the
-  data's cost) at a random time of each of ``n_train`` (paper: 150,000) independent 10 s
-  trajectories
-  started from :meth:`systems.ChainPendulum.sample_initial` (angles and rates about N(0, 1),
-  Cartesian jitter; energies mostly below the max potential energy). The notebook draws
-  q uniform in [0, 2 pi)^2 and qdot uniform in [-10, 10]^2, a box in which most states spin
-  with kinetic energies far above the potential's range; the text does not say. We follow
-  neither exactly: the train and test states then come from one distribution (the notebook's
-  test trajectories are not drawn from its training box either), and the test rollouts stay
-  in the regime where the potential matters for the energy. The test set is 40 trajectories
-  from independently drawn initial states, 100 points (99 steps) of dt = 0.1 s (the text's
-  "40 random initial conditions with 100 time steps each"; the notebook: 1000 steps at fps 10);
-- the network: the text's "four-layer neural network model with 500 hidden units": four
-  weight layers, i.e. three hidden layers of 500 (the notebook's ``layers 3``, 600 units),
-  softplus in both models, the LNN initialised by appendix B (``init="lnn"``, its eq. 3 with
-  n = the width; the notebook then divides every parameter by 200, ``init="lnn_notebook"``,
-  which the diagnosis runs as an ablation, ``python -m bench diagnose-lnn``), the
-  baseline with the suite's orthogonal initialisation (gain 0.5);
-- models: the pure LNN (``lnn`` with ``kinetic_prior`` 0 and the pseudo-inverse solve, the
-  text's "we use the pseudoinverse"), the baseline "that predicts qddot" (``node_so``: dq/dt =
-  qdot, qddot = MLP(cos q, sin q, qdot)), and the constant-velocity predictor;
-- optimiser: batch 32, AdamW from lr 1e-3 with the suite's cosine decay to 1e-6 (the text's
-  "decaying learning rate starting at 1e-3"), weight decay 1e-4, gradient-norm clip 1 (the
-  notebook: L1 loss, OneCycle schedule, batch 512);
-- rollouts: RK4 (3/8 rule) with 10 substeps per 0.1 s step (the notebook: odeint, adaptive);
-- metric: the energy discrepancy |E(zhat) - E(z)| with the TRUE energy, as % of the potential's
-  range max V - min V = 6 g = 58.9 J (``energy_pct_max_pe``: the mean over the 40 trajectories
-  and the 100 steps, the text's "averaging over 40 random initial conditions with 100 time
-  steps"; ``energy_pct_max_pe_last``: at the last step only, the notebook's). The notebook
-  divides by 29.4 J = 3 g (V measured from the pivot), half our range: on the seed's scale our
-  percentages are twice the stored ones (the table shows both).
-
-Budgets: ``paper`` (and ``paper-core``) the seed's 600,000 states, 30,000 steps of batch 32
-(1.6 passes over the data; a batch is 8 chunks = 32 states; the seed's length is not stated;
-the measured cost is in :data:`MEASURED`); ``quick`` 4,000 states (1,000 chunks), width 128,
-15,000 steps at 5 seeds (inside ``make bench``: :data:`MEASURED`); ``smoke`` tiny. At 3000
-steps and 10,000 states (quick's first try) neither model had learned the field (test losses
-6-450, every LNN seed had test rollouts that blew up): quick is about training length more
-than data.
+The pure LNN and a qddot-predicting baseline are trained on instantaneous accelerations at
+random states of the unit double pendulum and scored by the energy error of their rollouts, as
+a share of the potential's range. The seed's protocol, ours, and where they differ (the state
+distribution, the network, the optimiser, the metric's scale): docs/studies/lnn_seed.md.
 """
 
 from __future__ import annotations
@@ -66,11 +19,21 @@ from ...core._experiments import Experiment, RunConfig
 from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
-from ._rules import CLAIM_TITLES, _per_system_disc, _verdict, learned_cell
-from ._stats import _at_most, _bad, _greater, _paired, condition, gated
+from ._rules import CLAIM_TITLES
+from .kit import (
+    at_most,
+    bad_rows,
+    condition,
+    gated,
+    greater,
+    learned_cell,
+    paired,
+    per_system_discrimination,
+    verdict,
+)
 
 # Costs measured on this 2-core machine, the paper-core campaign paused (other
 # sessions' processes running): ms per training step at the paper's size (width 500, 3 hidden
@@ -203,28 +166,28 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """
     r0 = _seed_rows(runs)
     if not len(r0):
-        return _verdict(9, CLAIM_TITLES[9], [], None, 0, "log energy-% ratio baseline / LNN")
-    n_failed = int(_bad(r0[r0["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
+        return verdict(9, CLAIM_TITLES[9], [], None, 0, "log energy-% ratio baseline / LNN")
+    n_failed = int(bad_rows(r0[r0["model"] != "constant_velocity"], "energy_pct_max_pe").sum())
     r = _worst_for_failed(r0)
-    e = _paired(r, BASELINE, LNN, "energy_pct_max_pe")
-    loss = _paired(r, LNN, BASELINE, "derivative_mse_test")
-    similar = _at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), policy.margin("loss"))
+    e = paired(r, BASELINE, LNN, "energy_pct_max_pe")
+    loss = paired(r, LNN, BASELINE, "derivative_mse_test")
+    similar = at_most("(b) log(test loss LNN / baseline)", loss.to_numpy(), policy.margin("loss"))
     energy = gated(
-        _greater("(a) log(energy % baseline / LNN)", e.to_numpy(), policy.margin("energy")),
+        greater("(a) log(energy % baseline / LNN)", e.to_numpy(), policy.margin("energy")),
         condition(similar),
         learned_cell(r0, LNN, "pure LNN"),
         learned_cell(r0, BASELINE, "NODE+SO (baseline)"),
     )
     parts = [energy, similar]
     last = (
-        _paired(r, BASELINE, LNN, "energy_pct_max_pe_last")
+        paired(r, BASELINE, LNN, "energy_pct_max_pe_last")
         if "energy_pct_max_pe_last" in r
         else None
     )
     extra = ""
     if last is not None and len(last):
         extra = f"last-step energy % (the notebook's) baseline / LNN {math.exp(last.mean()):.3g}x"
-    return _verdict(
+    return verdict(
         9,
         CLAIM_TITLES[9],
         parts,
@@ -232,7 +195,7 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         min(len(e), len(loss)),
         "log energy-% ratio baseline / LNN",
         extra,
-        discs=_per_system_disc(r, "rollout_error"),
+        discs=per_system_discrimination(r, "rollout_error"),
         n_failed=n_failed,
     )
 
@@ -289,7 +252,7 @@ def section(results_dir) -> str:
         g = rows[rows["model"] == model]
         if not len(g):
             continue
-        ok = g[~_bad(g, "energy_pct_max_pe")]
+        ok = g[~bad_rows(g, "energy_pct_max_pe")]
         e = pd.to_numeric(ok["energy_pct_max_pe"], errors="coerce")
         rng = f" [{_f(e.min())}, {_f(e.max())}]" if len(e) else ""
         lines.append(
@@ -314,13 +277,12 @@ def _diagnosis(results_dir: Path) -> list[str]:
 def figure(results_dir) -> list[Path]:
     """Energy % of max PE (mean over time) and test loss per model, seeds as dots, the seed's
     numbers (on our scale) as black marks."""
-    import matplotlib.pyplot as plt
 
     rows, _ = _rows(Path(results_dir))
-    rows = rows[~_bad(rows, "energy_pct_max_pe")] if len(rows) else rows
+    rows = rows[~bad_rows(rows, "energy_pct_max_pe")] if len(rows) else rows
     if not len(rows):
         return []
-    fig, axes = plt.subplots(1, 2, figsize=(8, 3.2))
+    fig, axes = subplots(1, 2, figsize=(8, 3.2))
     names = (("lnn", "LNN"), ("node_so", "baseline"), ("constant_velocity", "const. vel."))
     for ax, metric, key, label in (
         (axes[0], "energy_pct_max_pe", "energy_pct", "energy error, % of max V - min V"),

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -15,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     PAPER_MODELS,
@@ -33,23 +32,21 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _models,
-    _verdict,
-    discrimination,
-    learned_cell,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     ALPHA,
     MODEL_LABELS,
+    Part,
     Verdict,
-    _equivalent,
-    _n_bad,
-    _Part,
+    discrimination,
+    equivalent,
     gated,
+    learned_cell,
+    n_bad,
+    non_trivial,
     scored,
     t_bounds,
+    verdict,
 )
 
 
@@ -69,9 +66,9 @@ LOSS = Experiment(
     profile_overrides=shared_overrides(),
     include=_loss_include,
     claim=6,
-    # Not at quick (issue 20): its verdict is inconclusive at every checkpoint of quick's
-    # learning curves, so the five-seed quick budget is spent where it decides; the paper-core
-    # campaign runs claim 6 first (issue 24).
+    # Not at quick: its verdict is inconclusive at every checkpoint of quick's learning curves,
+    # so the five-seed quick budget is spent where it decides; the paper-core campaign runs
+    # claim 6 first.
     profiles=("smoke", "paper", "paper-core"),
 )
 
@@ -143,9 +140,9 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     k = 2 if len(p) and 2 in set(p["k"].dropna()) else None
     if k is not None:
         p = p[p["k"] == k]
-    m = _models(p)
+    m = non_trivial(p)
     if not len(m) or set(m["loss"].unique()) < {"l1", "l2"}:
-        return _verdict(6, CLAIM_TITLES[6], [], None, 0, "log(err L1 / err L2), largest")
+        return verdict(6, CLAIM_TITLES[6], [], None, 0, "log(err L1 / err L2), largest")
     table = m.assign(le=np.log(scored(m))).pivot_table(
         index="seed", columns=["loss", "model"], values="le", aggfunc="mean"
     )
@@ -153,7 +150,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     table = table[[(loss, x) for loss in ("l1", "l2") for x in models]].dropna()
     n = len(table)
     if n == 0 or len(models) < 2:
-        return _verdict(6, CLAIM_TITLES[6], [], None, 0, "log(err L1 / err L2), largest")
+        return verdict(6, CLAIM_TITLES[6], [], None, 0, "log(err L1 / err L2), largest")
     arr = table.to_numpy().reshape(n, 2, len(models))
     err = policy.margin("error")
     trivial = p[p["model"].isin(TRIVIAL_MODELS)]
@@ -168,7 +165,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     }
     parts = [
         gated(
-            _equivalent(
+            equivalent(
                 f"(a) {MODEL_LABELS.get(x, x)}: log(err L1 / err L2)",
                 arr[:, 0, i] - arr[:, 1, i],
                 err,
@@ -190,7 +187,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     )
     if dropped:
         note += f"; left out (did not learn under both losses): {', '.join(dropped)}"
-    order = _Part(
+    order = Part(
         "(b) ordering of the model pairs under L1 and L2",
         status if len(keep) >= 2 else "not tested",
         float(len(kept)),
@@ -208,7 +205,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         else None,
     )
     parts.append(order)
-    return _verdict(
+    return verdict(
         6,
         CLAIM_TITLES[6],
         parts,
@@ -216,7 +213,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         n,
         "log(err L1 / err L2), the model it moves most",
         discs=[discrimination(p, "chain_pendulum")],
-        n_failed=_n_bad(m),
+        n_failed=n_bad(m),
     )
 
 
@@ -226,7 +223,7 @@ def fig_loss(runs, curves, outdir: Path) -> list[Path]:
     if not len(runs):
         return []
     ag = _agg(runs, ["model", "loss"], "rollout_error")
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = subplots(figsize=(7, 4))
     _trivial_lines(ax, trivial)
     _bars(
         ax,

@@ -1,47 +1,10 @@
-"""Learning from pixels (issue 22): the HNN seed's pixel pendulum (claim 11) and the VIN seed's
-pixel forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and a figure
-of predicted frames against the truth.
+"""Learning from pixels: the HNN seed's pixel pendulum (claim 11) and the VIN seed's pixel
+forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and a figure of
+predicted frames against the truth.
 
-**The task** (``observation="pixels"``; data, loss and metrics in :mod:`bench.core._pixels`):
-the suite's ``pendulum`` (H = 3 (1 - cos q) + p^2) rendered to 28 x 28 grey frames
-(``systems.render``), each observation a frame stacked with its successor; starts with |q0| <
-pi/6 and qdot0 ~ U(-1, 1) (the seed's Pendulum-v0 starts); dt = 0.08 s, 32 frames per small-angle
-period as the seed's Pendulum-v0 (dt 0.05 s, its faster pendulum) has. The seed (its text and
-greydanus/hamiltonian-nn experiment-pixels/): 200 trajectories of 100 frames (80/20 split),
-an autoencoder of four fully connected residual relu layers of 200 units each way with a latent
-of 2, the HNN (or the baseline MLP field) of width 200 on the latent, loss = pixel L2 + the
-auxiliary latent loss + 0.1 x the latent dynamics loss, Adam at lr 1e-3, weight decay 1e-5,
-batch 200, 10000 steps. Ours at ``paper``: the same, with AdamW, the suite's cosine decay and
-clipping, and an RK4 step in the dynamics loss (the seed trains with an Euler step and tests
-with RK4).
-
-**Models**: ``models.LatentModel`` = ``models.Autoencoder`` + a registered dynamics model on the
-2-number latent: ``hnn`` (J grad H on z = (q, p)) against the seed's baseline ``node`` (an MLP
-field), and the VIN seed's ``vin`` (velocity Verlet of a learned L on z = (q, qdot)) against its
-``resnet`` (z + MLP(z)). The VIN seed encodes frames to q and infers qdot; ours encodes the
-two-frame observation to (q, qdot) with the HNN seed's auxiliary loss (one encoder for all four
-models).
-
-**Claims.** 11 (HNN seed, Table 1's pixel row): the HNN's energy MSE far below the baseline's
-at comparable losses; ours is the true pendulum energy of the state read off the decoded
-frames (``systems.read_state``), the same quantity for every model. 12 (VIN seed): the VIN's
-pixel forecasts beat the residual network's, over the whole horizon and its last third. Each
-comparison is judged only where its models learned the motion (pixel MSE against holding the
-first frame, at the policy's learning margin squared); see :func:`claim_11`, :func:`claim_12`.
-
-Budgets: ``paper`` the seed's (above; 4 x 5 runs of 10000 steps: about 2.4 CPU hours here, a
-few GPU minutes, see :data:`PAPER_CPU_S`); ``quick`` 40 trajectories of 4 s (50 frames), width
-128, batch 64, 1500 steps, test horizon 60 frames (make bench's budget); ``smoke`` tiny.
-At quick's 1500 steps the latent HNN does not learn the motion (a budget, not a defect; seed 0,
-measured with the HNN's dz/dt against the encoded latent's frame-to-frame motion and the
-Hessian of its H at the latent origin, which should approach diag(omega^2, 1), omega = 2 pi /
-32 per frame): after 1500 steps |f| / |dz| = 0.01, after 3000 0.25, after 5000 1.0 with
-d2H/dq2 = 0.004 (a tenth of omega^2: the arm drifts, pixel MSE 0.035 vs 0.027 holding the first
-frame), after 10000 (the seed's) |f| / |dz| = 1.0, cos 0.98, Hessian diag(0.040, 1.02), pixel
-MSE 0.0066, 4x below holding the first frame (seed 1 at 10000: 0.00046, 62x). An Euler step,
-lr 3e-3, Adam eps 1e-12 or the seed's init (gain 1, nonzero biases: ours is odd in z, so its H
-has zero curvature at the origin at init) do not make 1500 steps enough; the MLP field learns
-in 1500.
+An autoencoder maps two stacked 28 x 28 frames of the pendulum to a 2-number latent on which a
+registered dynamics model (HNN, MLP field, VIN, ResNet) runs. The task, the models, the budgets
+and why quick's latent HNN does not learn the motion: docs/studies/pixels.md.
 """
 
 from __future__ import annotations
@@ -56,19 +19,21 @@ from ...core._experiments import Experiment
 from ...core._query import experiment_rows, pick_profile
 from ...core._store import read_rows
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import new_figure, save_figure
 from . import _vin_diagnosis, policy
-from ._rules import CLAIM_TITLES, _Disc, _verdict
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
+    Discrimination,
     Gate,
-    _at_most,
-    _bad,
-    _greater,
-    _paired,
+    at_most,
+    bad_rows,
     condition,
     gated,
+    greater,
     learned,
+    paired,
     scored,
+    verdict,
 )
 
 # The HNN seed's pixel-pendulum row (greydanus/hamiltonian-nn README, baseline -> HNN)
@@ -148,10 +113,10 @@ def _pixels(runs: pd.DataFrame, models: tuple[str, ...]) -> pd.DataFrame:
     return runs[(runs["observation"] == "pixels") & runs["model"].isin(models)]
 
 
-def _disc(r: pd.DataFrame) -> list[_Disc]:
+def _disc(r: pd.DataFrame) -> list[Discrimination]:
     """Discriminating: the best model (lowest mean log pixel MSE) beats holding the first
     observation by the learning margin (squared: an MSE) on every seed."""
-    ok = r[~_bad(r, "pixel_mse")]
+    ok = r[~bad_rows(r, "pixel_mse")]
     if not len(ok):
         return []
     per = np.log(pd.to_numeric(ok["pixel_mse"])).groupby([ok["model"], ok["seed"]]).mean()
@@ -160,10 +125,10 @@ def _disc(r: pd.DataFrame) -> list[_Disc]:
     triv = np.log(pd.to_numeric(ok["pixel_mse_static"])).groupby(ok["seed"]).mean()
     m = (triv - per.loc[best]).dropna()
     if not len(m):
-        return [_Disc("pixels", "unknown")]
+        return [Discrimination("pixels", "unknown")]
     worst = float(m.min())
     status = "yes" if worst >= policy.margin("learning", squared=True).test else "no"
-    return [_Disc("pixels", status, best, worst, float(np.exp(triv).mean()))]
+    return [Discrimination("pixels", status, best, worst, float(np.exp(triv).mean()))]
 
 
 def _learned(r: pd.DataFrame, model: str) -> Gate:
@@ -189,11 +154,11 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     where both models learned the motion. Failed runs score the worst value. Headline (a)."""
     r = _pixels(runs, ("hnn", "node"))
     if not len(r):
-        return _verdict(11, CLAIM_TITLES[11], [], None, 0, "log energy-MSE ratio")
-    e = _paired(r, BASELINE, HNN, "decoded_energy_mse")
-    loss = _paired(r, HNN, BASELINE, "pixel_loss_test")
-    similar = _at_most("(b) log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss"))
-    energy = _greater(
+        return verdict(11, CLAIM_TITLES[11], [], None, 0, "log energy-MSE ratio")
+    e = paired(r, BASELINE, HNN, "decoded_energy_mse")
+    loss = paired(r, HNN, BASELINE, "pixel_loss_test")
+    similar = at_most("(b) log(test loss HNN / MLP)", loss.to_numpy(), policy.margin("loss"))
+    energy = greater(
         "(a) log(decoded energy MSE MLP / HNN)",
         e.to_numpy(),
         policy.margin("energy", squared=True),
@@ -201,7 +166,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     parts = [gated(energy, condition(similar), _learned(r, "hnn"), _learned(r, "node")), similar]
     drift = pd.to_numeric(r[r["model"] == "hnn"]["latent_energy_drift"], errors="coerce")
     extra = f"HNN latent H drift (range / spread over starts) {np.nanmean(drift):.3g}"
-    return _verdict(
+    return verdict(
         11,
         CLAIM_TITLES[11],
         parts,
@@ -210,7 +175,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         "log decoded-energy-MSE ratio MLP / HNN",
         extra,
         discs=_disc(r),
-        n_failed=int(_bad(r, "decoded_energy_mse").sum()),
+        n_failed=int(bad_rows(r, "decoded_energy_mse").sum()),
     )
 
 
@@ -220,18 +185,18 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     where both models learned the motion. Headline (a)."""
     r = _pixels(runs, ("vin", "resnet"))
     if not len(r):
-        return _verdict(12, CLAIM_TITLES[12], [], None, 0, "log pixel-MSE ratio")
-    a = _paired(r, RESNET, VIN_CELL, "pixel_mse")
-    b = _paired(r, RESNET, VIN_CELL, "pixel_mse_late")
+        return verdict(12, CLAIM_TITLES[12], [], None, 0, "log pixel-MSE ratio")
+    a = paired(r, RESNET, VIN_CELL, "pixel_mse")
+    b = paired(r, RESNET, VIN_CELL, "pixel_mse_late")
     mg = policy.margin("error", squared=True)
     gates = (_learned(r, "vin"), _learned(r, "resnet"))
     parts = [
-        gated(_greater("(a) log(pixel MSE ResNet / VIN)", a.to_numpy(), mg), *gates),
-        gated(_greater("(b) log(late pixel MSE ResNet / VIN)", b.to_numpy(), mg), *gates),
+        gated(greater("(a) log(pixel MSE ResNet / VIN)", a.to_numpy(), mg), *gates),
+        gated(greater("(b) log(late pixel MSE ResNet / VIN)", b.to_numpy(), mg), *gates),
     ]
     drift = pd.to_numeric(r[r["model"] == "vin"]["latent_energy_drift"], errors="coerce")
     extra = f"VIN latent energy drift (range / spread over starts) {np.nanmean(drift):.3g}"
-    return _verdict(
+    return verdict(
         12,
         CLAIM_TITLES[12],
         parts,
@@ -240,7 +205,7 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         "log pixel-MSE ratio ResNet / VIN",
         extra,
         discs=_disc(r),
-        n_failed=int(_bad(r, "pixel_mse").sum()),
+        n_failed=int(bad_rows(r, "pixel_mse").sum()),
     )
 
 
@@ -300,7 +265,7 @@ def section(results_dir) -> str:
 
     seed = {"node": SEED_ENERGY_MSE[0], "hnn": SEED_ENERGY_MSE[1]}
     for model in ("hnn", "node", "vin", "resnet"):
-        g = t[(t["model"] == model) & ~_bad(t, "pixel_mse")]
+        g = t[(t["model"] == model) & ~bad_rows(t, "pixel_mse")]
         if not len(g):
             continue
         cells = [
@@ -333,7 +298,6 @@ def _vin_diagnosis_lines(results_dir: Path) -> list[str]:
 def figure(results_dir) -> list[Path]:
     """Predicted frames against the truth (first test trajectory of the lowest seed, first
     frame of each observation at a few times) and pixel MSE against time per model."""
-    import matplotlib.pyplot as plt
 
     rows, _, _ = _rows(Path(results_dir))
     rows = [
@@ -348,7 +312,7 @@ def figure(results_dir) -> list[Path]:
     picked = list(first.values())
     c0 = picked[0]["curves"]
     n = len(c0["frame_index"])
-    fig = plt.figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
+    fig = new_figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
     # n frame columns, a spacer, the curves
     grid = fig.add_gridspec(len(picked) + 1, n + 2, width_ratios=[1] * n + [0.3, 3.2])
     dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0

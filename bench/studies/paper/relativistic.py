@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -14,7 +13,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     RELATIVISTIC_TEST_PARAMS,
@@ -27,23 +26,21 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _models,
-    _verdict,
-    discrimination,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     Verdict,
-    _at_most,
-    _bad,
-    _cell,
-    _greater,
-    _n_bad,
+    at_most,
+    bad_rows,
+    cell_rows,
+    discrimination,
     gated,
+    greater,
     learned,
+    n_bad,
+    non_trivial,
     scored,
     undecided,
+    verdict,
 )
 
 # (model, coordinates, model_options) of the relativistic test; the extras run at seed 0 only
@@ -139,7 +136,7 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """
     r = select(runs, ok=False, system="relativistic_particle", noise=0.0)
     if not len(r):
-        return _verdict(7, CLAIM_TITLES[7], [], None, 0, "log error ratio, weaker of the two")
+        return verdict(7, CLAIM_TITLES[7], [], None, 0, "log error ratio, weaker of the two")
     sc, note = velocity_scores(r)
     r = r.assign(_s=sc)
     cells = {
@@ -149,9 +146,9 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     }
     logs = {}
     for name, c in cells.items():
-        rows = _cell(r, c)
+        rows = cell_rows(r, c)
         logs[name] = np.log(rows["_s"]).groupby(rows["seed"]).mean() if len(rows) else None
-    t_ok = r["model"].isin(TRIVIAL_MODELS) & ~_bad(r)
+    t_ok = r["model"].isin(TRIVIAL_MODELS) & ~bad_rows(r)
     triv = None
     if t_ok.any():
         lt = np.log(r.loc[t_ok, "_s"]).groupby([r["seed"][t_ok], r["model"][t_ok]]).mean()
@@ -168,7 +165,7 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             d = (logs[a] - logs[b]).dropna().to_numpy()
             parts.append(gated(kind(name, d, err), *gates))
 
-    ratio("(a) log(naive HNN / HNN(q,p))", "naive", "hnn_p", _greater, (hnn_p_learned,))
+    ratio("(a) log(naive HNN / HNN(q,p))", "naive", "hnn_p", greater, (hnn_p_learned,))
     for other, label, fails in (
         ("naive", "(b) naive HNN fails", True),
         ("hnn_p", "(c) HNN(q,p) succeeds", False),
@@ -178,7 +175,7 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             continue
         gain = (triv - logs[other]).dropna().to_numpy()  # log(err trivial / err model)
         name = f"{label}: log(err best trivial / err model) vs {gate_margin.label()}"
-        kind = _at_most if fails else _greater
+        kind = at_most if fails else greater
         parts.append(kind(name, gain, gate_margin))
     # "learns the system as accurately as an HNN trained on canonical coordinates" (seeds/002,
     # line 82): an *at most* part, as every "matches" (a better LNN is also as accurate)
@@ -186,10 +183,10 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         "(e) LNN as accurate as HNN(q,p): log(LNN / HNN(q,p))",
         "lnn",
         "hnn_p",
-        _at_most,
+        at_most,
         (hnn_p_learned,),
     )
-    ratio("(f) LNN beats the naive HNN: log(naive HNN / LNN)", "naive", "lnn", _greater)
+    ratio("(f) LNN beats the naive HNN: log(naive HNN / LNN)", "naive", "lnn", greater)
     head = parts[0] if np.isfinite(parts[0].point) else None
     n = (
         min(
@@ -207,12 +204,12 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         ),
         ("LNN with kinetic prior 0.1", {"model": "lnn", "opt:kinetic_prior": 0.1}),
     ):
-        rows = _cell(r, c)
+        rows = cell_rows(r, c)
         if len(rows):
             extras.append(f"extra {label}: mean err {float(np.exp(np.log(rows['_s']).mean())):.3g}")
     if note:
         extras.append(note)
-    return _verdict(
+    return verdict(
         7,
         CLAIM_TITLES[7],
         parts,
@@ -221,7 +218,7 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         "log error ratio, weaker of the two",
         "; ".join(extras),
         discs=[discrimination(r, "relativistic_particle", scores=r["_s"])],
-        n_failed=_n_bad(_models(r)),
+        n_failed=n_bad(non_trivial(r)),
     )
 
 
@@ -249,7 +246,7 @@ def fig_relativistic(runs, curves, outdir: Path) -> list[Path]:
         return []
     df = runs.assign(variant=_coord_label(runs))
     ag = _agg(df, ["system", "variant"], "score")
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     vs = list(dict.fromkeys(df["variant"]))
     _trivial_lines(a, trivial, "score", ["relativistic_particle"])
     _bars(

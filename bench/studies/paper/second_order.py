@@ -23,22 +23,20 @@ from ._common import (
 from ._plot import (
     _model_bars,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _verdict,
-    discrimination,
-    learned_cell,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     Verdict,
-    _cell,
-    _greater,
-    _n_bad,
-    _paired,
-    _paper_spring,
-    _share,
+    cell_rows,
     condition,
+    discrimination,
     gated,
+    greater,
+    learned_cell,
+    n_bad,
+    paired,
+    paper_spring,
+    share,
+    verdict,
 )
 
 SECOND_ORDER = Experiment(
@@ -77,7 +75,7 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     a *greater* part at the error margin); the chain's share is reported, not judged.
     Headline: (b) on the spring.
     """
-    p = _paper_spring(select(plain(runs), loss="l2", ok=False))
+    p = paper_spring(select(plain(runs), loss="l2", ok=False))
     ks = p["k"].dropna().unique() if "k" in p and len(p) else []
     k = 2 if 2 in set(ks) else None
     base = {"k": k} if k is not None else {}
@@ -88,32 +86,32 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     err = policy.margin("error")
     for system in ("chain_pendulum", "spring_pendulum"):
         s = {**base, "system": system}
-        closed = _paired(p, {**s, "model": "node"}, {**s, "model": "node_so"})
-        gap = _paired(p, {**s, "model": "node"}, {**s, "model": "hnn_so"})
-        hnn = _paired(p, {**s, "model": "hnn"}, {**s, "model": "hnn_so"})
+        closed = paired(p, {**s, "model": "node"}, {**s, "model": "node_so"})
+        gap = paired(p, {**s, "model": "node"}, {**s, "model": "hnn_so"})
+        hnn = paired(p, {**s, "model": "hnn"}, {**s, "model": "hnn_so"})
         both = pd.concat([closed, gap], axis=1, keys=["c", "g"]).dropna()
         if not len(both):
             continue
         n_seeds += [len(both), len(hnn)]
-        rows = _cell(p, s)
-        n_failed += _n_bad(_cell(p, {**s, "model": ["node", "node_so", "hnn", "hnn_so"]}))
+        rows = cell_rows(p, s)
+        n_failed += n_bad(cell_rows(p, {**s, "model": ["node", "node_so", "hnn", "hnn_so"]}))
         discs.append(discrimination(rows, system))
         gate = {m: learned_cell(rows, {"model": m}, f"{m} on {system}") for m in PAPER_MODELS}
         parts.append(
             gated(
-                _greater(f"{system}: (a) log(NODE / NODE+SO)", closed.to_numpy(), err),
+                greater(f"{system}: (a) log(NODE / NODE+SO)", closed.to_numpy(), err),
                 gate["node"],
                 gate["node_so"],
             )
         )
         parts.append(
             gated(
-                _greater(f"{system}: (a) log(HNN / HNN+SO)", hnn.to_numpy(), err),
+                greater(f"{system}: (a) log(HNN / HNN+SO)", hnn.to_numpy(), err),
                 gate["hnn"],
                 gate["hnn_so"],
             )
         )
-        share = _share(
+        share_part = share(
             f"{system}: (b) share of the gap closed by SO",
             both["c"].to_numpy(),
             both["g"].to_numpy(),
@@ -123,19 +121,19 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         )
         if system not in SHARE_SYSTEMS:
             notes.append(
-                f"{system}: (b) share {share.point:.3g} reported, not judged (the paper "
+                f"{system}: (b) share {share_part.point:.3g} reported, not judged (the paper "
                 "concedes a gap in non-Cartesian coordinates)"
             )
             continue
-        advantage = _greater(f"{system}: HNN+SO beats NODE (log(NODE / HNN+SO))", both["g"], err)
+        advantage = greater(f"{system}: HNN+SO beats NODE (log(NODE / HNN+SO))", both["g"], err)
         parts.append(advantage)
         parts.append(
-            gated(share, condition(advantage), gate["node"], gate["node_so"], gate["hnn_so"])
+            gated(share_part, condition(advantage), gate["node"], gate["node_so"], gate["hnn_so"])
         )
-        head = share
+        head = share_part
     if not parts:
-        return _verdict(3, CLAIM_TITLES[3], [], None, 0, "fraction of the log gap closed by SO")
-    return _verdict(
+        return verdict(3, CLAIM_TITLES[3], [], None, 0, "fraction of the log gap closed by SO")
+    return verdict(
         3,
         CLAIM_TITLES[3],
         parts,

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -14,7 +14,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     SPRING_PAPER,
@@ -33,22 +33,19 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
-    CLAIM_TITLES,
-    _k,
-    _per_system_disc,
-    _trivial_log,
-    _verdict,
-)
-from ._stats import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     MODEL_LABELS,
     Verdict,
-    _at_most,
-    _n_bad,
-    _paper_spring,
+    at_most,
     gated,
     learned,
+    n_bad,
+    paper_spring,
+    per_system_discrimination,
     scored,
+    trivial_log,
+    verdict,
 )
 
 
@@ -91,15 +88,19 @@ SYMPLECTIC = Experiment(
     },
     include=_symplectic_include,
     claim=2,
-    # Not at quick (2026-11-25, the make bench budget): quick's claim-2 verdict did not
-    # replicate (inconclusive on seeds 0-4, reproduced on 5-9, changed without seed 2), and its
-    # 20 runs were 488 s of run time (~4 min of make bench) that the pixel tasks and claim 9
-    # needed; the paper-core campaign runs claim 2 at five weights (issue 24).
+    # Not at quick (the make bench budget): quick's claim-2 verdict did not replicate
+    # (inconclusive on seeds 0-4, reproduced on 5-9, changed without seed 2), and its 20 runs
+    # were 488 s of run time (~4 min of make bench) that the pixel tasks and claim 9 need; the
+    # paper-core campaign runs claim 2 at five weights.
     profiles=("smoke", "paper", "paper-core"),
 )
 
 
 SYMREG_MODELS = ("node_so_symreg", "node_symreg")
+
+
+def _k(k) -> str:
+    return "-" if k is None or (isinstance(k, float) and math.isnan(k)) else str(int(k))
 
 
 def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
@@ -119,18 +120,18 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     Discrimination: per system, the best regularised model against constant velocity in (q, p).
     """
     p = select(runs, ok=False, coordinates="momentum", noise=0.0, friction=0.0)
-    p = _paper_spring(p)
+    p = paper_spring(p)
     sr = p[p["model"].isin(SYMREG_MODELS)] if len(p) else p
     if not len(sr):
-        return _verdict(2, CLAIM_TITLES[2], [], None, 0, "log(err_0 / err_w), best w")
+        return verdict(2, CLAIM_TITLES[2], [], None, 0, "log(err_0 / err_w), best w")
     rows = pd.concat([sr, p[p["model"].isin(TRIVIAL_MODELS)]])
-    discs = _per_system_disc(rows)
+    discs = per_system_discrimination(rows)
     sr = sr.assign(weight=option(sr, "weight").astype(float), _e=np.log(scored(sr)))
     parts = []
     seeds: set = set()
     for (model, system, k), g in sr.groupby(["model", "system", "k"], dropna=False):
         base = g[g["weight"] == 0].groupby("seed")["_e"].mean()
-        triv = _trivial_log(p[(p["system"] == system) & p["model"].isin(TRIVIAL_MODELS)])
+        triv = trivial_log(p[(p["system"] == system) & p["model"].isin(TRIVIAL_MODELS)])
         gate = learned(
             f"{MODEL_LABELS.get(model, model)} w=0 on {system}", base, triv if len(triv) else None
         )
@@ -138,7 +139,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             d = (base - gw.groupby("seed")["_e"].mean()).dropna()
             seeds |= set(d.index)
             name = f"{model} {system} k={_k(k)} w={w:g}: gain"
-            parts.append(gated(_at_most(name, d.to_numpy(), policy.margin("error")), gate))
+            parts.append(gated(at_most(name, d.to_numpy(), policy.margin("error")), gate))
     best = max(parts, key=lambda q: q.point) if parts else None
     extra = ""
     if "symplectic_error" in sr:
@@ -148,7 +149,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         if ok.sum() > 2:
             r = np.corrcoef(x[ok], y[ok])[0, 1]
             extra = f"corr(log achieved symplectic error, log err) = {r:.2f}"
-    return _verdict(
+    return verdict(
         2,
         CLAIM_TITLES[2],
         parts,
@@ -157,7 +158,7 @@ def claim_2(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         "log(err_0 / err_w) of the best weight",
         extra,
         discs=discs,
-        n_failed=_n_bad(sr),
+        n_failed=n_bad(sr),
         universal=True,  # "negligible even at an optimally chosen strength" (Sec. 4)
     )
 
@@ -169,7 +170,7 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
     if not len(runs):
         return []
     df = runs.assign(weight=option(runs, "weight").astype(float))
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     _trivial_lines(a, trivial)
     _trivial_lines(b, trivial)
     for (s, model), g in df.groupby(["system", "model"]):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import pandas as pd
 
 from ...core._experiments import Experiment, RunConfig
@@ -12,7 +11,7 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     TRIVIAL_MODELS,
@@ -26,24 +25,22 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
-from ._rules import (
+from ._rules import CLAIM_TITLES
+from .kit import (
     BOUNDED_SLOPE,
-    CLAIM_TITLES,
-    _curve_slopes,
-    _models,
-    _verdict,
-    discrimination,
-    learned_cell,
-)
-from ._stats import (
     Verdict,
-    _at_most,
-    _below,
-    _greater,
-    _n_bad,
-    _paired,
+    at_most,
+    below,
+    curve_slopes,
+    discrimination,
     gated,
+    greater,
+    learned_cell,
+    n_bad,
+    non_trivial,
+    paired,
     undecided,
+    verdict,
 )
 
 # Noisy data are at the smallest data size (n_train 8 at every profile), the VIN seed's
@@ -102,9 +99,9 @@ def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """
     v = select(runs, ok=False, system="chain_pendulum", k=1, friction=0.0)
     v = v[v["model"].isin(["vin", "resnet", *TRIVIAL_MODELS])] if len(v) else v
-    if not len(_models(v)):
-        return _verdict(8, CLAIM_TITLES[8], [], None, 0, "log(err ResNet / err VIN), fewest data")
-    n_min = _models(v)["n_train"].min()
+    if not len(non_trivial(v)):
+        return verdict(8, CLAIM_TITLES[8], [], None, 0, "log(err ResNet / err VIN), fewest data")
+    n_min = non_trivial(v)["n_train"].min()
     at_min = v[v["n_train"] == n_min]
     trivial = v[v["model"].isin(TRIVIAL_MODELS)]
     parts, ns = [], []
@@ -119,49 +116,49 @@ def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         ]
 
     vin_gate = None
-    for noise, g in _models(at_min).groupby("noise"):
-        a = _paired(g, {"model": "resnet"}, {"model": "vin"})
-        e = _paired(g, {"model": "resnet"}, {"model": "vin"}, metric="energy_violation")
+    for noise, g in non_trivial(at_min).groupby("noise"):
+        a = paired(g, {"model": "resnet"}, {"model": "vin"})
+        e = paired(g, {"model": "resnet"}, {"model": "vin"}, metric="energy_violation")
         both = gates(g, f"n_train={n_min} noise={noise:g}")
         vin_gate = both[0] if noise == 0 else vin_gate
         label = f"n_train={n_min} noise={noise:g}"
-        pa = gated(_greater(f"(a) {label}: log(err ResNet / VIN)", a.to_numpy(), err), *both)
+        pa = gated(greater(f"(a) {label}: log(err ResNet / VIN)", a.to_numpy(), err), *both)
         parts.append(pa)
         parts.append(
-            gated(_greater(f"(b) {label}: log(EV ResNet / VIN)", e.to_numpy(), energy), *both)
+            gated(greater(f"(b) {label}: log(EV ResNet / VIN)", e.to_numpy(), energy), *both)
         )
         ns.append(len(a))
         if head is None:
             head = pa
     vin_runs = select(at_min, model="vin", noise=0.0)
-    sl = _curve_slopes(vin_runs, curves, t_min_frac=0.5)
+    sl = curve_slopes(vin_runs, curves, t_min_frac=0.5)
     if len(sl):
         ps = sl.groupby("seed")["slope"].mean().to_numpy()
-        c = _below(
+        c = below(
             "(c) VIN late slope of log EV vs log t", ps, BOUNDED_SLOPE, policy.margin("slope")
         )
         parts.append(gated(c, vin_gate) if vin_gate is not None else c)
     else:
         parts.append(undecided("(c) VIN late energy slope", "no curves"))
-    clean = _models(v)[_models(v)["noise"] == 0.0]
+    clean = non_trivial(v)[non_trivial(v)["noise"] == 0.0]
     sizes = sorted(clean["n_train"].unique())
     for n, m in zip(sizes, sizes[1:], strict=False):
         vin_n, res_m = {"model": "vin", "n_train": n}, {"model": "resnet", "n_train": m}
-        d = _paired(clean, vin_n, res_m)
+        d = paired(clean, vin_n, res_m)
         name = f"(d) log(err VIN at n_train={n} / ResNet at n_train={m})"
         parts.append(
             gated(
-                _at_most(name, d.to_numpy(), err),
+                at_most(name, d.to_numpy(), err),
                 learned_cell(clean, vin_n, f"vin n_train={n}", trivial=trivial),
                 learned_cell(clean, res_m, f"resnet n_train={m}", trivial=trivial),
             )
         )
     rows = (
-        pd.concat([_models(at_min), trivial]).drop_duplicates("config_hash")
+        pd.concat([non_trivial(at_min), trivial]).drop_duplicates("config_hash")
         if "config_hash" in v
-        else pd.concat([_models(at_min), trivial])
+        else pd.concat([non_trivial(at_min), trivial])
     )
-    return _verdict(
+    return verdict(
         8,
         CLAIM_TITLES[8],
         parts,
@@ -169,7 +166,7 @@ def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         min(ns, default=0),
         "log(err ResNet / err VIN), fewest data",
         discs=[discrimination(rows, f"pendulum n_train={n_min}")],
-        n_failed=_n_bad(_models(v)),
+        n_failed=n_bad(non_trivial(v)),
     )
 
 
@@ -179,7 +176,7 @@ def fig_vin(runs, curves, outdir: Path) -> list[Path]:
     runs, trivial = split_trivial(runs)
     if not len(runs):
         return []
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, (a, b) = subplots(1, 2, figsize=(11, 4))
     _trivial_lines(a, trivial)
     for (m, noise), g in runs.groupby(["model", "noise"]):
         ag = _agg(g, ["n_train"], "rollout_error").sort_values("n_train")

@@ -133,7 +133,7 @@ def run_stability(results_dir="results", profile: str = "quick", cases=None, wor
     results_dir.mkdir(parents=True, exist_ok=True)
     df = to_frame(run_cases(profile, cases, workers=workers))
     df.insert(0, "profile", profile)
-    for name, value in provenance().items():  # versions, backend, device, commit (issue 14)
+    for name, value in provenance().items():  # versions, backend, device, commit
         df[name] = value
     df.to_csv(results_dir / "stability.csv", index=False)
     try:

@@ -1,0 +1,76 @@
+"""Gates: the preconditions of a comparison ("both models learned", "at similar loss").
+
+A part with a closed gate reads *not tested*: it never counts for or against its claim.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from . import policy
+from ._stats import Part
+
+__all__ = ["Gate", "apply_gates", "condition", "gated", "learned"]
+
+
+@dataclass(frozen=True)
+class Gate:
+    """A precondition of a comparison: ``open`` True (met), False (not met: the part it gates
+    reads *not tested*) or None (unknown: no trivial-predictor runs; the part is judged,
+    flagged). ``text`` says what was measured against what."""
+
+    label: str
+    open: bool | None
+    text: str
+
+
+def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared=False) -> Gate:
+    """The learning gate: the model's per-seed log score beats the best trivial predictor's by
+    the policy's learning margin, as a geometric mean over the paired seeds (``squared``: the
+    scores are mean squares, the margin squared). Unknown without paired trivial runs."""
+    mg = policy.margin("learning", squared=squared)
+    if model_log is None or not len(model_log):
+        return Gate(label, None, f"{label} has no runs")
+    if trivial_log is None:
+        return Gate(label, None, f"{label}: no paired trivial-predictor runs")
+    d = (trivial_log - model_log).dropna()
+    d = d[np.isfinite(d)]
+    if not len(d):
+        return Gate(label, None, f"{label}: no paired trivial-predictor runs")
+    ratio = math.exp(float(d.mean()))
+    ok = bool(float(d.mean()) >= mg.test)
+    return Gate(
+        label,
+        ok,
+        f"{label} {'learned' if ok else 'did not learn'}: {ratio:.3g}x below the best trivial "
+        f"predictor (geometric mean over {len(d)} seeds; the gate is {mg.label()})",
+    )
+
+
+def condition(part: Part) -> Gate:
+    """A stated condition of other parts ("at similar loss"): open when ``part`` holds. The
+    part becomes a *condition*: shown, never a finding of its own."""
+    part.role = "condition"
+    return Gate(part.name, part.status == "holds", f"condition {part.name}: {part.status}")
+
+
+def gated(part: Part, *gates: Gate) -> Part:
+    """``part`` judged only where every gate is open (:func:`apply_gates`)."""
+    part.gates = (*part.gates, *gates)
+    return part
+
+
+def apply_gates(parts: list[Part]) -> None:
+    """A part with a closed gate reads *not tested*, its reasons in the note."""
+    for p in parts:
+        closed = [g for g in p.gates if g.open is False]
+        if closed:
+            p.status = "not tested"
+            p.note = "; ".join([*(g.text for g in closed), *([p.note] if p.note else [])])
+        elif any(g.open is None for g in p.gates):
+            unknown = "; ".join(g.text for g in p.gates if g.open is None)
+            p.note = f"{p.note}; gate unknown: {unknown}" if p.note else f"gate unknown: {unknown}"

@@ -1,0 +1,164 @@
+"""The verdict of a claim from its parts: reproduced, partly, not reproduced or inconclusive."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from ._discrimination import Discrimination
+from ._gates import apply_gates
+from ._holm import holm
+from ._seeds import WORST_ERROR, required_seeds
+from ._stats import Part
+
+__all__ = [
+    "INCONCLUSIVE",
+    "NOT_REPRODUCED",
+    "PARTLY",
+    "REPRODUCED",
+    "VERDICTS",
+    "Verdict",
+    "verdict",
+]
+
+
+REPRODUCED = "reproduced"
+
+PARTLY = "partly reproduced"
+
+NOT_REPRODUCED = "not reproduced"
+
+INCONCLUSIVE = "inconclusive"
+
+VERDICTS = (REPRODUCED, PARTLY, NOT_REPRODUCED, INCONCLUSIVE)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of one claim: ``effect`` (meaning in ``effect_name``) with its 95% CI.
+
+    ``variant`` names a sub-verdict (claim 4: metric and spring initial state); ``discriminating``
+    is True/False, or None when no trivial-predictor runs exist; ``n_failed`` counts the runs
+    scored as the worst error; ``pending`` is ``(stored, declared)`` runs of the claim while a
+    campaign (a selection such as ``paper-core``) has not stored them all, else None;
+    ``primary`` is the verdict on the profile's own seeds where the replication checks demoted
+    it to an inconclusive one, with ``readings`` the seed sets' verdicts that did
+    (:func:`bench.studies.paper._replication.judge`), else None and ""."""
+
+    claim: int
+    title: str
+    verdict: str
+    effect: float
+    ci_low: float
+    ci_high: float
+    n_seeds: int
+    detail: str
+    effect_name: str = ""
+    variant: str = ""
+    profile: str | None = None
+    n_failed: int = 0
+    discriminating: bool | None = None
+    parts: tuple = ()  # the tested parts (``Part``), for the report's parts table
+    pending: tuple[int, int] | None = None
+    primary: str | None = None
+    readings: str = ""
+
+    @property
+    def key(self) -> str:
+        return f"{self.claim}" + (f" ({self.variant})" if self.variant else "")
+
+    def as_row(self) -> dict:
+        return {
+            "claim": self.claim,
+            "variant": self.variant,
+            "title": self.title,
+            "verdict": self.verdict,
+            "effect": self.effect,
+            "effect_name": self.effect_name,
+            "ci_low": self.ci_low,
+            "ci_high": self.ci_high,
+            "n_seeds": self.n_seeds,
+            "profile": self.profile,
+            "n_failed": self.n_failed,
+            "discriminating": self.discriminating,
+            "detail": self.detail,
+        }
+
+
+def verdict(
+    claim: int,
+    title: str,
+    parts: list[Part],
+    headline: Part | None,
+    n_seeds: int,
+    effect_name: str,
+    extra: str = "",
+    *,
+    discs: Iterable[Discrimination] = (),
+    n_failed: int = 0,
+    variant: str = "",
+    universal: bool = False,
+) -> Verdict:
+    """Combine a claim's parts. First each part is settled: one tested on fewer seeds than a
+    verdict needs is undecided; one with a closed gate reads *not tested*; Holm's correction
+    runs across the rest; each part gets its margin ranges. Then: *reproduced* when every part
+    holds, *not reproduced* when some contradict and none holds, *partly reproduced* when some
+    hold and some contradict (the claim's separate statements), else *inconclusive*; a part
+    not tested never counts against the claim. Condition parts (``role == "condition"``) are
+    shown, not counted. ``universal``: the parts are instances of one statement over a grid
+    ("no gain at any weight"), so one contradicting instance refutes it (*not reproduced*,
+    never *partly*)."""
+    discs = list(discs)
+    need = required_seeds()
+    for p in parts:  # a part tested on fewer seeds than a verdict needs decides nothing
+        if 0 <= p.n < need and p.status not in ("undecided", "not tested"):
+            p.note = (p.note + "; " if p.note else "") + f"{p.status} on {p.n} < {need} seeds"
+            p.status = "undecided"
+            p.decide = None
+    apply_gates(parts)
+    holm(parts)
+    claim_parts = [p for p in parts if p.role == "part"]
+    statuses = [p.status for p in claim_parts]
+    not_disc = [d for d in discs if d.status == "no"]
+    if discs and all(d.status == "yes" for d in discs):
+        discriminating = True
+    elif not_disc:
+        discriminating = False
+    else:
+        discriminating = None
+    if n_seeds < need or not claim_parts or not_disc:
+        reading = INCONCLUSIVE
+    elif all(s == "holds" for s in statuses):
+        reading = REPRODUCED
+    elif "contradicts" in statuses:
+        reading = PARTLY if "holds" in statuses and not universal else NOT_REPRODUCED
+    else:
+        reading = INCONCLUSIVE
+    detail = "; ".join(p.text() for p in parts) or "no runs"
+    if not_disc:
+        detail = f"NOT DISCRIMINATING ({'; '.join(d.text() for d in not_disc)}); {detail}"
+    elif discs:
+        detail = f"{detail}; " + "; ".join(d.text() for d in discs)
+    if n_seeds < need and parts:
+        detail = f"fewer than {need} paired seeds or a missing cell; {detail}"
+    if n_failed:
+        detail = f"{detail}; {n_failed} failed/diverged runs scored as error {WORST_ERROR:g}"
+    if extra:
+        detail = f"{detail}; {extra}"
+    h = headline or (parts[0] if parts else None)
+    return Verdict(
+        claim=claim,
+        title=title,
+        verdict=reading,
+        effect=h.point if h else math.nan,
+        ci_low=h.lo if h else math.nan,
+        ci_high=h.hi if h else math.nan,
+        n_seeds=int(n_seeds),
+        detail=detail,
+        effect_name=effect_name,
+        variant=variant,
+        n_failed=int(n_failed),
+        discriminating=discriminating,
+        parts=tuple(parts),
+    )

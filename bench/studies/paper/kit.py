@@ -1,0 +1,154 @@
+"""The study kit: what every claim's rule is built from.
+
+A rule splits its claim into *parts*, each a one-sided t test on paired per-seed values against
+a margin from the policy; *gates* say where a part may be judged at all; :func:`verdict` turns
+the parts into the claim's verdict (Holm's correction across them). A new rule reads::
+
+    from bench.studies.paper.kit import gated, greater, learned_cell, margin, paired, verdict
+
+    node, hnn = {"model": "node"}, {"model": "hnn"}
+    d = paired(runs, node, hnn)  # per seed log(err NODE / err HNN)
+    part = gated(greater("NODE worse than HNN", d, margin("error")), learned_cell(runs, node))
+    return verdict(n, title, [part], part, len(d), "log(err NODE / err HNN)")
+
+Parts (:mod:`._stats`), with m the margin on the test scale (log m for ratios) and [lo, hi]
+the one-sided (1 - alpha) t bounds of the mean effect:
+
+- ``greater``: holds when lo > m, contradicts when hi < m.
+- ``at_most``: holds when hi < m, contradicts when lo > m.
+- ``equivalent`` (TOST): holds when -m < lo and hi < m, contradicts when the interval is outside.
+- ``band``: centre c, holds when c - m < lo and hi < c + m; ``below``: holds when hi < c + m.
+- ``share``: per seed closed - s * gap > 0 at the share margin s ("most of the gap").
+- ``undecided``: a part with nothing to test.
+
+Gates (:mod:`._gates`): ``learned`` (the model beats the best trivial predictor by the learning
+margin), ``condition`` (a stated condition of other parts, "at similar loss"), ``gated``.
+
+Per-seed values (:mod:`._seeds`): ``scored`` (failed runs at the worst error), ``cell_rows``,
+``log_per_seed``, ``paired`` (per seed log(metric A / metric B)), ``curve_slopes``.
+
+Verdict (:mod:`._verdict`, :mod:`._holm`): ``verdict`` is *reproduced* when every part holds,
+*partly reproduced* when some hold and some are contradicted, *not reproduced* when some are
+contradicted and none holds, else *inconclusive*; ``holm`` corrects both directions.
+
+Policy (:mod:`.policy`): ``margin(quantity)``, ``stated(quantity, value, quote, source)``,
+``POLICY``: one margin per quantity, larger only where the paper states a number.
+"""
+
+from __future__ import annotations
+
+from ._common import MODEL_LABELS, TRIVIAL_MODELS
+from ._discrimination import (
+    TRIVIAL_FACTOR,
+    Discrimination,
+    discrimination,
+    learned_cell,
+    non_trivial,
+    per_system_discrimination,
+    succeeds,
+    trivial_log,
+)
+from ._gates import Gate, apply_gates, condition, gated, learned
+from ._holm import holm, margin_ranges
+from ._seeds import (
+    BOUNDED_SLOPE,
+    LINEAR_SLOPE,
+    MIN_SEEDS,
+    WORST_ERROR,
+    bad_rows,
+    cell_rows,
+    curve_slopes,
+    log_per_seed,
+    min_seeds,
+    n_bad,
+    paired,
+    paper_spring,
+    required_seeds,
+    scored,
+)
+from ._stats import (
+    ALPHA,
+    Part,
+    at_most,
+    band,
+    below,
+    equivalent,
+    greater,
+    share,
+    t_bounds,
+    t_bounds_jackknife,
+    undecided,
+)
+from ._verdict import (
+    INCONCLUSIVE,
+    NOT_REPRODUCED,
+    PARTLY,
+    REPRODUCED,
+    VERDICTS,
+    Verdict,
+    verdict,
+)
+from .policy import POLICY, Margin, margin, override, stated
+
+__all__ = [
+    # parts
+    "ALPHA",
+    "Part",
+    "at_most",
+    "band",
+    "below",
+    "equivalent",
+    "greater",
+    "share",
+    "t_bounds",
+    "t_bounds_jackknife",
+    "undecided",
+    # gates
+    "Gate",
+    "apply_gates",
+    "condition",
+    "gated",
+    "learned",
+    "learned_cell",
+    # per-seed values
+    "BOUNDED_SLOPE",
+    "LINEAR_SLOPE",
+    "MIN_SEEDS",
+    "WORST_ERROR",
+    "bad_rows",
+    "cell_rows",
+    "curve_slopes",
+    "log_per_seed",
+    "min_seeds",
+    "n_bad",
+    "paired",
+    "paper_spring",
+    "required_seeds",
+    "scored",
+    # trivial predictors
+    "MODEL_LABELS",
+    "TRIVIAL_FACTOR",
+    "TRIVIAL_MODELS",
+    "Discrimination",
+    "discrimination",
+    "non_trivial",
+    "per_system_discrimination",
+    "succeeds",
+    "trivial_log",
+    # the verdict
+    "INCONCLUSIVE",
+    "NOT_REPRODUCED",
+    "PARTLY",
+    "REPRODUCED",
+    "VERDICTS",
+    "Verdict",
+    "holm",
+    "margin_ranges",
+    "verdict",
+    # the policy
+    "POLICY",
+    "Margin",
+    "margin",
+    "override",
+    "stated",
+]
