@@ -47,7 +47,7 @@ matplotlib.use("Agg")
 from . import energy, symplectic, second_order, coordinates, damped, loss  # noqa: E402
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: E402, F401
 from . import pixels, _hnn_diagnosis  # noqa: E402, F401
-from . import _commands  # noqa: E402, F401 - the paper's verbs
+from . import _commands, _sections  # noqa: E402, F401 - the paper's verbs and report sections
 
 # isort: on
 from ._budget import (  # noqa: E402
