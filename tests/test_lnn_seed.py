@@ -1,4 +1,4 @@
-"""Claim 9 (the LNN seed's double pendulum, issue 23): its declarations, the appendix-B
+"""Claim 9 (the LNN seed's double pendulum): its declarations, the appendix-B
 initialisation against the seed's formula, derivative-target training of the seed's two models
 at a tiny size, the diagnosis quantities against the double pendulum's mass matrix, and the
 verdict rule on synthetic tables built to pass, to fail and to be undecided."""
