@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import signal
 import sys
 import warnings
@@ -29,6 +28,16 @@ from .core._experiments import (
     profile_defaults,
 )
 from .core._runnable import check_runnable
+from .core._studies import commands
+from .studies._options import (
+    check_sweep_args,
+    float_arg,
+    int_arg,
+    run_experiments,
+    seed_list,
+    sweep_options,
+    usable_results,
+)
 
 
 class UsageError(Exception):
@@ -38,29 +47,6 @@ class UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, no usage dump
         raise UsageError(message)
-
-
-def _int(name):
-    def parse(s):
-        try:
-            return int(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be an integer; got {s!r}") from None
-
-    return parse
-
-
-def _float(name):
-    def parse(s):
-        try:
-            v = float(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be a number; got {s!r}") from None
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{name} must be finite; got {s!r}")
-        return v
-
-    return parse
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -85,15 +71,15 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("run", help="one ad-hoc run: print its metrics and store its row")
     r.add_argument("--system", required=True)
-    r.add_argument("--k", type=_int("k"), default=None)
-    r.add_argument("--friction", type=_float("friction"), default=0.0)
+    r.add_argument("--k", type=int_arg("k"), default=None)
+    r.add_argument("--friction", type=float_arg("friction"), default=0.0)
     r.add_argument("--model", default="node")
-    r.add_argument("--seed", type=_int("seed"), default=0)
+    r.add_argument("--seed", type=int_arg("seed"), default=0)
     r.add_argument("--profile", default="smoke", help=f"one of {', '.join(PROFILES)}")
-    r.add_argument("--width", type=_int("width"))
-    r.add_argument("--depth", type=_int("depth"))
-    r.add_argument("--steps", type=_int("steps"))
-    r.add_argument("--lr", type=_float("lr"))
+    r.add_argument("--width", type=int_arg("width"))
+    r.add_argument("--depth", type=int_arg("depth"))
+    r.add_argument("--steps", type=int_arg("steps"))
+    r.add_argument("--lr", type=float_arg("lr"))
     r.add_argument("--coordinates")
     r.add_argument("--integrator", help="train and eval integrator")
     r.add_argument(
@@ -107,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
     s = sub.add_parser("sweep", help="run an experiment's runs not yet stored")
     s.add_argument("experiment", nargs="?")
     s.add_argument("--all", action="store_true", help="every registered experiment")
-    _sweep_opts(s, default_profile="quick")
+    sweep_options(s, default_profile="quick")
     s.add_argument(
         "--seeds",
         default=None,
@@ -128,72 +114,14 @@ def _parser() -> argparse.ArgumentParser:
 
     sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
     sub.add_parser("report", help="write results/REPORT.md")
-    pf = sub.add_parser("perf", help="performance measurements (bench.studies.perf)")
-    pf.add_argument(
-        "--ensemble",
-        action="store_true",
-        help="runs per minute, ensembles vs one at a time (results/perf_ensemble.csv)",
-    )
-
-    st = sub.add_parser("stability", help="numerical stability cases (results/stability.csv)")
-    st.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
-    st.add_argument("--case", action="append", default=None, help="run only these cases")
-    st.add_argument(
-        "--workers",
-        type=_int("workers"),
-        default=1,
-        help="processes (default 1: in-process; 0: one per core)",
-    )
-
-    es = sub.add_parser(
-        "estimate", help="runs and hours per claim of a profile's campaign (stored, left)"
-    )
-    es.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
-    es.add_argument("--workers", type=_int("workers"), default=2, help="for the wall hours")
-
-    dl_help = (
-        "the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
-        ": <results>/lnn_diagnosis.csv"
-    )
-    dl = sub.add_parser("diagnose-lnn", help=dl_help, description=dl_help)
-    dl.add_argument("--profile", default="quick", help="smoke, quick or paper")
-
-    dh_help = (
-        "the first training steps of the plain HNN on the spring, replayed and probed "
-        "(claims 1 and 3): <results>/hnn_diagnosis.csv"
-    )
-    dh = sub.add_parser("diagnose-hnn", help=dh_help, description=dh_help)
-    dh.add_argument("--profile", default="paper-core", help="smoke, quick, paper or paper-core")
-    dh.add_argument(
-        "--steps", type=_int("steps"), default=None, help="probe steps (default: by profile)"
-    )
-
-    dv_help = (
-        "the latent VIN of the pixel pendulum trained again without the auxiliary latent loss, "
-        "beside the protocol's VIN and ResNet (claim 12): <results>/vin_diagnosis.csv"
-    )
-    dvin = sub.add_parser("diagnose-vin", help=dv_help, description=dv_help)
-    dvin.add_argument("--profile", default="paper-core", help="smoke, quick or paper-core")
-    dvin.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
-
-    cp = sub.add_parser(
-        "campaign",
-        help="sweep a profile's claim experiments claim by claim (make paper-core runs it niced "
-        "in the background)",
-    )
-    _sweep_opts(cp, default_profile="paper-core")
-    cp.add_argument(
-        "--replication",
-        action="store_true",
-        help="on the profile's replication seeds instead of its own "
-        "(quick, paper, paper-core: 5-9)",
-    )
+    for c in commands():  # the verbs the studies register
+        c.add_arguments(sub.add_parser(c.name, help=c.help, description=c.description))
 
     da = sub.add_parser("data", help="export a profile's datasets with a card; verify a folder")
     dsub = da.add_subparsers(dest="data_verb", required=True, parser_class=_Parser)
     de = dsub.add_parser("export", help="the train and test arrays of a system at a profile")
     de.add_argument("system", help="a system name (python -m bench list)")
-    de.add_argument("--k", type=_int("k"), default=None, help="only this k (links/masses)")
+    de.add_argument("--k", type=int_arg("k"), default=None, help="only this k (links/masses)")
     de.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
     de.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
     de.add_argument("--format", default="npz", help="npz (default) or hdf5")
@@ -205,7 +133,7 @@ def _parser() -> argparse.ArgumentParser:
     b = sub.add_parser(
         "bench", help="sweep every experiment, the stability cases, then figures and report"
     )
-    _sweep_opts(b, default_profile="quick")
+    sweep_options(b, default_profile="quick")
     b.add_argument("--skip-stability", action="store_true", help="do not run the stability cases")
     b.add_argument(
         "--no-compare",
@@ -213,40 +141,6 @@ def _parser() -> argparse.ArgumentParser:
         help="do not compare with the reference of the profile (results/reference/<profile>)",
     )
     return p
-
-
-def _sweep_opts(p, default_profile):
-    p.add_argument("--profile", default=default_profile, help=f"one of {', '.join(PROFILES)}")
-    p.add_argument(
-        "--models",
-        default=None,
-        metavar="A,B",
-        help="replace the experiments' trained models with these (built-in or plug-in names); "
-        "their trivial predictors stay",
-    )
-    p.add_argument("--executor", default="local", help="local (default) or ray")
-    p.add_argument("--address", default=None, help="Ray cluster address (ray executor)")
-    p.add_argument(
-        "--workers",
-        type=_int("workers"),
-        default=1,
-        help="local processes (default 1: in-process; 0: one per core)",
-    )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--ensemble",
-        default="auto",
-        help="auto (default: on when jax's backend is an accelerator), on or off: train runs "
-        "that differ only in seed, lr or noise as one vmapped program",
-    )
-
-
-def _check_sweep_args(args):
-    check_choice("profile", args.profile, list(PROFILES))
-    check_choice("executor", args.executor, ["local", "ray"])
-    check_choice("ensemble", args.ensemble, ["auto", "on", "off"])
-    if args.workers < 0:
-        raise ValueError(f"workers must be an integer >= 0; got {args.workers}")
 
 
 def _config_from_args(args) -> RunConfig:
@@ -280,27 +174,16 @@ def _config_from_args(args) -> RunConfig:
     return check_runnable(RunConfig(**kw))
 
 
+# The metrics ``run`` prints, in order (error and diverged_step only where set).
+_ROW_KEYS = (
+    "status error diverged_step rollout_error energy_violation mse valid_time floor "
+    "rollout_error_ref energy_pct_max_pe symplectic_error train_seconds compile_seconds "
+    "rollout_seconds nfe n_params config_hash"
+).split()
+
+
 def _print_row(row: dict) -> None:
-    keys = [
-        "status",
-        "error",
-        "diverged_step",
-        "rollout_error",
-        "energy_violation",
-        "mse",
-        "valid_time",
-        "floor",
-        "rollout_error_ref",
-        "energy_pct_max_pe",
-        "symplectic_error",
-        "train_seconds",
-        "compile_seconds",
-        "rollout_seconds",
-        "nfe",
-        "n_params",
-        "config_hash",
-    ]
-    for k in keys:
+    for k in _ROW_KEYS:
         v = row.get(k)
         if v is None and k in ("error", "diverged_step"):
             continue
@@ -326,7 +209,7 @@ def _cmd_run(args) -> int:
     from .core._runner import sweep
 
     cfg = _config_from_args(args)
-    _usable_results(args)
+    usable_results(args)
     row = sweep([cfg], args.results, experiment="adhoc", profile=args.profile, progress=False)
     if not row:  # already stored: show the stored row
         from .core._store import read_rows
@@ -349,160 +232,22 @@ def _sweep_names(args) -> list[str]:
 
 
 def _do_sweep(args, names) -> int:
-
-    _check_sweep_args(args)
+    check_sweep_args(args)
     if not names:
         print("no experiments yet")
         return 0
-    _usable_results(args)
-    from .studies.paper._budget import run_seconds
+    usable_results(args)
+    from .studies import run_seconds
 
     # longest runs first: the workers finish together
-    seeds = _seed_list(getattr(args, "seeds", None))
-    res = _run_experiments(args, names, order=run_seconds, seeds=seeds)
+    seeds = seed_list(getattr(args, "seeds", None))
+    res = run_experiments(args, names, order=run_seconds, seeds=seeds)
     for name, rows in res.items():
         counts = {}
         for r in rows:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
         print(f"{name}: {len(rows)} new runs {counts}")
     return 0
-
-
-def _seed_list(given: str | None) -> tuple[int, ...] | None:
-    """``--seeds 5,6,7`` as a tuple of integers >= 0 (ValueError in one line otherwise)."""
-    if given is None:
-        return None
-    try:
-        seeds = tuple(int(x) for x in given.split(","))
-    except ValueError:
-        seeds = ()
-    if not seeds or any(x < 0 for x in seeds):
-        raise ValueError(f"--seeds must be comma-separated integers >= 0, got {given!r}")
-    return seeds
-
-
-def _cmd_diagnose_lnn(args) -> int:
-    from .studies.paper._lnn_diagnosis import FILE, diagnose, summary
-
-    results = _usable_results(args)
-    df = diagnose(args.profile, results)
-    print(summary(df))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
-
-
-def _cmd_diagnose_vin(args) -> int:
-    from .studies.paper._vin_diagnosis import FILE, diagnose, summary
-
-    results = _usable_results(args)
-    df = diagnose(args.profile, results, seeds=_seed_list(args.seeds))
-    print(summary(df))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
-
-
-def _cmd_diagnose_hnn(args) -> int:
-    from .core._store import read_rows, rows_frame
-    from .studies.paper._hnn_diagnosis import FILE, diagnose, summary
-
-    results = _usable_results(args)
-    df = diagnose(args.profile, results, steps=args.steps)
-    print(summary(df, rows_frame(read_rows(results))))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
-
-
-def _model_list(args) -> list[str] | None:
-    """``--models a,b`` as a list of registered names (ValueError naming the allowed ones)."""
-    import models
-
-    given = getattr(args, "models", None)
-    if given is None:
-        return None
-    names = [m.strip() for m in given.split(",") if m.strip()]
-    if not names:
-        raise ValueError("--models needs at least one model name")
-    for m in names:
-        check_choice("model", m, models.available())
-    return names
-
-
-def _run_experiments(args, names, *, order, seeds=None) -> dict:
-    """One sweep of ``names`` with the sweep options of ``args`` (sweep, bench, campaign)."""
-    from .core._runner import run_experiments
-
-    return run_experiments(
-        names,
-        args.profile,
-        args.results,
-        seeds=seeds,
-        models=_model_list(args),
-        order=order,
-        executor=args.executor,
-        workers=None if args.workers == 0 else args.workers,
-        address=args.address,
-        progress=not args.no_progress,
-        ensemble=args.ensemble,
-    )
-
-
-def _cmd_estimate(args) -> int:
-    from .core._experiments import SELECTIONS, replication_seeds
-    from .studies.paper._campaign import format_plan, plan, replication_order
-
-    check_choice("profile", args.profile, list(PROFILES))
-    if args.workers < 1:
-        raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
-    df = plan(args.profile, args.results, workers=args.workers)
-    print(f"results: {args.results}")
-    print(format_plan(df, args.profile, args.workers))
-    seeds = replication_seeds(args.profile)
-    if args.profile in SELECTIONS and seeds:  # a campaign's second phase (make paper-core)
-        order = replication_order(args.results, args.profile)
-        rep = plan(
-            args.profile, args.results, workers=args.workers, seeds=seeds, prior=df, order=order
-        )
-        print()
-        print(format_plan(rep, args.profile, args.workers, seeds=seeds))
-    return 0
-
-
-def _cmd_campaign(args) -> int:
-    from .core._experiments import replication_seeds
-    from .studies.paper._campaign import (
-        CAMPAIGN_CLAIMS,
-        campaign_experiments,
-        priority,
-        replication_order,
-    )
-
-    _check_sweep_args(args)
-    if not campaign_experiments(args.profile):
-        raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
-    seeds, order = None, CAMPAIGN_CLAIMS
-    if args.replication:
-        seeds = replication_seeds(args.profile) or None
-        if seeds is None:
-            allowed = [p for p in PROFILES if replication_seeds(p)]
-            check_choice("profile with replication seeds", args.profile, allowed)
-    _usable_results(args)
-    if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
-        order = replication_order(args.results, args.profile)
-    names = campaign_experiments(args.profile, order)
-    which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
-    print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
-    # claim by claim, longest runs first within a claim
-    res = _run_experiments(args, names, order=priority(args.profile, seeds, order), seeds=seeds)
-    for name, rows in res.items():
-        print(f"{name}: {len(rows)} new runs", flush=True)
-    return 0
-
-
-def _usable_results(args) -> Path:
-    """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
-    from .core._store import check_results_dir
-
-    return check_results_dir(args.results, create=True)
 
 
 class NoRuns(Exception):
@@ -560,46 +305,16 @@ def _cmd_report(args) -> int:
     return 0
 
 
-def _cmd_perf(args) -> int:
-    from .studies import perf
-
-    # its own defaults; `python -m bench.perf --help` lists its options; written to --results
-    results = _usable_results(args)
-    ens = getattr(args, "ensemble", False)
-    name = "perf_ensemble.csv" if ens else "perf.csv"
-    out = perf.main([*(["--ensemble"] if ens else []), "--out", str(results / name)])
-    return int(out or 0)
-
-
-def _cmd_stability(args) -> int:
-    from .studies import stability as _stability
-
-    check_choice("profile", args.profile, list(PROFILES))
-    if args.case:
-        for c in args.case:
-            check_choice("stability case", c, list(_stability.CASES))
-    _usable_results(args)
-    from .core._env import cpu_count
-
-    workers = getattr(args, "workers", 1)
-    if workers < 0:
-        raise ValueError(f"workers must be an integer >= 0; got {workers}")
-    workers = cpu_count() if workers == 0 else workers
-    df = _stability.run_stability(Path(args.results), args.profile, args.case, workers=workers)
-    counts = df["outcome"].value_counts().to_dict() if len(df) else {}
-    print(f"stability: {len(df)} rows {counts} -> {Path(args.results) / 'stability.csv'}")
-    return 0
-
-
 def _cmd_bench(args) -> int:
     import time
 
     names = _sweep_names(args)
     if not names:
-        _check_sweep_args(args)
+        check_sweep_args(args)
         print("no experiments yet")
         return 0
     from .core._provenance import provenance
+    from .core._schema import SCHEMA_VERSION
     from .core._store import done_hashes
 
     before = len(done_hashes(Path(args.results)))
@@ -607,9 +322,10 @@ def _cmd_bench(args) -> int:
     _do_sweep(args, names)
     swept = time.time()
     executed = len(done_hashes(Path(args.results))) - before
-    if not args.skip_stability:
+    stability = next((c for c in commands() if c.name == "stability"), None)
+    if not args.skip_stability and stability is not None:
         args.case = None
-        _cmd_stability(args)
+        stability.run(args)
     meta = {
         "start": start,
         "end": time.time(),
@@ -623,7 +339,7 @@ def _cmd_bench(args) -> int:
         "ensemble": args.ensemble,
         "experiments": names,
         "provenance": provenance(),  # this process's versions, device and commit
-        "schema_version": _schema_version(),
+        "schema_version": SCHEMA_VERSION,
     }
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
@@ -638,12 +354,6 @@ def _cmd_bench(args) -> int:
         return 0  # regenerating the reference itself
     args.a, args.b, args.out = str(ref), str(results), str(results / "COMPARE.md")
     return _cmd_compare(args)
-
-
-def _schema_version() -> int:
-    from .core._schema import SCHEMA_VERSION
-
-    return SCHEMA_VERSION
 
 
 def _cmd_data(args) -> int:
@@ -765,17 +475,12 @@ def _main(argv) -> int:
         return _cmd_run(args)
     if args.verb == "sweep":
         return _do_sweep(args, _sweep_names(args))
-    return {
+    verbs = {
         "figures": _cmd_figures,
         "report": _cmd_report,
-        "perf": _cmd_perf,
-        "stability": _cmd_stability,
         "bench": _cmd_bench,
-        "estimate": _cmd_estimate,
-        "campaign": _cmd_campaign,
         "compare": _cmd_compare,
         "data": _cmd_data,
-        "diagnose-lnn": _cmd_diagnose_lnn,
-        "diagnose-hnn": _cmd_diagnose_hnn,
-        "diagnose-vin": _cmd_diagnose_vin,
-    }[args.verb](args)
+    }
+    verbs.update({c.name: c.run for c in commands()})
+    return verbs[args.verb](args)

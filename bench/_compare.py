@@ -1,4 +1,4 @@
-"""``python -m bench compare A B``: two results folders side by side (issue 21).
+"""``python -m bench compare A B``: two results folders side by side.
 
 ``A`` is the reference (e.g. ``results/reference/quick``), ``B`` the runs to check against it
 (e.g. a fresh clone's ``results/own``). Three levels, then a one-line summary:

@@ -1,5 +1,5 @@
 """``python -m bench data export | verify``: a profile's exact training and test arrays, in
-files any framework reads, with a dataset card (issue 21).
+files any framework reads, with a dataset card.
 
 **Which datasets.** Those the profile's runs train and are tested on for the system: every
 experiment is expanded at the profile (:func:`bench.core._experiments.expand`) and the distinct

@@ -12,23 +12,15 @@ import pandas as pd
 
 from .core._experiments import RunConfig, expand
 from .core._query import cell_key, option, params_of, parse_pairs, variant
+from .studies._text import fmt as _fmt
+from .studies._text import md_escape as _md_escape
 from .studies.paper import MODEL_LABELS, TRIVIAL_MODELS, discrimination, velocity_scores
-
-
-def _fmt(x, digits: int = 3) -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "-"
-    return f"{x:.{digits}g}"
 
 
 def _pm(mean, sem) -> str:
     if not np.isfinite(mean):
         return "-"
     return _fmt(mean) if not np.isfinite(sem) else f"{_fmt(mean)} ± {_fmt(sem, 2)}"
-
-
-def _md_escape(text: str) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
 
 
 # Columns that tell the cells of an experiment apart, in display order.

@@ -1,4 +1,4 @@
-"""``bench data export | verify`` and the exported folder's loader (issue 21).
+"""``bench data export | verify`` and the exported folder's loader.
 
 The exported arrays are checked against the datasets the runs of the profile train on (built
 independently through ``RunConfig.dataset_config``), the card's checksums against ``hashlib``

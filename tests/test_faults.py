@@ -193,6 +193,21 @@ def test_unusable_results_folder_one_line_exit_2(tmp_path, capsys):
     assert not list((tmp_path / "res").glob(f"{_store.ROWS}/*"))
 
 
+@pytest.mark.skipif(os.geteuid() == 0, reason="root ignores permissions (see the slow variant)")
+def test_unwritable_results_folder_in_process(tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        code = main(["--results", str(ro), "sweep", "--all", "--profile", "smoke", "--no-progress"])
+    finally:
+        ro.chmod(0o755)
+    line = _one_error_line(capsys.readouterr().err)
+    assert code == 2 and line == f"error: results folder {ro} is not writable: Permission denied"
+    assert list(ro.iterdir()) == []
+
+
+@pytest.mark.slow  # a sweep in a subprocess (as root, without the permission override)
 def test_unwritable_results_folder_subprocess(tmp_path):
     """A folder without write permission. Root ignores permissions, so as root the command
     runs without the CAP_DAC_OVERRIDE capability (``setpriv``), which makes it obey them."""
@@ -294,7 +309,7 @@ def _limited(cmd, kib):
     return ["bash", "-c", f"trap '' XFSZ; ulimit -f {kib} && exec \"$@\"", "limited", *cmd]
 
 
-@pytest.mark.slow  # keeps make test under 10 min on a CPU
+@pytest.mark.slow  # a sweep in a subprocess under a file-size limit
 def test_full_disk_while_a_row_is_written_stops_and_resumes(tmp_path, monkeypatch):
     res = tmp_path / "res"
     env = _env(tmp_path, DECON_TEST_FAKE_SLEEP="0", DECON_TEST_FAKE_PAD_SEED="3")
@@ -423,6 +438,28 @@ def test_orphan_temporaries_of_dead_writers_are_cleared(tmp_path):
     assert _store.tmp_prefix() == f".tmp-{os.getpid()}-"
 
 
+def test_a_sweep_run_again_stores_only_the_missing_rows(tmp_path, monkeypatch, capsys):
+    """In-process, through the CLI: three rows stored, the sweep run again executes the other
+    three and stores each run once."""
+    configs = expand(RESUME, "smoke")
+    res = tmp_path / "results"
+    executed = []
+
+    def fake(config, **kw):
+        executed.append(config.config_hash)
+        return _fake_row(config)
+
+    monkeypatch.setattr(runner, "execute_run", fake)
+    runner.sweep(configs[:3], res, experiment="faults_resume", profile="smoke", progress=False)
+    argv = ["--results", str(res), "sweep", "faults_resume", "--profile", "smoke", "--no-progress"]
+    assert main(argv) == 0
+    assert "faults_resume: 3 new runs {'ok': 3}" in capsys.readouterr().out
+    assert executed == [c.config_hash for c in configs]  # each run once
+    df = pd.read_parquet(res / "runs.parquet")
+    assert sorted(df["config_hash"]) == sorted(c.config_hash for c in configs)
+
+
+@pytest.mark.slow  # two sweeps in subprocesses, one killed
 def test_resume_after_kill(tmp_path):
     """SIGKILL in the middle of a sweep: the next sweep stores exactly the missing rows."""
     log = tmp_path / "executed.log"

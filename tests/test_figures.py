@@ -204,14 +204,14 @@ def test_a_figure_saved_twice_has_the_same_bytes(tmp_path):
 def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
     """*inconclusive* here and *inconclusive (does not replicate)* there agree (neither signs
     the claim, no cause to name); *partly reproduced* against either does not."""
-    from bench._report import _comparison_section
+    from bench.studies.paper._comparison import comparison_section
     from bench.studies.paper.kit import Verdict
 
     def v(verdict, claim=3):
         return Verdict(claim, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p")
 
     others = [("a", "quick", [v("inconclusive (does not replicate)"), v("inconclusive", 1)])]
-    rows = _comparison_section([v("inconclusive"), v("partly reproduced", 1)], "paper", others)
+    rows = comparison_section([v("inconclusive"), v("partly reproduced", 1)], "paper", others)
     row3 = next(r for r in rows if r.startswith("| 3 |"))
     row1 = next(r for r in rows if r.startswith("| 1 |"))
     assert row3.endswith("| yes | - |"), row3
@@ -221,14 +221,14 @@ def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
 def test_a_cause_shared_by_two_compared_folders_is_named_once():
     """Here against two folders that disagree with it for the same reason: the budget cause
     appears once, a failed-run count only where it differs."""
-    from bench._report import _comparison_section
+    from bench.studies.paper._comparison import comparison_section
     from bench.studies.paper.kit import Verdict
 
     def v(verdict, n_failed=0):
         return Verdict(3, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p", n_failed=n_failed)
 
     others = [("a", "paper", [v("partly reproduced", 1)]), ("b", "paper", [v("partly reproduced")])]
-    rows = _comparison_section([v("inconclusive")], "quick", others)
+    rows = comparison_section([v("inconclusive")], "quick", others)
     row3 = next(r for r in rows if r.startswith("| 3 |"))
     cause = row3.rstrip(" |").rsplit(" | ", 1)[1]
     assert cause.count("budget (") == 1, row3
@@ -239,7 +239,7 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
     """Quick's seeds 0-4 read *not reproduced*, as the paper budget does, but its verdict
     changes without a seed: the cause is the reading's stability, and the budget is not named.
     Where the demoted reading's own seeds differ from the other folder, both are named."""
-    from bench._report import _comparison_section
+    from bench.studies.paper._comparison import comparison_section
     from bench.studies.paper._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
     from bench.studies.paper.kit import Verdict
 
@@ -272,7 +272,7 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
             "seeds 0-4: inconclusive; seeds 5-9: partly reproduced",
         ),
     ]
-    rows = _comparison_section(
+    rows = comparison_section(
         [v("not reproduced", 9), v("partly reproduced", 3)],
         "paper-core",
         [("a", "quick", quick)],

@@ -1,4 +1,4 @@
-"""Plug-in models (issue 21): a model from outside the repository becomes a first-class name.
+"""Plug-in models: a model from outside the repository becomes a first-class name.
 
 The throwaway plug-in is installed the way pip leaves a package: its module and a
 ``.dist-info`` folder with ``entry_points.txt`` in a directory on the path (written by hand
@@ -50,6 +50,7 @@ def _bench(args, site: Path, tmp_path: Path, timeout=300):
     )
 
 
+@pytest.mark.slow  # a training sweep and a report in subprocesses
 def test_an_installed_plugin_trains_beside_the_builtins_and_is_reported(tmp_path):
     site = _install(tmp_path / "site", "throwaway_plugin", "throwaway_so")
     res = tmp_path / "res"
@@ -148,3 +149,20 @@ def test_builtin_names_cannot_be_taken(clean_registry):
     cls = _example_class()
     with pytest.raises(ValueError, match="built-in model"):
         models.register("node_so", cls)
+
+
+def test_a_registered_plugin_is_swept_beside_the_trivial_predictor(
+    clean_registry, tmp_path, monkeypatch
+):
+    """In-process, through the CLI, the runs faked: the plug-in's name replaces the trained
+    models and the experiment's trivial predictor stays."""
+    import bench.core._runner as runner
+    from bench._cli import main
+    from bench.core._record import base_row
+
+    _example_class()
+    monkeypatch.setattr(runner, "execute_run", lambda c, **kw: {**base_row(c), "status": "ok"})
+    argv = ["sweep", "second_order", "--profile", "smoke", "--models", "drag_so", "--no-progress"]
+    assert main(["--results", str(tmp_path), *argv]) == 0
+    runs = pd.read_parquet(tmp_path / "runs.parquet")
+    assert set(runs["model"]) == {"drag_so", "constant_velocity"}

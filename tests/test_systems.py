@@ -115,7 +115,7 @@ def test_unknown_name_suggests_closest():
         ),
     ],
 )
-def test_bad_params(name, params, match):
+def test_bad_params_of_the_paper_systems_raise(name, params, match):
     with pytest.raises(ValueError, match=match):
         systems.make(name, **params)
 

@@ -1,4 +1,4 @@
-"""The HNN seed's systems (issue 22) against closed forms and second derivations: the
+"""The HNN seed's systems against closed forms and second derivations: the
 mass-spring's exact solution and Hamiltonian, the pendulum's Hamiltonian, its small-angle
 period and the chain pendulum's field, two-body circular orbits in closed form, and energy and
 angular momentum kept to 1e-9 over ten orbits of the seed's near-circular draws."""
@@ -95,6 +95,6 @@ def test_two_body_seed_orbits_conserve_energy_and_angular_momentum_over_ten_orbi
         ("two_body", {"k": 2}, "unknown parameter"),
     ],
 )
-def test_bad_params(name, params, match):
+def test_bad_params_of_the_seed_systems_raise(name, params, match):
     with pytest.raises(ValueError, match=match):
         systems.make(name, **params)

@@ -1,4 +1,5 @@
-"""The one registry of studies: name -> experiments, verdict rule, figure and report section.
+"""The one registry of studies (name -> experiments, verdict rule, figure, report section), of
+the command-line verbs they own and of the report sections they add before the experiments'.
 
 A study is a module under ``bench.studies`` (or a third-party module) that declares its
 experiments and calls :func:`register_study` at import. ``bench`` imports ``bench.studies``, so
@@ -10,13 +11,27 @@ here, the first time the registry is read.
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ._experiments import ENTRY_POINT_GROUP, Experiment, load_plugins, register
 
-__all__ = ["ENTRY_POINT_GROUP", "Study", "register_study", "studies"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Command",
+    "ReportContext",
+    "ReportSection",
+    "Study",
+    "commands",
+    "register_command",
+    "register_section",
+    "register_study",
+    "report_sections",
+    "studies",
+]
 
 
 @dataclass(frozen=True)
@@ -66,3 +81,77 @@ def studies() -> list[Study]:
     """The registered studies, in registration order (the report's order)."""
     load_plugins()
     return list(_STUDIES.values())
+
+
+def _no_arguments(parser: argparse.ArgumentParser) -> None:
+    """A verb without options of its own."""
+
+
+@dataclass(frozen=True)
+class Command:
+    """A verb of ``python -m bench`` that a study owns.
+
+    ``add_arguments(parser)`` declares its options on its subparser; ``run(args) -> int`` runs
+    it and returns the exit code (a ValueError is a bad input: one line, exit code 2).
+    ``description`` is the text of ``<verb> --help`` where it differs from none."""
+
+    name: str
+    help: str
+    run: Callable[[argparse.Namespace], int]
+    add_arguments: Callable[[argparse.ArgumentParser], None] = _no_arguments
+    description: str | None = None
+
+
+@dataclass(frozen=True)
+class ReportContext:
+    """What a report section reads: the results folder, its stored tables and profile, the
+    other folders to set beside it (``None``: the report's default), and ``memo``, where the
+    sections of one study share what they computed once."""
+
+    results_dir: Path
+    runs: Any
+    curves: Any
+    profile: str | None
+    compare: tuple[Path, ...] | None = None
+    memo: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ReportSection:
+    """A part of REPORT.md placed after its header and before the experiments' sections:
+    ``render(context) -> list[str]`` returns its Markdown lines."""
+
+    name: str
+    render: Callable[[ReportContext], list[str]]
+
+
+_COMMANDS: dict[str, Command] = {}
+_SECTIONS: dict[str, ReportSection] = {}
+
+
+def register_command(command: Command) -> Command:
+    """Add a verb to the command line (re-registering a name replaces it)."""
+    if not isinstance(command, Command):
+        raise ValueError(f"register_command expects a Command; got {type(command).__name__}")
+    _COMMANDS[command.name] = command
+    return command
+
+
+def commands() -> list[Command]:
+    """The registered verbs, in registration order (their order in ``--help``)."""
+    load_plugins()
+    return list(_COMMANDS.values())
+
+
+def register_section(section: ReportSection) -> ReportSection:
+    """Add a section to the report (re-registering a name replaces it)."""
+    if not isinstance(section, ReportSection):
+        raise ValueError(f"register_section expects a ReportSection; got {type(section).__name__}")
+    _SECTIONS[section.name] = section
+    return section
+
+
+def report_sections() -> list[ReportSection]:
+    """The registered report sections, in registration order (the report's order)."""
+    load_plugins()
+    return list(_SECTIONS.values())

@@ -1,15 +1,19 @@
 """The studies: each paper experiment with its verdict rule and figure, the trade-off, the
 stability study and the learning curves (registered here), and the performance benchmark
-(``perf``, an entry point of its own that pins threads at import, so it is imported only by
-``python -m bench perf``).
+(``perf``: its verb is registered here; its timing modules pin threads at import, so they load
+only when ``python -m bench perf`` measures).
 
 Importing this package registers every built-in study in :mod:`bench.core`'s registry
 (:func:`bench.core.studies`); the order of the imports is the report's order. A study imports
-``bench.core`` and other studies, never the CLI or the report.
+``bench.core`` and other studies, never the CLI or the report. :func:`run_seconds` is the
+suite's estimate of one run's time (the paper budget's cost model): sweeps start the longest
+runs first by it.
 """
 
 from . import paper, tradeoff  # noqa: I001 - registration order
 from . import stability
 from . import learning
+from . import perf
+from .paper._budget import run_seconds
 
-__all__ = ["learning", "paper", "stability", "tradeoff"]
+__all__ = ["learning", "paper", "perf", "run_seconds", "stability", "tradeoff"]

@@ -107,6 +107,8 @@ __all__ = [
     "valid_time",
 ]
 
+from . import _commands  # noqa: E402, F401 - registers `python -m bench stability`
+
 STUDY = register_study(
     Study(
         name="stability",

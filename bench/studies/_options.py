@@ -1,0 +1,141 @@
+"""Command-line options and checks shared by the CLI's verbs and the verbs the studies register.
+
+Here, below the CLI, so that a study's verb parses ``--workers`` or ``--seeds`` and runs a sweep
+the way ``python -m bench sweep`` does without importing the CLI.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..core._experiments import PROFILES, check_choice
+
+__all__ = [
+    "check_sweep_args",
+    "float_arg",
+    "int_arg",
+    "model_list",
+    "run_experiments",
+    "seed_list",
+    "sweep_options",
+    "usable_results",
+]
+
+
+def int_arg(name):
+    """An argparse ``type``: an integer, or ``<name> must be an integer`` in one line."""
+
+    def parse(s):
+        try:
+            return int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be an integer; got {s!r}") from None
+
+    return parse
+
+
+def float_arg(name):
+    """An argparse ``type``: a finite number, or one line saying what ``name`` must be."""
+
+    def parse(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number; got {s!r}") from None
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{name} must be finite; got {s!r}")
+        return v
+
+    return parse
+
+
+def sweep_options(p, default_profile):
+    """The options of every verb that sweeps (sweep, bench, campaign)."""
+    p.add_argument("--profile", default=default_profile, help=f"one of {', '.join(PROFILES)}")
+    p.add_argument(
+        "--models",
+        default=None,
+        metavar="A,B",
+        help="replace the experiments' trained models with these (built-in or plug-in names); "
+        "their trivial predictors stay",
+    )
+    p.add_argument("--executor", default="local", help="local (default) or ray")
+    p.add_argument("--address", default=None, help="Ray cluster address (ray executor)")
+    p.add_argument(
+        "--workers",
+        type=int_arg("workers"),
+        default=1,
+        help="local processes (default 1: in-process; 0: one per core)",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--ensemble",
+        default="auto",
+        help="auto (default: on when jax's backend is an accelerator), on or off: train runs "
+        "that differ only in seed, lr or noise as one vmapped program",
+    )
+
+
+def check_sweep_args(args):
+    """ValueError (one line) for a bad value of the :func:`sweep_options`."""
+    check_choice("profile", args.profile, list(PROFILES))
+    check_choice("executor", args.executor, ["local", "ray"])
+    check_choice("ensemble", args.ensemble, ["auto", "on", "off"])
+    if args.workers < 0:
+        raise ValueError(f"workers must be an integer >= 0; got {args.workers}")
+
+
+def usable_results(args) -> Path:
+    """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
+    from ..core._store import check_results_dir
+
+    return check_results_dir(args.results, create=True)
+
+
+def seed_list(given: str | None) -> tuple[int, ...] | None:
+    """``--seeds 5,6,7`` as a tuple of integers >= 0 (ValueError in one line otherwise)."""
+    if given is None:
+        return None
+    try:
+        seeds = tuple(int(x) for x in given.split(","))
+    except ValueError:
+        seeds = ()
+    if not seeds or any(x < 0 for x in seeds):
+        raise ValueError(f"--seeds must be comma-separated integers >= 0, got {given!r}")
+    return seeds
+
+
+def model_list(args) -> list[str] | None:
+    """``--models a,b`` as a list of registered names (ValueError naming the allowed ones)."""
+    import models
+
+    given = getattr(args, "models", None)
+    if given is None:
+        return None
+    names = [m.strip() for m in given.split(",") if m.strip()]
+    if not names:
+        raise ValueError("--models needs at least one model name")
+    for m in names:
+        check_choice("model", m, models.available())
+    return names
+
+
+def run_experiments(args, names, *, order, seeds=None) -> dict:
+    """One sweep of ``names`` with the :func:`sweep_options` of ``args``."""
+    from ..core._runner import run_experiments as run
+
+    return run(
+        names,
+        args.profile,
+        args.results,
+        seeds=seeds,
+        models=model_list(args),
+        order=order,
+        executor=args.executor,
+        workers=None if args.workers == 0 else args.workers,
+        address=args.address,
+        progress=not args.no_progress,
+        ensemble=args.ensemble,
+    )

@@ -1,0 +1,30 @@
+"""``python -m bench perf``: the performance measurements, written to the results folder."""
+
+from __future__ import annotations
+
+from ...core._studies import Command, register_command
+from .._options import usable_results
+
+
+def _arguments(p):
+    p.add_argument(
+        "--ensemble",
+        action="store_true",
+        help="runs per minute, ensembles vs one at a time (results/perf_ensemble.csv)",
+    )
+
+
+def _run(args) -> int:
+    from ._main import main  # pins the threads: imported only to measure
+
+    # its own defaults; `python -m bench.perf --help` lists its options; written to --results
+    results = usable_results(args)
+    ens = getattr(args, "ensemble", False)
+    name = "perf_ensemble.csv" if ens else "perf.csv"
+    out = main([*(["--ensemble"] if ens else []), "--out", str(results / name)])
+    return int(out or 0)
+
+
+COMMAND = register_command(
+    Command("perf", "performance measurements (bench.studies.perf)", _run, _arguments)
+)
