@@ -22,7 +22,7 @@ _FACTORIES: dict[str, tuple[Callable[..., AbstractSystem], dict]] = {
     "relativistic_particle": (relativistic_particle, {}),
     "damped_chain_pendulum": (chain_pendulum, {"friction": DAMPED_FRICTION}),
     "damped_spring_pendulum": (spring_pendulum, {"friction": DAMPED_FRICTION}),
-    # the HNN seed's tasks (issue 22)
+    # the HNN seed's tasks
     "mass_spring": (mass_spring, {}),
     "pendulum": (pendulum, {}),
     "two_body": (two_body, {}),

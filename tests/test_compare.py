@@ -1,4 +1,4 @@
-"""``python -m bench compare A B`` (issue 21): claims, cells and runs of two results folders.
+"""``python -m bench compare A B``: claims, cells and runs of two results folders.
 
 The folders hold synthetic tables (tests/_synthetic.py: no training), written as a results
 folder without row files (runs.parquet, curves.parquet, bench_meta.json)."""

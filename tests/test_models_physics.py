@@ -410,7 +410,7 @@ def test_canonical_rk4_rollout_conserves_learned_energy(name):
     assert flow > 1e-2 and np.ptp(energy) < 1e-6 * (1 + abs(energy[0])), (flow, energy)
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 @pytest.mark.parametrize("name", ["hnn", "hnn_so"])
 def test_canonical_rollout_adaptive_and_energy(name):
     """Adaptive canonical rollout equals the z-coordinate one to solver tolerance, and the

@@ -47,7 +47,7 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
-    assert bool(l2) == (profile != "quick")  # claim 6 is not run at quick (issue 20)
+    assert bool(l2) == (profile != "quick")  # claim 6 is not run at quick
 
 
 def test_damped_has_plain_mixture_and_rayleigh_hnn():
@@ -132,7 +132,7 @@ def test_smoke_is_small_and_quick_budget_does_not_grow():
     smoke = P.estimate_seconds("smoke")
     assert smoke["runs"] <= 60
     quick = P.estimate_seconds("quick")
-    assert len(E.profile_defaults("quick")[1]) >= 5  # issue 20: five seeds per verdict
+    assert len(E.profile_defaults("quick")[1]) >= 5  # five seeds per verdict
     # `make bench` promises about 30 minutes on 2 cores. With five seeds it does not keep it:
     # the estimator (calibrated on an older CPU, where it over-predicted by 15%) says 34.6 min,
     # and this machine measured 50.6 min under load (docs/measured.md, "Known limits"). This guard

@@ -268,7 +268,7 @@ def test_a_drained_sweep_stores_the_runs_in_flight_and_starts_no_other(tmp_path,
 
 
 # --------------------------------------------------------------------------------- ray
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 @pytest.mark.ray
 def test_ray_two_run_sweep(tmp_path):
     pytest.importorskip("ray")

@@ -82,7 +82,7 @@ def test_unknown_profile_and_case():
 
 
 # ----------------------------------------------------------------------------- physics
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 def test_stiff_rk4_diverges_adaptive_stays_accurate():
     rows = S.case_stiffness(TINY)
     _check_recorded(rows)
@@ -119,7 +119,7 @@ def test_relativistic_roundtrip_float64_exact_to_rounding():
 
 
 def test_float32_velocity_stagnates_near_light_speed():
-    # at v = 0.999 the float32 RK4 velocity never changes (issue 10) while float64's does:
+    # at v = 0.999 the float32 RK4 velocity never changes while float64's does:
     # the case must flag it, so that its float32 "drift" is not read as a measurement
     import systems
     from bench.studies.stability._truth import _relativistic_rk4
@@ -200,7 +200,7 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     assert "## Numerical stability" in text and "stiffness" in text
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 def test_simulate_takes_tolerance_and_solver():
     # the stability study's ground truth and solver variants go through systems' simulate
     import systems

@@ -109,7 +109,7 @@ def test_one_step_is_symplectic_for_the_separable_hnn_mass(method):
     assert float(jnp.max(jnp.abs(phi_x.T @ _j(2) @ phi_x - _j(2)))) > 1e-7
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 def test_learned_h_bounded_over_ten_thousand_steps():
     scene = models.Scene(dof=1, angular=(True,), canonical=True)
     model = models.make("hnn", scene, key=jax.random.PRNGKey(0), width=16, dtype="float64")
@@ -143,7 +143,7 @@ def test_learned_h_bounded_over_ten_thousand_steps():
         pytest.param("implicit_midpoint", "hnn_so", marks=pytest.mark.slow),
     ],
 )
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 def test_gradient_through_implicit_stages_matches_finite_differences(method, name):
     scene = models.Scene(dof=2, angular=(True, True))
     model = models.make(name, scene, key=jax.random.PRNGKey(2), width=8, dtype="float64")

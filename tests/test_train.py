@@ -228,7 +228,7 @@ def _energies(model, zs, args):
     return np.asarray(jax.vmap(lambda z: model.hamiltonian(z, args))(zs))
 
 
-@pytest.mark.slow  # issue 20: make test under 10 min on this CPU
+@pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU
 def test_learned_h_conserved_adaptive(hnn64):
     ts = jnp.linspace(0.0, 10.0, 101)
     zs = rollout(hnn64, Z0_H, ts, NO_ARGS, Integrator("adaptive", rtol=1e-10, atol=1e-12))

@@ -69,7 +69,7 @@ def _schedule(todo: list[RunConfig], order: Callable[[RunConfig], float]) -> lis
     Seeds of one cell started side by side compile the same programs at the same time, each
     before the other has filled the persistent compilation cache: on a cold cache (a fresh
     clone) the second compile is wasted (4 of the 26 CPU minutes of compilation of quick's
-    seeds 0-4 in the sweep of 8a3bc90). Sorting is stable: equal keys keep their order.
+    seeds 0-4 in one measured sweep). Sorting is stable: equal keys keep their order.
     A key that is a tuple (``bench.studies.paper._campaign.priority``: claim rank, seconds)
     keeps its leading parts first: the rule applies within each of their groups.
     """

@@ -159,7 +159,8 @@ _RUN = {
         "s (CPU)",
         "CPU time of the run's process over the run, every thread (an ensemble member: its "
         "own evaluation plus its share of the ensemble's); unlike the wall times it excludes "
-        "time spent waiting for the CPU (a niced campaign); empty before 2026-11-25",
+        "time spent waiting for the CPU (a niced campaign); empty in rows stored before the "
+        "column existed",
     ),
     "ensemble_size": ("count", "runs trained together as one vmapped ensemble (1: alone)"),
     # pixel runs (observation "pixels", bench.core._pixels); empty for state runs
