@@ -12,13 +12,13 @@ and the integrators (``Integrator``, ``rollout``, ...).
 
 from ._autoencoder import Autoencoder
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
+from ._implicit import implicit_tolerance
 from ._integrators import (
     DESCRIPTIONS,
     METHODS,
     ORDERS,
     Integrator,
     count_evaluations,
-    implicit_tolerance,
     rollout,
     rollout_batch,
 )
