@@ -1,4 +1,4 @@
-"""Derivative-target training (the HNN and LNN seeds' protocol; issues 22 and 23): the true
+"""Derivative-target training (the HNN and LNN seeds' protocol): the true
 targets against a second derivation, the loss against its definition, a fit, and a run."""
 
 from __future__ import annotations

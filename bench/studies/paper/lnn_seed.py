@@ -227,8 +227,8 @@ def section(results_dir) -> str:
     lines = [
         "## LNN seed: the double pendulum as the seed ran it (claim 9)",
         "",
-        "Unit double pendulum, trained on instantaneous accelerations at random states (issue "
-        f"23; profile {profile or '-'}; geometric means over seeds, min-max in brackets). Energy: "
+        "Unit double pendulum, trained on instantaneous accelerations at random states ("
+        f"profile {profile or '-'}; geometric means over seeds, min-max in brackets). Energy: "
         "|E(zhat) - E(z)| with the true E along 40 test rollouts of 100 points (dt 0.1 s), as % "
         "of the potential's range 6 g (the seed divides by 3 g: its scale is 2x ours, column "
         "'seed scale'); mean over time (the seed's text) and at the last step (its notebook). "
