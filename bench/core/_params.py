@@ -76,14 +76,11 @@ def _load_snapshots(pdir: Path, meta: dict, checkpoints: tuple, like, final) -> 
     return tuple(out)
 
 
-def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple = ()) -> dict:
-    """Write a :class:`bench.TrainResult` (trained keeping ``checkpoints``) to
-    ``params/<train_hash>/``; return its meta, as :func:`cached_training` returns it."""
-    import equinox as eqx
-
-    pdir = params_dir(cache_root, config.train_hash)
+def result_meta(res) -> dict:
+    """A :class:`bench.TrainResult`'s outcome and costs as the row's training fields
+    (``final_loss``: the last finite loss; None without one)."""
     losses = np.asarray(res.losses, dtype=np.float64)
-    meta = {
+    return {
         "status": res.status,
         "diverged_step": res.diverged_step,
         "train_seconds": float(res.train_seconds),
@@ -91,8 +88,17 @@ def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple =
         "steps_done": int(res.steps_done),
         "flops_per_step": float(res.flops_per_step),
         "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
-        "code": code_fingerprint(),
     }
+
+
+def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple = ()) -> dict:
+    """Write a :class:`bench.TrainResult` (trained keeping ``checkpoints``) to
+    ``params/<train_hash>/``; return its meta, as :func:`cached_training` returns it."""
+    import equinox as eqx
+
+    pdir = params_dir(cache_root, config.train_hash)
+    losses = np.asarray(res.losses, dtype=np.float64)
+    meta = {**result_meta(res), "code": code_fingerprint()}
     atomic_write(pdir / "model.eqx", lambda tmp: eqx.tree_serialise_leaves(tmp, res.model))
     meta["sha256"] = sha256_file(pdir / "model.eqx")
     snaps = tuple(getattr(res, "snapshots", ()))

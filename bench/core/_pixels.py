@@ -8,7 +8,7 @@ and clipping and the seed's weight decay. The evaluate step is :mod:`bench.core.
 from __future__ import annotations
 
 import math
-import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +16,7 @@ import numpy as np
 import systems
 
 from ._experiments import RunConfig
-from ._params import cached_training
+from ._params import cached_training, result_meta
 
 SIZE = 28  # pixels per side (the HNN seed's 28 x 28)
 MAX_ANGLE = math.pi / 6  # the seed's starts: |angle| < pi/6 ...
@@ -162,127 +162,82 @@ def _gather(frames, idx, chunk: int):
     return jax.vmap(one)(jnp.asarray(idx))
 
 
-def _train_config(steps, batch, lr):
-    from ._train import TrainConfig
-
-    return TrainConfig(steps=steps, batch=batch, lr=lr, weight_decay=WEIGHT_DECAY)
-
-
 def _jit(fn):
     import equinox as eqx
 
     return eqx.filter_jit(fn)
 
 
-@_jit
-def _block(params, opt_state, frames, idx, static, hp):
-    """A block of training steps (one compile per model structure, shapes and ``hp``, shared
-    by the seeds of a sweep in one process)."""
-    import equinox as eqx
-    import jax
-    import jax.numpy as jnp
-    import optax
+class Windows:
+    """Batch indices of pixel training: ``take(k)`` draws k batches of ``batch`` (trajectory,
+    start) windows uniformly with replacement (``windows[rng.integers(...)]``, (k, batch, 2))."""
 
+    def __init__(self, windows: np.ndarray, batch: int, seed: int):
+        self.windows, self.batch = windows, min(batch, len(windows))
+        self.rng = np.random.default_rng(seed)
+
+    def take(self, k: int) -> np.ndarray:
+        return self.windows[self.rng.integers(0, len(self.windows), size=(k, self.batch))]
+
+
+@dataclass(frozen=True)
+class PixelObjective:
+    """The objective of a pixel run for the one training loop (``bench.train``'s
+    ``objective``): :func:`seed_loss` (its cc term weighed by ``aux_weight``) on windows of
+    ``chunk`` frames of ``dataset.frames_train``, rolled out with ``config.integrator``."""
+
+    chunk: int
+    aux_weight: float = CC_LOSS
+
+    def data(self, model, dataset, config):
+        import jax.numpy as jnp
+
+        return jnp.asarray(dataset.frames_train, jnp.dtype(config.dtype))
+
+    def batches(self, frames, config) -> Windows:
+        return Windows(_windows(*frames.shape[:2], self.chunk), config.batch, config.seed)
+
+    def loss(self, model, frames, ix, config):
+        return seed_loss(
+            model, _gather(frames, ix, self.chunk), config.integrator, self.aux_weight
+        )[0]
+
+
+def train_config(c: RunConfig):
+    """The optimisation of a pixel run: the suite's AdamW, cosine decay and clipping with the
+    seed's weight decay, :data:`BLOCK` steps per compiled block, the run's train integrator."""
     import models
 
-    from ._train import optimizer
+    from ._train import TrainConfig
 
-    steps, batch, lr, chunk, method, substeps, aux_weight = hp
-    integ = models.Integrator(method, substeps=substeps)
-    opt = optimizer(_train_config(steps, batch, lr))
-
-    def step(carry, i):
-        p, s = carry
-        f = _gather(frames, i, chunk)
-        loss, grads = jax.value_and_grad(
-            lambda p_: seed_loss(eqx.combine(p_, static), f, integ, aux_weight)[0]
-        )(p)
-        ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
-        updates, s2 = opt.update(grads, s, p)
-        p2 = eqx.apply_updates(p, updates)
-        keep = lambda a, b: jax.tree_util.tree_map(lambda x, y: jnp.where(ok, x, y), a, b)
-        return (keep(p2, p), keep(s2, s)), jnp.where(ok, loss, jnp.nan)
-
-    (params, opt_state), losses = jax.lax.scan(step, (params, opt_state), idx)
-    return params, opt_state, losses
+    return TrainConfig(
+        steps=c.steps,
+        batch=c.batch,
+        lr=c.lr,
+        weight_decay=WEIGHT_DECAY,
+        integrator=models.Integrator(c.train_integrator, substeps=c.train_substeps),
+        dtype=c.dtype,
+        seed=c.seed,
+        steps_per_call=BLOCK,
+    )
 
 
 def fit_pixels(c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS):
-    """Train ``model`` with :func:`seed_loss` (its cc term weighed by ``aux_weight``); returns
-    a :class:`bench.TrainResult` (``flops_per_step`` NaN, no snapshots).
+    """Train ``model`` on ``data``'s frames by the one training loop (``bench.train``) with
+    :class:`PixelObjective`; returns its :class:`bench.TrainResult`."""
+    from ._train import train
 
-    A non-finite loss or gradient stops training at that block (``status`` diverged) and
-    keeps the parameters from before the block."""
-    import equinox as eqx
-    import jax.numpy as jnp
-
-    from ._train import TrainResult, optimizer
-
-    dtype = jnp.dtype(c.dtype)
-    tcfg = _train_config(c.steps, c.batch, c.lr)
-    hp = (c.steps, c.batch, c.lr, c.chunk, c.train_integrator, c.train_substeps, aux_weight)
-    opt = optimizer(tcfg)
-    frames = jnp.asarray(data.frames_train, dtype)
-    windows = _windows(*frames.shape[:2], c.chunk)
-    batch = min(c.batch, len(windows))
-    params, static = eqx.partition(model, eqx.is_inexact_array)
-    opt_state = opt.init(params)
-
-    rng = np.random.default_rng(c.seed)
-    losses, status, diverged_step, done = [], "ok", None, 0
-    compile_seconds, t_start = 0.0, time.perf_counter()
-    while done < c.steps:
-        k = min(BLOCK, c.steps - done)
-        idx = windows[rng.integers(0, len(windows), size=(k, batch))]
-        t0 = time.perf_counter()
-        new_params, new_state, block_losses = _block(
-            params, opt_state, frames, jnp.asarray(idx), static, hp
-        )
-        block_losses = np.asarray(block_losses, dtype=np.float64)
-        if done == 0:  # the first block includes the compile: time a second call of it
-            compile_seconds = time.perf_counter() - t0
-        bad = ~np.isfinite(block_losses)
-        if bad.any():
-            first = int(np.argmax(bad))
-            losses.extend(block_losses[:first])
-            status, diverged_step, done = "diverged", done + first, done + first
-            break
-        params, opt_state = new_params, new_state
-        losses.extend(block_losses)
-        done += k
-        if progress:
-            print(f"  step {done}/{c.steps} loss {block_losses[-1]:.4g}", flush=True)
-    total = time.perf_counter() - t_start
-    # the first block's time is mostly its compile; its steps are charged at the mean rate
-    per_step = (total - compile_seconds) / max(1, done - min(done, BLOCK))
-    compile_seconds = max(0.0, compile_seconds - per_step * min(done, BLOCK))
-    return TrainResult(
-        model=eqx.combine(params, static),
-        losses=np.asarray(losses, dtype=np.float64),
-        status=status,
-        diverged_step=diverged_step,
-        train_seconds=float(total - compile_seconds),
-        compile_seconds=float(compile_seconds),
-        steps_done=int(done),
-    )
+    objective = PixelObjective(chunk=c.chunk, aux_weight=aux_weight)
+    return train(model, data, train_config(c), progress, objective=objective)
 
 
 def train_pixels(
     c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS
 ) -> tuple:
-    """:func:`fit_pixels` as ``(model, meta)``: meta with the training's outcome, costs and
-    ``final_loss`` (the last loss; None without one)."""
+    """:func:`fit_pixels` as ``(model, meta)``, meta the row's training fields
+    (:func:`bench.core._params.result_meta`), nothing cached."""
     res = fit_pixels(c, model, data, progress, aux_weight)
-    meta = {
-        "status": res.status,
-        "diverged_step": res.diverged_step,
-        "train_seconds": res.train_seconds,
-        "compile_seconds": res.compile_seconds,
-        "steps_done": res.steps_done,
-        "flops_per_step": float("nan"),
-        "final_loss": float(res.losses[-1]) if len(res.losses) else None,
-    }
-    return res.model, meta
+    return res.model, result_meta(res)
 
 
 def train_cached_pixels(c: RunConfig, model, data, cache_root: Path, progress: bool) -> tuple:

@@ -1,7 +1,9 @@
-"""The one training loop: a model fitted to a dataset's chunks by backpropagation through its
-rollout (or, with ``target="derivative"``, to the true time derivatives), ``steps_per_call``
-steps at a time in one compiled ``lax.scan`` (:func:`train`; the loss is :func:`loss_fn`). The
-compiled block is cached per configuration and shapes: seeds and repeats compile once.
+"""The one training loop: a model fitted by backpropagation, ``steps_per_call`` steps at a
+time in one compiled ``lax.scan`` (:func:`train`). What is fitted is an *objective*: by default
+:class:`StateObjective`, a dataset's chunks of states through the model's rollout (or, with
+``target="derivative"``, the true time derivatives; the loss is :func:`loss_fn`); observations of
+another kind bring their own (pixels: ``bench.core._pixels.PixelObjective``). The compiled block
+is cached per configuration, objective and shapes: seeds and repeats compile once.
 """
 
 from __future__ import annotations
@@ -181,11 +183,52 @@ def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):
     return data + penalty.astype(data.dtype)
 
 
+class Batches:
+    """Batch indices: per epoch a random permutation of the N chunks, cut into N // B batches."""
+
+    def __init__(self, n: int, batch: int, seed: int):
+        self.n, self.batch = n, min(batch, n)
+        self.rng = np.random.default_rng(seed)
+        self.pending: list[np.ndarray] = []
+
+    def take(self, k: int) -> np.ndarray:
+        while len(self.pending) < k:
+            perm = self.rng.permutation(self.n)
+            per_epoch = self.n // self.batch
+            self.pending.extend(perm[: per_epoch * self.batch].reshape(per_epoch, self.batch))
+        out, self.pending = self.pending[:k], self.pending[k:]
+        return np.stack(out).astype(np.int32)
+
+
+@dataclass(frozen=True)
+class StateObjective:
+    """What :func:`train` fits by default: :func:`loss_fn` on a batch of a dataset's chunks of
+    states. An objective is a hashable value (it keys the compiled block) with three methods:
+    ``data(model, dataset, config)`` the device arrays of the training set, ``batches(data,
+    config)`` an object whose ``take(k)`` gives the batch indices of k steps, and
+    ``loss(model, data, ix, config)`` the scalar loss of one batch."""
+
+    def data(self, model, dataset, config: TrainConfig):
+        return prepare(model, dataset, config)
+
+    def batches(self, data, config: TrainConfig) -> Batches:
+        return Batches(data[0].shape[0], config.batch, config.seed)
+
+    def loss(self, model, data, ix, config: TrainConfig):
+        z_all, args_all, ts, *targets = data  # targets: (dz_all,) with target="derivative"
+        dz = targets[0][ix] if targets else None
+        return loss_fn(model, z_all[ix], args_all[ix], ts, config, dz)
+
+
+STATES = StateObjective()
+
+
 _TRACES = [0]  # how many times a training block was traced (tests assert one per config)
 
 
-def make_step(static, config: TrainConfig, data, lr=None):
-    """One training step ``step(carry, (batch indices, active)) -> (carry, (loss, failed))``.
+def make_step(static, config: TrainConfig, data, lr=None, objective=STATES):
+    """One training step ``step(carry, (batch indices, active)) -> (carry, (loss, failed))`` of
+    ``objective`` (default :data:`STATES`) on ``data``.
 
     ``carry = (params, opt_state, dead, good)``. ``active`` False makes the step a no-op
     (padding of the tail). After a non-finite loss or gradient, ``dead`` is set and no later
@@ -193,17 +236,13 @@ def make_step(static, config: TrainConfig, data, lr=None):
     ``lr`` (default ``config.lr``) may be a traced scalar: ensembles (``bench.core._ensemble``) vmap
     this one step over members with their own data, parameters and learning rate.
     """
-    z_all, args_all, ts, *targets = data  # targets: (dz_all,) with target="derivative"
     opt = optimizer(config, lr=lr)
 
     def step(carry, xs):
         params, opt_state, dead, good = carry
         ix, on = xs
         model = eqx.combine(params, static)
-        dz = targets[0][ix] if targets else None
-        loss, grads = eqx.filter_value_and_grad(loss_fn)(
-            model, z_all[ix], args_all[ix], ts, config, dz
-        )
+        loss, grads = eqx.filter_value_and_grad(objective.loss)(model, data, ix, config)
         grads = eqx.filter(grads, eqx.is_inexact_array)
         ok = jnp.isfinite(loss) & jnp.isfinite(optax.global_norm(grads))
         updates, new_state = opt.update(grads, opt_state, params)
@@ -223,11 +262,11 @@ def make_step(static, config: TrainConfig, data, lr=None):
     return step
 
 
-def train_block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig):
+def train_block(inputs, params, opt_state, dead, good, *, static, config: TrainConfig, objective):
     """Run ``len(idx)`` steps of :func:`make_step` as one ``lax.scan``."""
     _TRACES[0] += 1
     data, idx, active = inputs
-    step = make_step(static, config, data)
+    step = make_step(static, config, data, objective=objective)
     (params, opt_state, dead, good), (losses, failed) = jax.lax.scan(
         step, (params, opt_state, dead, good), (idx, active)
     )
@@ -256,8 +295,10 @@ def step_flops(compiled) -> float:
     return value if np.isfinite(value) and value >= 0 else float("nan")
 
 
-def compiled_block(params, static, opt_state, dead, good, data, idx, active, config):
-    """The compiled block for this configuration and these shapes (compiled at most once);
+def compiled_block(
+    params, static, opt_state, dead, good, data, idx, active, config, objective=STATES
+):
+    """The compiled block for this configuration, objective and shapes (compiled at most once);
     its ``flops`` attribute is :func:`step_flops` of the compiled program."""
     cfg_key = dataclasses.replace(config, seed=0, log_every=1, checkpoints=())
     leaves = jax.tree.leaves((params, opt_state, data, idx))
@@ -266,6 +307,7 @@ def compiled_block(params, static, opt_state, dead, good, data, idx, active, con
         tuple(jax.tree.leaves(static)),
         tuple((x.shape, x.dtype) for x in leaves),
         cfg_key,
+        objective,
     )
     hit = _COMPILED.get(key)
     if hit is not None:
@@ -273,36 +315,16 @@ def compiled_block(params, static, opt_state, dead, good, data, idx, active, con
     # the inputs (data, batch indices) are not donated; the state is replaced by the outputs
     fn = eqx.filter_jit(train_block, donate="all-except-first")
     t0 = time.perf_counter()
-    compiled = fn.lower(
-        (data, idx, active), params, opt_state, dead, good, static=static, config=cfg_key
-    ).compile()
+    statics = {"static": static, "config": cfg_key, "objective": objective}
+    compiled = fn.lower((data, idx, active), params, opt_state, dead, good, **statics).compile()
     seconds = time.perf_counter() - t0
 
     def run(data, params, opt_state, dead, good, idx, active):
-        return compiled(
-            (data, idx, active), params, opt_state, dead, good, static=static, config=cfg_key
-        )
+        return compiled((data, idx, active), params, opt_state, dead, good, **statics)
 
     run.flops = step_flops(compiled)
     _COMPILED[key] = run
     return run, seconds
-
-
-class Batches:
-    """Batch indices: per epoch a random permutation of the N chunks, cut into N // B batches."""
-
-    def __init__(self, n: int, batch: int, seed: int):
-        self.n, self.batch = n, min(batch, n)
-        self.rng = np.random.default_rng(seed)
-        self.pending: list[np.ndarray] = []
-
-    def take(self, k: int) -> np.ndarray:
-        while len(self.pending) < k:
-            perm = self.rng.permutation(self.n)
-            per_epoch = self.n // self.batch
-            self.pending.extend(perm[: per_epoch * self.batch].reshape(per_epoch, self.batch))
-        out, self.pending = self.pending[:k], self.pending[k:]
-        return np.stack(out).astype(np.int32)
 
 
 def _check_dataset(dataset, min_points: int = 2):
@@ -366,22 +388,28 @@ def prepare(model, dataset, config: TrainConfig):
     return data
 
 
-def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = False):
-    """Fit ``model`` to ``dataset``'s training chunks; never raises on divergence.
+def train(
+    model,
+    dataset,
+    config: TrainConfig = TrainConfig(),
+    progress: bool = False,
+    objective=STATES,
+):
+    """Fit ``model`` to ``dataset`` (by default its training chunks of states: ``objective``
+    :data:`STATES`); never raises on divergence.
 
     Returns a :class:`TrainResult`. ``compile_seconds`` is the ahead-of-time compile of the
     training block (0 when this configuration was compiled before in this process);
     ``train_seconds`` is the wall time of the steps alone; ``flops_per_step`` comes from the
     same compiled block (no extra compile).
     """
-    data = prepare(model, dataset, config)
-    n = data[0].shape[0]
+    data = objective.data(model, dataset, config)
     params, static = eqx.partition(model, eqx.is_inexact_array)
     # the blocks donate their state buffers: copy so that the caller's model stays valid
     params = jax.tree.map(jnp.copy, params)
     opt_state = optimizer(config).init(params)
     k = min(config.steps_per_call, config.steps)
-    batches = Batches(n, config.batch, config.seed)
+    batches = objective.batches(data, config)
     dead = jnp.asarray(False)
 
     def block_inputs(start):
@@ -392,7 +420,7 @@ def train(model, dataset, config: TrainConfig = TrainConfig(), progress: bool = 
     idx, active = block_inputs(0)
     good = jax.tree.map(jnp.copy, params)  # a distinct buffer: both are donated
     compiled, compile_seconds = compiled_block(
-        params, static, opt_state, dead, good, data, idx, active, config
+        params, static, opt_state, dead, good, data, idx, active, config, objective
     )
 
     bar = None
