@@ -251,7 +251,8 @@ def plan_groups(
     Runs whose every field except ``ENSEMBLE_FIELDS`` and ``eval_*`` agree form one group (cut
     into groups of at most ``max_size``). Runs whose parameters are cached under ``cache_root``,
     second runs of one ``train_hash`` (they differ only in evaluation), trivial predictors
-    (nothing to train) and pixel runs come last, alone. Not grouped: ``loss`` (a static choice
+    (nothing to train), pixel runs and runs with fresh states of a ``train_box`` (objectives of
+    their own) come last, alone. Not grouped: ``loss`` (a static choice
     of the loss function) and options held by the model (e.g. a regulariser weight inside
     ``model_options``, a static field of the model).
     """
@@ -265,8 +266,8 @@ def plan_groups(
             cache_root is not None
             and cached_params_meta(params_dir(cache_root, c.train_hash)) is not None
         )
-        # pixel runs train their own way (bench.core._pixels): alone
-        pixels = c.observation != "state"
+        # pixel and train_box runs fit objectives of their own (bench.core._train): alone
+        pixels = c.observation != "state" or bool(c.train_box)
         if cached or c.train_hash in trains or c.model in _trivial_names() or pixels:
             alone.append([c])
             continue

@@ -42,6 +42,8 @@ LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
 OBSERVATIONS = ("state", "pixels")  # what the models see (pixels: bench.core._pixels)
+OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
+LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,17 @@ class RunConfig:
     # what the models observe: "state" (z itself) or "pixels" (rendered frames of the state,
     # an autoencoder and latent dynamics: bench.core._pixels)
     observation: str = "state"
+    # the optimisation (bench.core._train.optimizer): "adamw" (the suite's: clipping, AdamW,
+    # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
+    # no clipping); the learning-rate schedule from ``lr``; the weight decay (None: the
+    # observation's default, 1e-4 for states and the HNN seed's 1e-5 for pixels)
+    optimizer: str = "adamw"
+    lr_schedule: str = "cosine"
+    weight_decay: float | None = None
+    # training states (with train_target "derivative"): () the dataset's chunks, or a box
+    # (q_low, q_high, qdot_low, qdot_high) from which fresh states are drawn uniformly for
+    # every batch, each coordinate alike (the LNN seed's notebook; bench.core._box)
+    train_box: tuple = ()
 
     def __post_init__(self):
         # Canonical forms, so that equal runs hash equally however they were written.
@@ -105,6 +118,14 @@ class RunConfig:
         object.__setattr__(
             self, "eval_checkpoints", _as_int(self.eval_checkpoints, "eval_checkpoints")
         )
+        if self.weight_decay is not None:
+            object.__setattr__(self, "weight_decay", _as_float(self.weight_decay, "weight_decay"))
+        box = self.train_box
+        if isinstance(box, str):
+            box = json.loads(box)
+        if not isinstance(box, list | tuple):
+            raise ValueError(f"train_box must be () or 4 numbers; got {self.train_box!r}")
+        object.__setattr__(self, "train_box", tuple(_as_float(b, "train_box") for b in box))
 
     def validate(self) -> RunConfig:
         """Check values that need no registry; raise ValueError naming what is allowed."""
@@ -138,6 +159,31 @@ class RunConfig:
         check_choice("dtype", self.dtype, DTYPES)
         check_choice("train_target", self.train_target, TRAIN_TARGETS)
         check_choice("observation", self.observation, OBSERVATIONS)
+        check_choice("optimizer", self.optimizer, OPTIMIZERS)
+        check_choice("lr_schedule", self.lr_schedule, LR_SCHEDULES)
+        wd = self.weight_decay
+        if wd is not None and not (math.isfinite(wd) and wd >= 0):
+            raise ValueError(f"weight_decay must be None or a finite number >= 0; got {wd}")
+        box = self.train_box
+        if box:
+            if len(box) != 4 or not all(math.isfinite(b) for b in box):
+                raise ValueError(
+                    f"train_box must be () or 4 finite numbers (q_low, q_high, qdot_low, "
+                    f"qdot_high); got {box}"
+                )
+            if not (box[0] < box[1] and box[2] < box[3]):
+                raise ValueError(
+                    f"train_box needs q_low < q_high and qdot_low < qdot_high; got {box}"
+                )
+            if self.train_target != "derivative" or self.coordinates != "velocity":
+                raise ValueError(
+                    "train_box needs train_target 'derivative' and coordinates 'velocity' "
+                    f"(states drawn in (q, qdot)); got {self.train_target!r}, {self.coordinates!r}"
+                )
+            if self.noise or self.random_args or self.observation != "state":
+                raise ValueError(
+                    "train_box supports no noise, random_args or pixels; allowed: their defaults"
+                )
         return self
 
     def to_dict(self) -> dict:
@@ -216,6 +262,10 @@ _NEW_FIELDS = {
     "train_target": "rollout",
     "duration": 10.0,
     "observation": "state",
+    "optimizer": "adamw",
+    "lr_schedule": "cosine",
+    "weight_decay": None,
+    "train_box": (),
 }
 
 

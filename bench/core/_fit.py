@@ -40,6 +40,21 @@ def train_config(config: RunConfig):
         steps_per_call=TRAIN_BLOCK,
         checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, TRAIN_BLOCK),
         target=config.train_target,
+        optimizer=config.optimizer,
+        schedule=config.lr_schedule,
+        **({} if config.weight_decay is None else {"weight_decay": config.weight_decay}),
+    )
+
+
+def objective(config: RunConfig):
+    """What a state run fits: its dataset's chunks, or fresh states from its ``train_box``."""
+    from ._box import BoxObjective
+    from ._train import STATES
+
+    if not config.train_box:
+        return STATES
+    return BoxObjective(
+        config.system, tuple(sorted(config.system_kwargs().items())), config.train_box
     )
 
 
@@ -57,6 +72,6 @@ def train_cached(config: RunConfig, model, data, cache_root: Path, progress):
         config,
         model,
         cache_root,
-        lambda: train(model, data, tcfg, progress=progress),
+        lambda: train(model, data, tcfg, progress=progress, objective=objective(config)),
         checkpoints=tcfg.checkpoints,
     )

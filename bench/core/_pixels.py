@@ -204,8 +204,9 @@ class PixelObjective:
 
 
 def train_config(c: RunConfig):
-    """The optimisation of a pixel run: the suite's AdamW, cosine decay and clipping with the
-    seed's weight decay, :data:`BLOCK` steps per compiled block, the run's train integrator."""
+    """The optimisation of a pixel run: the run's optimiser and schedule (by default the suite's
+    AdamW, cosine decay and clipping) with the seed's weight decay unless the run sets one,
+    :data:`BLOCK` steps per compiled block, the run's train integrator."""
     import models
 
     from ._train import TrainConfig
@@ -214,11 +215,13 @@ def train_config(c: RunConfig):
         steps=c.steps,
         batch=c.batch,
         lr=c.lr,
-        weight_decay=WEIGHT_DECAY,
+        weight_decay=WEIGHT_DECAY if c.weight_decay is None else c.weight_decay,
         integrator=models.Integrator(c.train_integrator, substeps=c.train_substeps),
         dtype=c.dtype,
         seed=c.seed,
         steps_per_call=BLOCK,
+        optimizer=c.optimizer,
+        schedule=c.lr_schedule,
     )
 
 

@@ -67,6 +67,25 @@ _CONFIG = {
         "what training fits: rollout (the chunks through the integrator) or derivative (the "
         "true dz/dt at the training states)",
     ),
+    "optimizer": (
+        "-",
+        "adamw (the suite's: clipping, AdamW with decoupled weight decay) or adam_l2 (the "
+        "seeds': Adam with an L2 term in the gradient, no clipping); empty before the field: adamw",
+    ),
+    "lr_schedule": (
+        "-",
+        "learning-rate schedule from lr: cosine (to lr x 1e-3), onecycle (the LNN seed "
+        "notebook's) or constant; empty before the field: cosine",
+    ),
+    "weight_decay": (
+        "-",
+        "weight decay; empty: the observation's default (1e-4 states, 1e-5 pixels)",
+    ),
+    "train_box": (
+        "-",
+        "JSON [q_low, q_high, qdot_low, qdot_high]: training on fresh uniform states of this "
+        "box (derivative targets); [] or empty: the dataset's training chunks",
+    ),
 }
 
 _RUN = {

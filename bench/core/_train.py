@@ -24,6 +24,8 @@ from models._integrators import Integrator, rollout_batch
 LOSSES = ("l2", "l1")
 DTYPES = ("float32", "float64")
 TARGETS = ("rollout", "derivative")  # what the loss compares (:func:`loss_fn`)
+OPTIMIZERS = ("adamw", "adam_l2")  # :func:`optimizer`
+SCHEDULES = ("cosine", "onecycle", "constant")  # :func:`lr_schedule`
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,8 @@ class TrainConfig:
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
     checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
     target: str = "rollout"  # "rollout" or "derivative" (:func:`loss_fn`)
+    optimizer: str = "adamw"  # "adamw" or "adam_l2" (:func:`optimizer`)
+    schedule: str = "cosine"  # "cosine", "onecycle" or "constant" (:func:`lr_schedule`)
 
     def __post_init__(self):
         for name in ("steps", "batch", "log_every", "steps_per_call"):
@@ -81,6 +85,14 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.dtype {self.dtype!r}: allowed {', '.join(DTYPES)}")
         if self.target not in TARGETS:
             raise ValueError(f"TrainConfig.target {self.target!r}: allowed {', '.join(TARGETS)}")
+        if self.optimizer not in OPTIMIZERS:
+            raise ValueError(
+                f"TrainConfig.optimizer {self.optimizer!r}: allowed {', '.join(OPTIMIZERS)}"
+            )
+        if self.schedule not in SCHEDULES:
+            raise ValueError(
+                f"TrainConfig.schedule {self.schedule!r}: allowed {', '.join(SCHEDULES)}"
+            )
         cps = self.checkpoints
         if not isinstance(cps, tuple) or any(
             isinstance(c, bool) or not isinstance(c, int) or not 1 <= c <= self.steps for c in cps
@@ -142,13 +154,44 @@ class TrainResult:
     snapshots: tuple = ()
 
 
+ONECYCLE_START, ONECYCLE_DIV = 0.2, 1e4  # the LNN seed notebook's OneCycleLR
+
+
+def lr_schedule(config: TrainConfig, lr=None):
+    """The learning rate at step s of N = ``config.steps``, from ``lr`` (default ``config.lr``):
+
+    - ``"cosine"``: lr (1 - (1 - a) (1 - cos(pi s / N)) / 2), a = ``config.lr_floor``;
+    - ``"onecycle"``: the LNN seed notebook's OneCycleLR, lr / 1e4 + (lr - lr / 1e4)
+      (1 - cos(2 pi u)) / 2 with u = 0.2 + 0.8 s / N: from 0.35 lr up to lr at s = 0.375 N and
+      down to lr / 1e4;
+    - ``"constant"``: lr.
+    """
+    lr = config.lr if lr is None else lr
+    if config.schedule == "constant":
+        return lambda step: lr * jnp.ones_like(step, dtype=jnp.result_type(float))
+    if config.schedule == "onecycle":
+        low, n = lr / ONECYCLE_DIV, config.steps
+
+        def onecycle(step):
+            u = ONECYCLE_START + (1.0 - ONECYCLE_START) * step / n
+            return low + (lr - low) * (1.0 - jnp.cos(2.0 * jnp.pi * u)) / 2.0
+
+        return onecycle
+    return optax.cosine_decay_schedule(lr, config.steps, alpha=config.lr_floor)
+
+
 def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
-    """clip_by_global_norm(clip) -> AdamW(cosine lr -> lr * lr_floor over steps, weight_decay).
+    """The update rule, with the learning rate of :func:`lr_schedule`:
+
+    - ``"adamw"`` (the suite's): clip_by_global_norm(clip) -> AdamW(weight_decay, decoupled);
+    - ``"adam_l2"`` (the seeds': PyTorch's ``Adam(weight_decay=w)``, and the LNN notebook's
+      L2 term): Adam on g + w theta, no clipping.
 
     ``lr`` overrides ``config.lr`` (a traced scalar in an ensemble).
     """
-    lr = config.lr if lr is None else lr
-    schedule = optax.cosine_decay_schedule(lr, config.steps, alpha=config.lr_floor)
+    schedule = lr_schedule(config, lr)
+    if config.optimizer == "adam_l2":
+        return optax.chain(optax.add_decayed_weights(config.weight_decay), optax.adam(schedule))
     return optax.chain(
         optax.clip_by_global_norm(config.clip),
         optax.adamw(schedule, weight_decay=config.weight_decay),
