@@ -54,7 +54,7 @@ upgrade: $(UV)
 	$(MAKE) test
 
 # The fast tests in TEST_WORKERS processes (pytest-xdist): 1.3x faster on 2 cores (475 s
-# against 619 s of pytest on a cold cache, 2026-11-24); TEST_WORKERS=0 runs them in-process.
+# against 619 s of pytest on a cold cache); TEST_WORKERS=0 runs them in-process.
 TEST_WORKERS ?= 2
 test: $(STAMP)
 	$(PY) -m pytest -m "not slow" -q -n $(TEST_WORKERS) $(PYTEST_ARGS)
@@ -84,7 +84,7 @@ bench: $(STAMP)
 compare: $(STAMP)
 	$(PY) -m bench --results $(RESULTS) compare $(REFERENCE) $(RESULTS) --out $(RESULTS)/COMPARE.md
 
-# The replication of issue 20: the claim experiments again on the profile's replication seeds
+# The replication: the claim experiments again on the profile's replication seeds
 # (quick: 5-9), stored beside the runs of `make bench`; the report judges every claim on both.
 replicate: $(STAMP)
 	$(PY) -m bench --results $(RESULTS) campaign --profile $(PROFILE) --replication --workers $(WORKERS)
@@ -103,7 +103,7 @@ figures: $(STAMP)
 report: $(STAMP)
 	$(PY) -m bench --results $(RESULTS) report
 
-# The paper-core campaign (issue 24): the paper's budget on the cells each verdict needs, niced in
+# The paper-core campaign: the paper's budget on the cells each verdict needs, niced in
 # the background, resumable at any moment (runs are content-addressed). Its process group is
 # the campaign: pause/resume/stop act on all its workers at once. setsid gives it its own
 # scheduler autogroup, where Linux (sched_autogroup_enabled = 1) ignores the nice level against
@@ -111,7 +111,7 @@ report: $(STAMP)
 # The child nices its own autogroup after setsid (from outside, a race could nice the caller's).
 # `env kill`: the shell's builtin kill (dash) does not signal a process group.
 # Two phases: the selection's own seeds (0-4), then its replication seeds (5-9), so that each
-# paper-core verdict is judged again on a disjoint seed set (issue 20's rule) once all are stored.
+# paper-core verdict is judged again on a disjoint seed set (the replication rule) once all are stored.
 CAMPAIGN_DIR ?= results/reference/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log

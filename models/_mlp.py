@@ -38,7 +38,8 @@ class MLP(eqx.Module):
 
     ``init="orthogonal"``: orthogonal weights with gain ``gain`` (0.5 in the paper), zero
     biases. ``init="lnn"``: Gaussian weights with the LNN seed's per-layer sigma, zero biases;
-    ``init="lnn_notebook"``: the same divided by 200, as the seed's notebook ran it.
+    ``init="lnn_notebook"``: the same divided by 200 (an optimiser state the seed's notebook
+    built and then replaced before training; an ablation).
     """
 
     weights: tuple[Array, ...]
