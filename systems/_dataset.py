@@ -40,6 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._coordinates import to_momentum
+from ._precision import require_x64
 from ._registry import make
 
 FORMAT_VERSION = 1
@@ -178,6 +179,7 @@ def make_dataset(config: DatasetConfig, cache_dir=None) -> Dataset:
     """Load the dataset of ``config`` from the cache, or generate and cache it."""
     if not isinstance(config, DatasetConfig):
         raise ValueError(f"config must be a DatasetConfig; got {type(config).__name__}")
+    require_x64("make_dataset")
     system = make(config.system, **dict(config.system_params))
     path = Path(cache_dir if cache_dir is not None else cache_root())
     path = path / "datasets" / f"{config.hash()}.npz"

@@ -308,9 +308,12 @@ def _pin_worker(slots) -> None:
 
 
 def _star_execute(job):
+    import systems
+
     from ._env import configure_compilation_cache
 
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
+    systems.enable_x64()
     dicts, cache_root = job
     if draining():  # the sweep is being drained: this job ends without running
         return []
