@@ -33,6 +33,7 @@ import math
 import numbers
 import os
 import tempfile
+import warnings
 from pathlib import Path
 
 import jax
@@ -102,7 +103,9 @@ class DatasetConfig:
                 f"test_chunks * chunk = {self.test_chunks * self.chunk} points exceeds the "
                 f"{n} points of a {self.duration} s trajectory at dt={self.dt}"
             )
-        make(self.system, **dict(self.system_params))  # ValueError for a bad system
+        with warnings.catch_warnings():  # only the parameters are checked: float32 is moot
+            warnings.filterwarnings("ignore", "Explicitly requested dtype", UserWarning)
+            make(self.system, **dict(self.system_params))  # ValueError for a bad system
 
     @property
     def n_points(self) -> int:

@@ -58,7 +58,8 @@ def test_bad_input_subprocess_has_no_traceback(tmp_path):
     )  # fmt: skip
     assert out.returncode == 2
     assert "Traceback" not in out.stderr
-    assert out.stderr.strip().splitlines()[-1].startswith("error: unknown model 'nod'")
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ") and "unknown model 'nod'; allowed: node" in last, last
 
 
 def test_help_on_every_verb(capsys):
