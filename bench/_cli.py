@@ -27,7 +27,6 @@ from .core._experiments import (
     field_names,
     profile_defaults,
 )
-from .core._runnable import check_runnable
 from .core._studies import commands
 from .studies._options import (
     check_sweep_args,
@@ -144,13 +143,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _config_from_args(args) -> RunConfig:
-    import models
-    import systems
-
-    check_choice("profile", args.profile, list(PROFILES))
-    check_choice("system", args.system, systems.available())
-    check_choice("model", args.model, models.available())
-    base, _ = profile_defaults(args.profile)
+    base, _ = profile_defaults(args.profile)  # ValueError naming the profiles
     kw = dict(base)
     kw.update(system=args.system, k=args.k, friction=args.friction, model=args.model)
     kw["seed"] = args.seed
@@ -169,9 +162,9 @@ def _config_from_args(args) -> RunConfig:
             kw[key] = json.loads(value)
         except ValueError:
             kw[key] = value
-    # Everything that would make the run fail before training (the system's parameters, the
-    # dataset shape, the model for the scene, the integrators the model allows) is a ValueError.
-    return check_runnable(RunConfig(**kw))
+    # ValueError for a bad value, system or dataset shape; the model for the scene and the
+    # integrators it allows are checked by the sweep, before it writes anything
+    return RunConfig(**kw)
 
 
 # The metrics ``run`` prints, in order (error and diverged_step only where set).
@@ -209,7 +202,6 @@ def _cmd_run(args) -> int:
     from .core._runner import sweep
 
     cfg = _config_from_args(args)
-    usable_results(args)
     row = sweep([cfg], args.results, experiment="adhoc", profile=args.profile, progress=False)
     if not row:  # already stored: show the stored row
         from .core._store import read_rows

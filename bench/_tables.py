@@ -109,6 +109,22 @@ def _group_columns(rows: pd.DataFrame) -> list[str]:
 
 def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
     """One "discriminating: yes/no" line per comparison group (system, k, friction, initial)."""
+    out = []
+    for d in discrimination_groups(rows):
+        mark = {"yes": "yes", "no": "**no**", "unknown": "unknown"}[d.status]
+        text = (
+            d.text().split(f"discriminating {d.status} ", 1)[-1]
+            if d.status != "unknown"
+            else "no finished trivial-predictor runs"
+        )
+        out.append(f"- discriminating: {mark} ({d.group}): {text}")
+    return out
+
+
+def discrimination_groups(rows: pd.DataFrame) -> list:
+    """Whether an experiment's test set discriminates, per comparison group (system, k,
+    friction, initial state): :func:`bench.studies.paper.kit.discrimination` of each group,
+    named ``"system=..., k=..."``."""
     if not len(rows):
         return []
     df = rows.assign(initial=_initial(rows))
@@ -129,14 +145,9 @@ def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
             for c, k in zip(cols, key, strict=True)
             if str(k) not in ("nan", "-", "0.0")
         )
-        d = discrimination(g, name, scores=scores.loc[g.index] if scores is not None else None)
-        mark = {"yes": "yes", "no": "**no**", "unknown": "unknown"}[d.status]
-        text = (
-            d.text().split(f"discriminating {d.status} ", 1)[-1]
-            if d.status != "unknown"
-            else "no finished trivial-predictor runs"
+        out.append(
+            discrimination(g, name, scores=scores.loc[g.index] if scores is not None else None)
         )
-        out.append(f"- discriminating: {mark} ({name}): {text}")
     return out
 
 

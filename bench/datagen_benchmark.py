@@ -74,6 +74,7 @@ def main(argv=None) -> None:
     parser.add_argument("--repeats", type=int, default=2, help="timed calls after the first")
     parser.add_argument("--drift-n", type=int, default=16, help="trajectories per system")
     opts = parser.parse_args(argv)
+    systems.enable_x64()
     _time_datagen(opts.n, opts.repeats)
     _energy_drift(opts.drift_n)
 

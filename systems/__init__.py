@@ -1,21 +1,22 @@
-"""Registry of physical systems with exact float64 ground truth, and their datasets."""
+"""Registry of physical systems with exact float64 ground truth, and their datasets.
 
-import jax
+Ground truth is float64: a process calls :func:`enable_x64` before computing it (the entry
+points do); importing ``systems`` changes no jax setting.
+"""
 
-jax.config.update("jax_enable_x64", True)
-
-from ._base import AbstractSystem, reference_masses_lengths  # noqa: E402
-from ._chain import ChainPendulum  # noqa: E402
-from ._coordinates import derivatives, to_momentum, to_velocity  # noqa: E402
-from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset  # noqa: E402
-from ._mass_spring import MassSpring  # noqa: E402
-from ._pendulum import Pendulum  # noqa: E402
-from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset  # noqa: E402
-from ._registry import available, make, parameters  # noqa: E402
-from ._relativistic import RelativisticParticle  # noqa: E402
-from ._render import read_angle, read_state, render  # noqa: E402
-from ._spring import SpringPendulum  # noqa: E402
-from ._two_body import TwoBody  # noqa: E402
+from ._base import AbstractSystem, reference_masses_lengths
+from ._chain import ChainPendulum
+from ._coordinates import derivatives, to_momentum, to_velocity
+from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset
+from ._mass_spring import MassSpring
+from ._pendulum import Pendulum
+from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset
+from ._precision import enable_x64
+from ._registry import available, make, parameters
+from ._relativistic import RelativisticParticle
+from ._render import read_angle, read_state, render
+from ._spring import SpringPendulum
+from ._two_body import TwoBody
 
 __all__ = [
     "AbstractSystem",
@@ -32,6 +33,7 @@ __all__ = [
     "available",
     "cache_root",
     "derivatives",
+    "enable_x64",
     "make",
     "make_dataset",
     "make_pixel_dataset",

@@ -30,6 +30,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from ._precision import require_x64
+
 RTOL = 1e-11
 ATOL = 1e-11
 MAX_STEPS = 1_000_000
@@ -150,6 +152,7 @@ class AbstractSystem(eqx.Module):
 
         ``rtol``, ``atol``, ``solver`` and ``stats``: as in :meth:`simulate_batch`.
         """
+        require_x64("simulate")
         z0 = _as_float_array(z0, "z0")
         if z0.shape != (2 * self.dof,):
             raise ValueError(
@@ -183,6 +186,12 @@ class AbstractSystem(eqx.Module):
         first-same-as-last one; for ``kvaerno5`` the stages' Newton iterations are not counted,
         so it is a lower bound) and ``ok`` (the solve succeeded).
         """
+        require_x64("simulate")
+        if any(x.dtype != jnp.float64 for x in jax.tree_util.tree_leaves(self) if eqx.is_array(x)):
+            raise ValueError(
+                f"this {self.name} was made while jax's 64-bit mode was off (float32 "
+                "parameters): make it again after systems.enable_x64()"
+            )
         if solver not in SOLVERS:
             raise ValueError(f"solver {solver!r}: allowed {', '.join(SOLVERS)}")
         rtol = self.ground_truth_tol if rtol is None else rtol

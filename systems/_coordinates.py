@@ -12,10 +12,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._precision import require_x64
+
 __all__ = ["derivatives", "to_momentum", "to_velocity"]
 
 
 def _convert(fn, system, zs, args) -> np.ndarray:
+    require_x64("to_momentum / to_velocity")
     zs = np.asarray(zs, dtype=np.float64)
     if zs.ndim == 1:
         return _convert(fn, system, zs[None], None if args is None else np.asarray(args)[None])[0]
@@ -58,6 +61,7 @@ def derivatives(system, zs, args=None, canonical: bool = False) -> np.ndarray:
     which Hamilton's equations alone would miss). ``args`` as in :func:`to_momentum`. The
     training targets of ``TrainConfig(target="derivative")`` (the HNN and LNN seeds' protocol).
     """
+    require_x64("derivatives")
     zs = np.asarray(zs, dtype=np.float64)
     if zs.ndim == 1:
         a = None if args is None else np.asarray(args)[None]

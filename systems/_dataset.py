@@ -33,6 +33,7 @@ import math
 import numbers
 import os
 import tempfile
+import warnings
 from pathlib import Path
 
 import jax
@@ -40,6 +41,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._coordinates import to_momentum
+from ._precision import require_x64
 from ._registry import make
 
 FORMAT_VERSION = 1
@@ -101,7 +103,9 @@ class DatasetConfig:
                 f"test_chunks * chunk = {self.test_chunks * self.chunk} points exceeds the "
                 f"{n} points of a {self.duration} s trajectory at dt={self.dt}"
             )
-        make(self.system, **dict(self.system_params))  # ValueError for a bad system
+        with warnings.catch_warnings():  # only the parameters are checked: float32 is moot
+            warnings.filterwarnings("ignore", "Explicitly requested dtype", UserWarning)
+            make(self.system, **dict(self.system_params))  # ValueError for a bad system
 
     @property
     def n_points(self) -> int:
@@ -178,6 +182,7 @@ def make_dataset(config: DatasetConfig, cache_dir=None) -> Dataset:
     """Load the dataset of ``config`` from the cache, or generate and cache it."""
     if not isinstance(config, DatasetConfig):
         raise ValueError(f"config must be a DatasetConfig; got {type(config).__name__}")
+    require_x64("make_dataset")
     system = make(config.system, **dict(config.system_params))
     path = Path(cache_dir if cache_dir is not None else cache_root())
     path = path / "datasets" / f"{config.hash()}.npz"

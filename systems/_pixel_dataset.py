@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._precision import require_x64
 from ._render import read_state, render
 
 
@@ -89,6 +90,7 @@ def make_pixel_dataset(config: PixelDatasetConfig) -> PixelDataset:
     """Simulate (float64, the system's ground truth) and render the dataset of ``config``."""
     from ._registry import make
 
+    require_x64("make_pixel_dataset")
     system = make(config.system, **dict(config.system_params))
     k_train, k_test = jax.random.split(jax.random.PRNGKey(config.seed))
     out = {}

@@ -127,9 +127,12 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
         df.loc["total", "cpu_hours_left"] * ratio / 2
     )
     assert C.plan("paper-core", tmp_path / "none", workers=2)["calibration"].eq(1.0).all()
-    text = C.format_plan(df.reset_index(), "paper-core", 2)
-    assert "total" in text and "loss" in text
-    assert f"on {len(with_cpu)} of {len(done)} stored runs" in text
+    table = df.reset_index()
+    lines = C.format_plan(table, "paper-core", 2).splitlines()
+    # a title, a header, then one line per claim and the total, as the plan has them
+    rows = lines[2 : 2 + len(table)]
+    assert [r.split()[0] for r in rows] == [str(c) for c in table["claim"]]
+    assert [r.split()[1] for r in rows] == [str(int(n)) for n in table["runs"]]
 
 
 def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
@@ -220,7 +223,8 @@ def test_the_replication_phase_runs_the_same_cells_on_seeds_5_to_9(tmp_path):
     assert prior.iloc[-1]["stored"] == 1 and df.iloc[-1]["stored"] == 0
     assert list(df["calibration"]) == pytest.approx(list(prior["calibration"]))
     assert prior.iloc[-1]["calibration"] != 1.0
-    assert "replication seeds 5, 6, 7, 8, 9" in C.format_plan(df, "paper-core", 2, seeds)
+    title = C.format_plan(df, "paper-core", 2, seeds).splitlines()[0]
+    assert title.startswith("paper-core, ") and all(str(s) in title for s in seeds)
 
 
 def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from bench._cli import main
+from bench.core._experiments import REPLICATION_SEEDS
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -58,7 +59,8 @@ def test_bad_input_subprocess_has_no_traceback(tmp_path):
     )  # fmt: skip
     assert out.returncode == 2
     assert "Traceback" not in out.stderr
-    assert out.stderr.strip().splitlines()[-1].startswith("error: unknown model 'nod'")
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ") and "unknown model 'nod'; allowed: node" in last, last
 
 
 def test_help_on_every_verb(capsys):
@@ -102,6 +104,7 @@ def test_env_pins_cores_and_compilation_cache():
     code = (
         "import os, jax, bench, bench.core._env as e; "
         "assert 'JAX_COMPILATION_CACHE_DIR' not in os.environ; n = e.setup_process(1); "
+        "assert jax.config.jax_enable_x64, 'setup_process did not turn 64-bit mode on'; "
         "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'], "
         "jax.config.jax_compilation_cache_dir)"
     )
@@ -115,10 +118,56 @@ def test_env_pins_cores_and_compilation_cache():
     assert cache.endswith(os.path.join("decon-bench", "jax"))
 
 
+IMPORTS_CHANGE_NOTHING = """
+import sys, warnings, jax, matplotlib, numpy as np
+backend = dict.__getitem__(matplotlib.rcParams, "backend")  # unresolved: no backend chosen yet
+import systems, models, bench
+assert not jax.config.jax_enable_x64, "an import turned jax's 64-bit mode on"
+assert dict.__getitem__(matplotlib.rcParams, "backend") == backend, "an import set a backend"
+assert "matplotlib.pyplot" not in sys.modules, "an import loaded pyplot"
+warnings.simplefilter("ignore")  # making a system without 64-bit mode warns of float32 arrays
+s = systems.make("chain_pendulum", k=1)
+config = systems.DatasetConfig(system="pendulum", n_generated=2, n_train=2, n_test=1)
+for compute in (lambda: s.simulate(np.array([0.1, 0.0]), np.arange(3) * 0.1),
+                lambda: systems.make_dataset(config, cache_dir=sys.argv[1])):
+    try:
+        compute()
+    except ValueError as e:
+        print(e)
+    else:
+        raise AssertionError("ground truth was computed without 64-bit mode")
+systems.enable_x64()
+try:
+    s.simulate(np.array([0.1, 0.0]), np.arange(3) * 0.1)
+except ValueError as e:
+    print(e)
+print(systems.make("chain_pendulum", k=1).simulate(np.array([0.1, 0.0]), np.arange(3) * 0.1).dtype)
+"""
+
+
+def test_imports_change_no_process_setting(tmp_path):
+    """`import systems, models, bench` leaves jax's 64-bit mode off and matplotlib's backend
+    unchosen; ground truth without 64-bit mode (or from a system made without it) is a one-line
+    error naming the fix, and the same computation runs in float64 once it is on."""
+    out = subprocess.run(
+        [sys.executable, "-c", IMPORTS_CHANGE_NOTHING, str(tmp_path)], cwd=ROOT,
+        capture_output=True, text=True, timeout=300,
+        env={k: v for k, v in os.environ.items() if k not in ("JAX_ENABLE_X64", "MPLBACKEND")},
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    *errors, dtype = out.stdout.splitlines()
+    assert len(errors) == 3 and dtype == "float64", out.stdout
+    for e in errors[:2]:
+        assert "systems.enable_x64()" in e and 'jax.config.update("jax_enable_x64", True)' in e
+    assert "made while jax's 64-bit mode was off" in errors[2]
+    assert not list(tmp_path.iterdir()), "a dataset was cached without 64-bit mode"
+
+
 def test_estimate_of_a_campaign_prints_both_phases(capsys, tmp_path):
     """paper-core's status: its own seeds, then the replication seeds' phase."""
     assert main(["--results", str(tmp_path), "estimate", "--profile", "paper-core"]) == 0
-    out = capsys.readouterr().out
-    assert "paper-core: runs and hours per claim" in out
-    assert "paper-core, replication seeds 5, 6, 7, 8, 9: runs and hours per claim" in out
-    assert out.count(" total ") == 2
+    lines = capsys.readouterr().out.splitlines()
+    titles = [x for x in lines if x.startswith("paper-core")]  # one plan per phase
+    seeds = REPLICATION_SEEDS["paper"]
+    assert len(titles) == 2 and all(str(s) in titles[1] for s in seeds), titles
+    assert sum(x.split()[:1] == ["total"] for x in lines) == 2

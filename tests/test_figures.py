@@ -1,7 +1,11 @@
 """Figures and the report from synthetic stored runs (no training): files exist, the report
 holds one verdict row per claim (claim 4: per metric and spring initial state), every
-experiment's table has its trivial-predictor row and a discriminating mark, the verdicts of a
-second results folder stand beside these, and an experiment without runs is skipped with a note."""
+experiment's table has its trivial-predictor row and discriminates, the verdicts of a second
+results folder stand beside these, and an experiment without runs is skipped.
+
+Verdicts, agreement and causes are asserted on the structured values the report is written
+from (:func:`load_other`'s verdicts, :func:`comparison_rows`), the report itself on its
+sections and rows."""
 
 import re
 
@@ -9,7 +13,18 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench._report import figure_stem, make_figures, write_report
+from bench._tables import discrimination_groups
+from bench.core._query import experiment_rows, load_tables
 from bench.studies.paper import FIGURES
+from bench.studies.paper._comparison import comparison_rows, load_other
+from bench.studies.paper.kit import (
+    INCONCLUSIVE,
+    NOT_REPRODUCED,
+    PARTLY,
+    REPRODUCED,
+    VERDICTS,
+    Verdict,
+)
 
 
 def _store(d, runs, curves):
@@ -32,6 +47,27 @@ def results(tmp_path_factory):
     return d, written, report.read_text()
 
 
+@pytest.fixture(scope="module")
+def judged(results):
+    """What the report is written from: this folder's final verdicts (pending where a
+    campaign's runs are missing) and, per claim key, its comparison with the paper folder."""
+    d, _, _ = results
+    _, profile, verdicts = load_other(d)
+    rows = comparison_rows(verdicts, profile, [load_other(d / "paper")])
+    return verdicts, {r.key: r for r in rows}
+
+
+def _section(text, heading):
+    """The body of the section ``heading`` (an experiment's heading may add "(claim n)")."""
+    lines = text.split("\n")
+    i = next(i for i, x in enumerate(lines) if x == heading or x.startswith(heading + " ("))
+    return "\n".join(lines[i + 1 :]).split("\n## ")[0]
+
+
+def _row(section, key):
+    return next(line for line in section.splitlines() if line.startswith(f"| {key} |"))
+
+
 def test_every_experiment_with_runs_has_png_and_pdf(results):
     d, written, _ = results
     for name in FIGURES:
@@ -43,56 +79,59 @@ def test_every_experiment_with_runs_has_png_and_pdf(results):
                 assert path in written and path.stat().st_size > 1000, path
 
 
-VERDICT = r"\*\*(reproduced|partly reproduced|not reproduced|inconclusive)\*\*"
-
-
-def test_report_has_a_verdict_row_per_claim(results):
+def test_report_has_a_verdict_row_per_claim(results, judged):
     _, _, text = results
-    claims = text.split("## Claims")[1].split("## Verdicts at both budgets")[0]
-    rows = re.findall(rf"^\| (\d)( \([^|]*\))? \| .*?{VERDICT}", claims, re.M)
-    assert sorted({int(c) for c, _, _ in rows}) == list(range(1, 10))  # one-digit claims
-    assert sum(c == "4" for c, _, _ in rows) == 4  # 2 metrics x 2 spring initial states
-    verdicts = {c: v for c, _, v in rows}
+    verdicts, _ = judged
+    assert {v.claim for v in verdicts} >= set(range(1, 10))  # the paper's claims, and more
+    assert sum(v.claim == 4 for v in verdicts) == 4  # 2 metrics x 2 spring initial states
+    final = {v.key: v.verdict for v in verdicts}
     # The synthetic table satisfies claims 1-6 and 8 by construction; claim 7 has no runs.
-    assert verdicts["3"] == "reproduced" and verdicts["7"] == "inconclusive"
+    assert final["3"] == REPRODUCED and final["7"] == INCONCLUSIVE
+    claims = _section(text, "## Claims")
+    for v in verdicts:  # one row per verdict, showing it
+        assert f"| **{v.verdict}** |" in _row(claims, v.key), v.key
 
 
-def test_report_sets_both_budgets_side_by_side(results):
+def test_report_sets_both_budgets_side_by_side(results, judged):
     _, _, text = results
-    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
-    assert "| claim | smoke (here) | paper (`paper/`) | agree |" in section
-    row3 = next(line for line in section.splitlines() if line.startswith("| 3 |"))
-    assert "**reproduced**" in row3 and "**not reproduced**" in row3 and "budget" in row3
+    _, rows = judged
+    row3 = rows["3"]
+    assert row3.labels == ("smoke (here)", "paper (`paper/`)")
+    assert [v.verdict for v in row3.verdicts] == [REPRODUCED, NOT_REPRODUCED]
+    assert row3.agree is False and "budget" in {c.kind for c in row3.causes}
+    section = _section(text, "## Verdicts at both budgets")
+    assert all(_row(section, key) for key in rows)  # one row per claim key
 
 
-def test_a_claim_judged_in_one_folder_only_names_no_cause(results):
-    """Claim 7 has no runs here (no relativistic rows) and a verdict in the other folder: the
-    cell says *no runs*, nothing disagrees, and the cause column stays empty (it used to repeat
-    "no runs or missing cells ... not comparable")."""
-    _, _, text = results
-    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
-    row7 = next(line for line in section.splitlines() if line.startswith("| 7 |"))
-    cells = [c.strip() for c in row7.strip("|").split("|")]
-    assert cells[1] == "no runs" and re.search(VERDICT, cells[2]), row7
-    assert cells[3] == "-" and cells[4] == "-", row7
+def test_a_claim_judged_in_one_folder_only_names_no_cause(judged):
+    """Claim 7 has no runs here (no relativistic rows) and a verdict in the other folder: here
+    has *no runs*, nothing disagrees, and no cause is named (not even "not comparable")."""
+    _, rows = judged
+    row7 = rows["7"]
+    assert row7.states == ("no runs", "judged")
+    assert row7.agree is None and row7.causes == ()
 
 
-def test_every_experiment_table_has_trivial_row_and_discriminating_mark(results):
-    _, _, text = results
+def test_every_experiment_table_has_trivial_row_and_discriminates(results):
+    d, _, text = results
+    runs, _, profile = load_tables(d)
     for name in FIGURES:
         if name == "relativistic":
             continue
-        section = text.split(f"## {name}")[1].split("\n## ")[0]
-        assert "(trivial) |" in section, name
-        assert "- discriminating: yes" in section, name
+        rows = experiment_rows(runs, name, profile)
+        assert {"constant_velocity", "at_rest"} & set(rows["model"]), name
+        groups = discrimination_groups(rows)
+        assert groups and all(g.status == "yes" for g in groups), (name, groups)
+        assert "(trivial) |" in _section(text, f"## {name}"), name  # its row in the table
 
 
-def test_report_links_figures_and_notes_missing_experiment(results):
-    _, _, text = results
+def test_report_links_figures_and_skips_an_experiment_without_runs(results):
+    d, _, text = results
     assert "](figures/fig4_second_order.png)" in text
-    assert "No runs of this experiment are stored" in text
-    assert "No runs for 4 declared cells" in text  # relativistic, listed
-    assert "profile: smoke" in text
+    section = _section(text, "## relativistic")
+    assert not [line for line in section.splitlines() if line.startswith("| ")]  # no table
+    assert "](figures/" not in section
+    assert "- profile: smoke" in text
     assert "reference_compatible" in text
 
 
@@ -137,18 +176,17 @@ def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_st
     want = {c.config_hash for c in expand("loss", "paper-core")}
     assert set(runs["config_hash"]) == want
 
-    def claims(text):
-        return text.split("## Claims")[1].split("## Verdicts at both budgets")[0]
-
     _store(tmp_path / "a", runs, curves)
-    text = claims(write_report(tmp_path / "a", compare=[]).read_text())
-    row6 = re.search(r"^\| 6 \|.*$", text, re.M).group(0)
-    assert "pending" not in row6 and re.search(VERDICT, row6)
-    row1 = re.search(r"^\| 1 \|.*$", text, re.M).group(0)
-    assert re.search(r"\*\*pending \(\d+ of 50 runs\)\*\*", row1), row1
+    final = {v.key: v for v in load_other(tmp_path / "a")[2]}
+    assert final["6"].pending is None and final["6"].verdict in VERDICTS
+    stored, declared = final["1"].pending
+    assert declared == 50 and stored < declared
+    claims = _section(write_report(tmp_path / "a", compare=[]).read_text(), "## Claims")
+    for key in ("1", "6"):  # the folder's own claims table shows them
+        assert f"| **{final[key].verdict}** |" in _row(claims, key)
     _store(tmp_path / "b", runs.iloc[1:], curves)
-    text = claims(write_report(tmp_path / "b", compare=[]).read_text())
-    assert "**pending (44 of 45 runs)**" in re.search(r"^\| 6 \|.*$", text, re.M).group(0)
+    final = {v.key: v for v in load_other(tmp_path / "b")[2]}
+    assert final["6"].pending == (44, 45)
 
 
 def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(results, tmp_path):
@@ -158,14 +196,13 @@ def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(res
     d, _, _ = results
     runs, curves = synthetic_tables("paper-core", experiments=("loss",))
     _store(tmp_path / "camp", runs, curves)
-    text = write_report(tmp_path / "camp", compare=[d, d / "paper"]).read_text()
-    section = text.split("## Verdicts at both budgets")[1].split("\n## ")[0]
-    row3 = next(line for line in section.splitlines() if line.startswith("| 3 |"))
-    cells = [c.strip() for c in row3.strip("|").split("|")]
-    assert cells[1].startswith("pending (") and cells[4] == "**no**", row3
-    assert "budget" in cells[5] and "not comparable yet" in cells[5], row3
-    parts = cells[5].split("; ")
-    assert len(parts) == len(set(parts)), row3
+    _, profile, verdicts = load_other(tmp_path / "camp")
+    others = [load_other(d), load_other(d / "paper")]
+    row3 = next(r for r in comparison_rows(verdicts, profile, others) if r.key == "3")
+    assert row3.states == ("pending", "judged", "judged") and row3.agree is False
+    kinds = [c.kind for c in row3.causes]
+    assert kinds.count("budget") == 1 and kinds.count("not comparable") == 1, row3.causes
+    assert next(c for c in row3.causes if c.kind == "not comparable").folder == row3.labels[0]
 
 
 def test_symplectic_figure_draws_from_weight_zero_runs_only(tmp_path):
@@ -204,44 +241,35 @@ def test_a_figure_saved_twice_has_the_same_bytes(tmp_path):
 def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
     """*inconclusive* here and *inconclusive (does not replicate)* there agree (neither signs
     the claim, no cause to name); *partly reproduced* against either does not."""
-    from bench.studies.paper._comparison import comparison_section
-    from bench.studies.paper.kit import Verdict
 
     def v(verdict, claim=3):
         return Verdict(claim, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p")
 
-    others = [("a", "quick", [v("inconclusive (does not replicate)"), v("inconclusive", 1)])]
-    rows = comparison_section([v("inconclusive"), v("partly reproduced", 1)], "paper", others)
-    row3 = next(r for r in rows if r.startswith("| 3 |"))
-    row1 = next(r for r in rows if r.startswith("| 1 |"))
-    assert row3.endswith("| yes | - |"), row3
-    assert "| **no** |" in row1 and "budget" in row1, row1
+    others = [("a", "quick", [v(f"{INCONCLUSIVE} (does not replicate)"), v(INCONCLUSIVE, 1)])]
+    rows = comparison_rows([v(INCONCLUSIVE), v(PARTLY, 1)], "paper", others)
+    row3, row1 = (next(r for r in rows if r.claim == c) for c in (3, 1))
+    assert row3.agree is True and row3.causes == (), row3
+    assert row1.agree is False and [c.kind for c in row1.causes] == ["budget"], row1
 
 
 def test_a_cause_shared_by_two_compared_folders_is_named_once():
     """Here against two folders that disagree with it for the same reason: the budget cause
     appears once, a failed-run count only where it differs."""
-    from bench.studies.paper._comparison import comparison_section
-    from bench.studies.paper.kit import Verdict
 
     def v(verdict, n_failed=0):
         return Verdict(3, "t", verdict, 0.1, 0.0, 0.2, 5, "d", profile="p", n_failed=n_failed)
 
-    others = [("a", "paper", [v("partly reproduced", 1)]), ("b", "paper", [v("partly reproduced")])]
-    rows = comparison_section([v("inconclusive")], "quick", others)
-    row3 = next(r for r in rows if r.startswith("| 3 |"))
-    cause = row3.rstrip(" |").rsplit(" | ", 1)[1]
-    assert cause.count("budget (") == 1, row3
-    assert cause.count("failed runs (0 vs 1)") == 1, row3
+    others = [("a", "paper", [v(PARTLY, 1)]), ("b", "paper", [v(PARTLY)])]
+    (row3,) = comparison_rows([v(INCONCLUSIVE)], "quick", others)
+    assert row3.agree is False
+    assert sorted(c.kind for c in row3.causes) == ["budget", "failed runs"], row3.causes
 
 
 def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_budget():
     """Quick's seeds 0-4 read *not reproduced*, as the paper budget does, but its verdict
     changes without a seed: the cause is the reading's stability, and the budget is not named.
     Where the demoted reading's own seeds differ from the other folder, both are named."""
-    from bench.studies.paper._comparison import comparison_section
     from bench.studies.paper._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
-    from bench.studies.paper.kit import Verdict
 
     def v(verdict, claim, primary=None, readings=""):
         return Verdict(
@@ -272,18 +300,19 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
             "seeds 0-4: inconclusive; seeds 5-9: partly reproduced",
         ),
     ]
-    rows = comparison_section(
-        [v("not reproduced", 9), v("partly reproduced", 3)],
-        "paper-core",
-        [("a", "quick", quick)],
+    rows = comparison_rows(
+        [v(NOT_REPRODUCED, 9), v(PARTLY, 3)], "paper-core", [("a", "quick", quick)]
     )
-    row9 = next(r for r in rows if r.startswith("| 9 |"))
-    row3 = next(r for r in rows if r.startswith("| 3 |"))
-    assert "| **no** |" in row9 and "reads not reproduced on its own seeds" in row9, row9
-    assert "changes without a seed (seeds 0-4: not reproduced; without seed 1" in row9, row9
-    assert "budget" not in row9, row9
-    assert "the verdict does not replicate (seeds 0-4: inconclusive; seeds 5-9" in row3, row3
-    assert "budget" in row3, row3
+    row9, row3 = (next(r for r in rows if r.claim == c) for c in (9, 3))
+    quick_label = row9.labels[1]
+    assert row9.agree is False
+    # quick's own seeds read as paper-core does: its stability is the only cause
+    assert [(c.kind, c.folder) for c in row9.causes] == [("stability", quick_label)], row9
+    # quick's own seeds read otherwise: its stability, and the budget
+    assert [(c.kind, c.folder) for c in row3.causes] == [
+        ("stability", quick_label),
+        ("budget", ""),
+    ], row3
 
 
 def test_report_names_no_folder_by_its_absolute_path(tmp_path):
@@ -299,18 +328,25 @@ def test_report_names_no_folder_by_its_absolute_path(tmp_path):
     assert str(tmp_path) not in text
 
 
-def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_claims(results):
+def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_claims(
+    results, judged
+):
     from bench.studies.paper import policy
+    from bench.studies.paper.kit import margin_ranges
 
     _, _, text = results
-    section = text.split("## Margin policy")[1].split("## Margin-dependent claims")[0]
+    verdicts, _ = judged
+    section = _section(text, "## Margin policy")
     for q in policy.POLICY.values():
         assert f"| {q.label} |" in section
-    assert "several orders of magnitude" in section  # a margin a seed states, with its source
+    stated = policy.stated_margins()  # margins a seed states, each with its quote and source
+    assert stated and all(m.quote in section and m.source in section for m in stated)
     parts = text.split("### Every part")[1].split("## Margin policy")[0]
     assert "| margin range |" in parts.splitlines()[2]
-    assert re.search(r"holds below [\d.]+x; undecided [\d.]+x-[\d.]+x; contradicts from", parts)
-    dependent = text.split("## Margin-dependent claims")[1].split("## Verdicts at both budgets")[0]
-    assert (
-        "No verdict changes inside any band." in dependent or "Margin-dependent: claim" in dependent
-    )
+    tested = [p for v in verdicts for p in v.parts if p.status != "not tested"]
+    for p in tested:
+        p.ranges = margin_ranges(p)
+        assert p.range_text() in parts, (p.name, p.range_text())
+    three = [p for p in tested if [r[0] for r in p.ranges] == ["holds", "undecided", "contradicts"]]
+    assert three, "no part that holds, then is undecided, then contradicted as the margin grows"
+    assert "\n## Margin-dependent claims\n" in text

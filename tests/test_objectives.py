@@ -117,7 +117,7 @@ def test_run_fields_are_validated_and_out_of_the_hash_at_their_defaults():
     )
     assert base.config_hash == same.config_hash
     box = RunConfig(system="chain_pendulum", k=2, train_target="derivative", train_box=list(BOX))
-    assert box.validate().train_box == BOX and box.config_hash != base.config_hash
+    assert box.train_box == BOX and box.config_hash != base.config_hash
     assert RunConfig.from_dict({**box.to_dict(), "train_box": "[0, 1, -1, 1]"}).train_box == (
         0.0,
         1.0,
@@ -135,7 +135,7 @@ def test_run_fields_are_validated_and_out_of_the_hash_at_their_defaults():
     ]
     for kw, needle in bad:
         with pytest.raises(ValueError, match=needle):
-            RunConfig(system="chain_pendulum", k=2, **kw).validate()
+            RunConfig(system="chain_pendulum", k=2, **kw)
     with pytest.raises(ValueError, match="optimizer .* allowed adamw, adam_l2"):
         TrainConfig(optimizer="sgd")
     with pytest.raises(ValueError, match="schedule .* allowed cosine, onecycle, constant"):

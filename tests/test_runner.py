@@ -4,8 +4,10 @@ Faults from outside a run (a sweep killed and resumed, damaged rows, a full disk
 tests/test_faults.py.
 """
 
+import dataclasses
 import json
 import os
+import re
 import signal
 import time
 from pathlib import Path
@@ -79,7 +81,7 @@ def test_expand_product_seeds_overrides_and_filters():
         name="t2",
         title="t",
         axes={"model": ["node", "node_so"]},
-        fixed={"system": "chain_pendulum"},
+        fixed={"system": "chain_pendulum", "k": 1},
         include=lambda c: c.model == "node",
     )
     assert [r.model for r in expand(only, "smoke")] == ["node"]
@@ -94,8 +96,8 @@ def test_hash_canonical_and_names_excluded():
     assert a.config_hash == b.config_hash
     assert a.config_hash != RunConfig(system="chain_pendulum", k=3).config_hash
     assert RunConfig.from_dict(json.loads(json.dumps(a.to_dict()))) == a
-    e1 = Experiment(name="x1", title="", axes={"model": ["node"]}, fixed={"system": "s"})
-    e2 = Experiment(name="x2", title="", axes={"model": ["node"]}, fixed={"system": "s"})
+    e1 = Experiment(name="x1", title="", axes={"model": ["node"]}, fixed={"system": "pendulum"})
+    e2 = Experiment(name="x2", title="", axes={"model": ["node"]}, fixed={"system": "pendulum"})
     assert [r.config_hash for r in expand(e1, "smoke")] == [
         r.config_hash for r in expand(e2, "smoke")
     ]
@@ -111,9 +113,48 @@ def test_unknown_fields_rejected_at_registration():
     with pytest.raises(ValueError, match="steps"):
         Experiment(name="bad", title="", profile_overrides={"smoke": {"stepz": 3}})
     with pytest.raises(ValueError, match="k must be an integer >= 1"):
-        RunConfig(system="chain_pendulum", k=0).validate()
+        RunConfig(system="chain_pendulum", k=0)
     with pytest.raises(ValueError, match="seed"):
-        RunConfig(system="chain_pendulum", seed=-1).validate()
+        RunConfig(system="chain_pendulum", seed=-1)
+
+
+def test_run_config_is_checked_once_where_it_is_built():
+    """Construction checks the values, the system with its parameters and the dataset's shape
+    (a RunConfig that exists is valid: from_dict and dataclasses.replace build one too);
+    expand checks only the combinations its experiment keeps."""
+    for bad, message in (
+        ({"system": "chain_pendulm", "k": 1}, "unknown system 'chain_pendulm'"),
+        ({"system": "chain_pendulum"}, "needs parameter(s) k"),
+        ({"system": "relativistic_particle", "k": 2}, "unknown parameter(s) k"),
+        ({"system": "chain_pendulum", "k": 1, "chunk": 1}, "chunk must be in [2, 334]"),
+        ({"system": "chain_pendulum", "k": 1, "loss": "l3"}, "allowed: l1, l2"),
+    ):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            RunConfig(**bad)
+    good = RunConfig(system="chain_pendulum", k=1)
+    with pytest.raises(ValueError, match="test_chunks"):
+        dataclasses.replace(good, test_chunks=100)
+    with pytest.raises(ValueError, match="unknown system"):
+        RunConfig.from_dict({**good.to_dict(), "system": "nope"})
+    # a row read back from JSON (lists for tuples) is the same, hashable configuration
+    params = RunConfig(system="chain_pendulum", k=2, system_params={"masses": (1.0, 2.0)})
+    back = RunConfig.from_dict(json.loads(json.dumps(params.to_dict())))
+    assert back == params and hash(back) == hash(params)
+    assert back.config_hash == params.config_hash
+    # the product holds a spring's initial state on the chain; include drops it, so it is
+    # never built, but a kept combination that cannot be built names its experiment
+    spring = (("initial", "paper"),)
+    exp = Experiment(
+        name="t3",
+        title="t",
+        axes={"system": ["chain_pendulum", "spring_pendulum"], "system_params": [(), spring]},
+        fixed={"k": 1},
+        include=lambda c: (c.system == "spring_pendulum") == (c.system_params == spring),
+    )
+    assert [r.system for r in expand(exp, "smoke")] == ["chain_pendulum", "spring_pendulum"]
+    everything = dataclasses.replace(exp, name="t4", include=None)
+    with pytest.raises(ValueError, match="experiment 't4' at smoke: unknown parameter"):
+        expand(everything, "smoke")
 
 
 # ------------------------------------------------------------------------------- store

@@ -197,7 +197,10 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     assert np.all(np.isfinite(ok["value"]))
     assert set(df["case"]) == set(S.CASES)
     text = S.stability_section(tmp_path)
-    assert "## Numerical stability" in text and "stiffness" in text
+    assert text.startswith("## Numerical stability\n")
+    for case, g in df.groupby("case"):  # one table per case, a row per variant and metric
+        table = text.split(f"\n### {case}\n")[1].split("\n### ")[0]
+        assert sum(x.startswith("| ") for x in table.splitlines()) == 2 + len(g), case
 
 
 @pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU

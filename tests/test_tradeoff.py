@@ -177,9 +177,15 @@ def _synthetic_store(tmp_path):
 
 def test_section_and_figure_from_a_store(tmp_path):
     rows = _synthetic_store(tmp_path)
+    runs = pd.DataFrame(rows)
+    front = T.tradeoff_table(runs)
+    assert len(front) and (front.on_front == "yes").any()
+    pick = T.cheapest_within(T.aggregate_seeds(runs), "rollout_seconds_per_traj")
+    assert len(pick) and (pick["error_ratio"] <= 1.1 + 1e-12).all()
     text = T.tradeoff_section(tmp_path)
-    assert "Pareto front" in text and "within 10%" in text
-    assert f"{len(rows)} runs" in text
+    table = text.split("\n### Pareto front")[1].split("\n### ")[0].splitlines()
+    assert sum(x.startswith("| ") for x in table) == 2 + len(front)  # head, rule, the rows
+    assert "\n### Cheapest configuration" in text
     paths = T.tradeoff_figure(tmp_path)
     assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
 

@@ -348,7 +348,6 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
         try:
             models, datasets = [], []
             for c in configs:
-                c.validate()
                 _, data, _, model = build_run(c, cache_root)
                 models.append(model)
                 datasets.append(data)

@@ -1,4 +1,5 @@
-"""Process settings for XLA on the CPU: cores (thread pools) and the compilation cache.
+"""Process settings made by entry points: jax's 64-bit mode, XLA's cores on the CPU (thread
+pools) and the compilation cache.
 
 Threads beyond the cores cost 3-5x on small training steps (measured on the reference code), so
 sweep workers are pinned to their own cores. These must run before jax creates its backend
@@ -78,9 +79,13 @@ def configure_compilation_cache(path: str | None = None) -> str | None:
 
 def setup_process(n: int | None = None, cores: list[int] | None = None) -> int:
     """An entry point's process setup, before any computation: :func:`configure_threads`
-    (``n``, ``cores``) and :func:`configure_compilation_cache`. Returns the cores in effect."""
+    (``n``, ``cores``), :func:`configure_compilation_cache` and jax's 64-bit mode for the
+    float64 ground truth (``systems.enable_x64``). Returns the cores in effect."""
     count = configure_threads(n, cores)
     configure_compilation_cache()
+    import systems
+
+    systems.enable_x64()
     return count
 
 

@@ -37,8 +37,8 @@ from ._record import (
 class Steps:
     """The steps of one kind of run, each a function of plain values:
 
-    - ``build(config, cache_root) -> built``: checks the configuration and makes the run's
-      system, data and untrained model (``built``, a tuple whose layout is the kind's own);
+    - ``build(config, cache_root) -> built``: the run's system, data and untrained model
+      (``built``, a tuple whose layout is the kind's own);
     - ``train(config, built, cache_root, progress) -> (model, meta)``: the trained model and
       the training's record (:func:`bench.core._params.cached_training`);
     - ``evaluate(config, built, model, meta, cache_root) -> (columns, arrays)``: the row's
@@ -51,7 +51,6 @@ class Steps:
 
 
 def _build_state(config: RunConfig, cache_root: Path):
-    config.validate()
     return build_run(config, cache_root)
 
 
@@ -61,9 +60,8 @@ def _train_state(config: RunConfig, built, cache_root: Path, progress: bool):
 
 
 def _build_pixels(config: RunConfig, cache_root: Path):
-    from ._pixels import build, check_pixels
+    from ._pixels import build
 
-    check_pixels(config)
     return build(config)
 
 

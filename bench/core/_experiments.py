@@ -13,6 +13,12 @@ another profile: it has its base profile's defaults, so its runs hash exactly as
 runs do, and an experiment takes part in it only where its ``profile_overrides`` name it (the
 base's overrides apply first, then the selection's, which usually narrow an axis).
 
+A :class:`RunConfig` is checked once, when it is built: every field's value, the system with
+its parameters and the dataset's shape (its ``systems.DatasetConfig``), and a pixel run's
+restrictions; each problem is a one-line ValueError naming what is allowed. What depends on the
+registered models (the model for the scene, the integrators its rollout accepts) is asked of
+the models by :func:`bench.core._runnable.check_runnable` before a sweep runs anything.
+
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
 of every field (fields added later, ``eval_checkpoints`` and ``train_target``, count only when
 they differ from their defaults, 0 and "rollout"),
@@ -25,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import hashlib
 import importlib
 import itertools
@@ -44,6 +51,18 @@ TRAIN_TARGETS = ("rollout", "derivative")
 OBSERVATIONS = ("state", "pixels")  # what the models see (pixels: bench.core._pixels)
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
+# A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
+# |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)
+# (Pendulum-v0's reset). PIXEL_DEFAULTS: the fields a pixel run leaves at their defaults.
+PIXEL_SIZE = 28
+PIXEL_MAX_ANGLE = math.pi / 6
+PIXEL_MAX_SPEED = 1.0
+PIXEL_DEFAULTS = (
+    ("noise", 0.0),
+    ("random_args", False),
+    ("train_target", "rollout"),
+    ("friction", 0.0),
+)
 
 
 @dataclass(frozen=True)
@@ -101,12 +120,18 @@ class RunConfig:
     train_box: tuple = ()
 
     def __post_init__(self):
-        # Canonical forms, so that equal runs hash equally however they were written.
+        self._canonicalize()
+        self._check()
+
+    def _canonicalize(self) -> None:
+        """Canonical forms, so that equal runs hash equally however they were written (a list
+        read back from JSON is the tuple it was written from: the JSON, and so the hash, is
+        the same)."""
         for name in ("system_params", "model_options"):
             value = getattr(self, name)
             if isinstance(value, Mapping):
                 value = tuple(value.items())
-            object.__setattr__(self, name, tuple(sorted((str(a), b) for a, b in value)))
+            object.__setattr__(self, name, tuple(sorted((str(a), _frozen(b)) for a, b in value)))
         if self.k is not None:
             object.__setattr__(self, "k", _as_int(self.k, "k"))
         for name in ("friction", "noise", "dt", "duration", "lr", "eval_rtol"):
@@ -127,8 +152,25 @@ class RunConfig:
             raise ValueError(f"train_box must be () or 4 numbers; got {self.train_box!r}")
         object.__setattr__(self, "train_box", tuple(_as_float(b, "train_box") for b in box))
 
-    def validate(self) -> RunConfig:
-        """Check values that need no registry; raise ValueError naming what is allowed."""
+    @classmethod
+    def _candidate(cls, **fields) -> RunConfig:
+        """A combination of an experiment's axes in canonical form, not checked: the product
+        holds combinations that the experiment's ``include`` drops (a spring's initial state on
+        the chain), so :func:`expand` filters candidates and builds only those it keeps."""
+        for key in fields.keys() - _defaults():
+            check_choice("RunConfig field", key, field_names())
+        c = object.__new__(cls)
+        for name, default in _defaults().items():
+            value = fields.get(name, default)
+            if value is dataclasses.MISSING:
+                raise ValueError(f"a run needs its {name}")
+            object.__setattr__(c, name, value)
+        c._canonicalize()
+        return c
+
+    def _check(self) -> None:
+        """The one check of a configuration (from ``__post_init__``): one-line ValueErrors
+        naming what is allowed."""
         if self.k is not None and self.k < 1:
             raise ValueError(f"k must be an integer >= 1; got {self.k}")
         for name in ("friction", "noise"):
@@ -184,7 +226,25 @@ class RunConfig:
                 raise ValueError(
                     "train_box supports no noise, random_args or pixels; allowed: their defaults"
                 )
-        return self
+        if self.observation == "pixels":
+            self._check_pixels()
+        else:  # the system, its parameters and the dataset's shape (systems checks them)
+            object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
+
+    def _check_pixels(self) -> None:
+        import systems
+
+        if self.chunk < 3:
+            raise ValueError(
+                f"pixel runs need chunk >= 3 frames (two observations); got chunk={self.chunk}"
+            )
+        for name, default in PIXEL_DEFAULTS:
+            if getattr(self, name) != default:
+                what = f"{name} {getattr(self, name)!r}"
+                raise ValueError(f"pixel runs support no {what}; allowed: {default!r}")
+        system = _system(self.system, tuple(sorted(self.system_kwargs().items())))
+        systems._render.reach(system)  # the renderable systems (ValueError naming them)
+        self.pixel_dataset_config()
 
     def to_dict(self) -> dict:
         """Every field, JSON-ready (tuples of pairs become lists)."""
@@ -219,23 +279,48 @@ class RunConfig:
             kw["friction"] = self.friction
         return kw
 
+    def _dataset_fields(self) -> tuple:
+        return (
+            ("system", self.system),
+            ("system_params", tuple(sorted(self.system_kwargs().items()))),
+            ("n_generated", self.n_generated),
+            ("n_train", self.n_train),
+            ("chunk", self.chunk),
+            ("dt", self.dt),
+            ("duration", self.duration),
+            ("n_test", self.n_test),
+            ("test_chunks", self.test_chunks),
+            ("noise", self.noise),
+            ("coordinates", self.coordinates),
+            ("random_args", self.random_args),
+            ("seed", self.seed),
+        )
+
     def dataset_config(self):
-        """The ``systems.DatasetConfig`` of this run's training and test data."""
+        """The ``systems.DatasetConfig`` of this run's training and test data (a state run's
+        was built, and so checked, with the run)."""
+        built = self.__dict__.get("_dataset")
+        return built if built is not None else _dataset_config(self._dataset_fields())
+
+    def pixel_dataset_config(self):
+        """A pixel run's ``systems.PixelDatasetConfig``: ``n_train`` training and ``n_test``
+        test trajectories from the :data:`PIXEL_MAX_ANGLE` / :data:`PIXEL_MAX_SPEED` starts,
+        frames of :data:`PIXEL_SIZE` pixels ``dt`` apart; a training trajectory spans
+        ``duration`` (``round(duration / dt)`` frames), a test trajectory
+        ``chunk * test_chunks`` frames."""
         import systems
 
-        return systems.DatasetConfig(
+        return systems.PixelDatasetConfig(
             system=self.system,
             system_params=tuple(sorted(self.system_kwargs().items())),
-            n_generated=self.n_generated,
+            size=PIXEL_SIZE,
             n_train=self.n_train,
-            chunk=self.chunk,
-            dt=self.dt,
-            duration=self.duration,
             n_test=self.n_test,
-            test_chunks=self.test_chunks,
-            noise=self.noise,
-            coordinates=self.coordinates,
-            random_args=self.random_args,
+            train_points=max(self.chunk, round(self.duration / self.dt)),
+            test_points=self.chunk * self.test_chunks,
+            dt=self.dt,
+            max_angle=PIXEL_MAX_ANGLE,
+            max_speed=PIXEL_MAX_SPEED,
             seed=self.seed,
         )
 
@@ -267,6 +352,38 @@ _NEW_FIELDS = {
     "weight_decay": None,
     "train_box": (),
 }
+
+
+@functools.cache
+def _defaults() -> dict:
+    """RunConfig field -> its default (``dataclasses.MISSING`` for ``system``)."""
+    return {f.name: f.default for f in dataclasses.fields(RunConfig)}
+
+
+@functools.lru_cache(maxsize=4096)
+def _dataset_config(fields: tuple):
+    """``systems.DatasetConfig(**fields)``, built once per distinct dataset in a process."""
+    import systems
+
+    return systems.DatasetConfig(**dict(fields))
+
+
+@functools.lru_cache(maxsize=256)
+def _system(name: str, params: tuple):
+    """``systems.make(name, **params)``, to check a pixel run's system (and ask it whether it
+    renders); jax's float32 warning is moot here, where only the parameters are checked."""
+    import warnings
+
+    import systems
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Explicitly requested dtype", UserWarning)
+        return systems.make(name, **dict(params))
+
+
+def _frozen(v):
+    """Lists (as JSON gives them back) as tuples, so that a configuration is hashable."""
+    return tuple(_frozen(x) for x in v) if isinstance(v, list | tuple) else v
 
 
 def _is_missing(v) -> bool:
@@ -519,13 +636,17 @@ def expand(
     keys = list(axes)
     out, seen = [], set()
     for combo in itertools.product(*(list(axes[k]) for k in keys)):
-        cfg = RunConfig(**{**base, **dict(zip(keys, combo, strict=True))})
-        if not valid(cfg) or (exp.include is not None and not exp.include(cfg)):
+        fields = {**base, **dict(zip(keys, combo, strict=True))}
+        cand = RunConfig._candidate(**fields)
+        if not valid(cand) or (exp.include is not None and not exp.include(cand)):
             continue
-        if cfg.config_hash in seen:
+        if cand.config_hash in seen:
             continue
-        seen.add(cfg.config_hash)
-        out.append(cfg)
+        seen.add(cand.config_hash)
+        try:
+            out.append(RunConfig(**fields))
+        except ValueError as e:
+            raise ValueError(f"experiment {exp.name!r} at {profile}: {e}") from None
     return out
 
 

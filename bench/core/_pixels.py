@@ -7,7 +7,6 @@ and clipping and the seed's weight decay. The evaluate step is :mod:`bench.core.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,12 +14,9 @@ import numpy as np
 
 import systems
 
-from ._experiments import RunConfig
+from ._experiments import PIXEL_SIZE, RunConfig
 from ._params import cached_training, result_meta
 
-SIZE = 28  # pixels per side (the HNN seed's 28 x 28)
-MAX_ANGLE = math.pi / 6  # the seed's starts: |angle| < pi/6 ...
-MAX_SPEED = 1.0  # ... and angular velocity U(-1, 1) (Pendulum-v0's reset)
 AE_LOSS, CC_LOSS, DYN_LOSS = 1.0, 1.0, 0.1  # the seed's weights (train.py)
 WEIGHT_DECAY = 1e-5  # the seed's (appendix C: "weight decay ... had a significant impact")
 LATENT_DT = 1.0  # latent time per frame (the seed's z_next = z + f(z))
@@ -37,55 +33,19 @@ PIXEL_METRICS = (
 )
 
 
-def dataset_config(c: RunConfig) -> systems.PixelDatasetConfig:
-    """The pixel dataset of a run: ``n_train`` training and ``n_test`` test trajectories from
-    starts |q0| < :data:`MAX_ANGLE`, qdot0 ~ U(-:data:`MAX_SPEED`, :data:`MAX_SPEED`), frames of
-    :data:`SIZE` x :data:`SIZE` pixels ``dt`` apart; a training trajectory spans ``duration``
-    (``round(duration / dt)`` frames), a test trajectory ``chunk * test_chunks`` frames."""
-    return systems.PixelDatasetConfig(
-        system=c.system,
-        system_params=tuple(sorted(c.system_kwargs().items())),
-        size=SIZE,
-        n_train=c.n_train,
-        n_test=c.n_test,
-        train_points=max(c.chunk, round(c.duration / c.dt)),
-        test_points=c.chunk * c.test_chunks,
-        dt=c.dt,
-        max_angle=MAX_ANGLE,
-        max_speed=MAX_SPEED,
-        seed=c.seed,
-    )
-
-
-def check_pixels(c: RunConfig) -> RunConfig:
-    """One-line ValueError for a pixel run that can never run (before any training)."""
+def check_pixel_model(c: RunConfig) -> None:
+    """One-line ValueError when the registered models cannot make ``c``'s latent model (the
+    configuration itself was checked when it was built)."""
     import jax
 
     import models
 
-    c.validate()
-    if c.chunk < 3:
-        raise ValueError(
-            f"pixel runs need chunk >= 3 frames (two observations); got chunk={c.chunk}"
-        )
-    for name, bad in (
-        ("noise", c.noise != 0),
-        ("random_args", c.random_args),
-        ("train_target 'derivative'", c.train_target != "rollout"),
-        ("friction", c.friction != 0),
-    ):
-        if bad:
-            raise ValueError(f"pixel runs support no {name}; allowed: the default")
-    system = systems.make(c.system, **c.system_kwargs())
-    systems._render.reach(system)  # the renderable systems (ValueError naming them)
-    dataset_config(c)
     if models.spec(c.model).trivial:
         allowed = [m for m in models.available() if not models.spec(m).trivial]
         raise ValueError(f"pixel runs need a learned model; allowed: {', '.join(allowed)}")
     models.LatentModel(
         c.model, (2, 8, 8), key=jax.random.PRNGKey(0), width=2, ae_width=2, dtype=c.dtype
     )
-    return c
 
 
 def build(c: RunConfig):
@@ -95,10 +55,10 @@ def build(c: RunConfig):
     import models
 
     system = systems.make(c.system, **c.system_kwargs())
-    data = systems.make_pixel_dataset(dataset_config(c))
+    data = systems.make_pixel_dataset(c.pixel_dataset_config())
     model = models.LatentModel(
         c.model,
-        (2, SIZE, SIZE),
+        (2, PIXEL_SIZE, PIXEL_SIZE),
         key=jax.random.PRNGKey(c.seed),
         latent_dof=system.dof,
         width=c.width,

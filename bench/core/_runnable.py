@@ -1,36 +1,36 @@
-"""Whether a run can ever run, checked before a sweep starts: the system and the dataset's
-shape, the model for the scene, and the integrators the model's rollout accepts (a tiny model
-built and traced once per distinct key, never trained)."""
+"""Whether the registered models can run a configuration, asked before a sweep starts: the
+model for the run's scene and the integrators the model's rollout accepts (a tiny model built
+and traced once per distinct key, never trained). The configuration's own values, its system
+and its dataset's shape were checked when the :class:`RunConfig` was built."""
 
 from __future__ import annotations
 
 import functools
 
-from ._experiments import INTEGRATORS, RunConfig
+from ._experiments import INTEGRATORS, RunConfig, check_choice
 
 
 def check_runnable(cfg: RunConfig) -> RunConfig:
-    """Raise a one-line ValueError, before any training, for a run that can never run.
+    """Raise a one-line ValueError, before any training, for a run the models cannot run.
 
-    Beyond :meth:`RunConfig.validate`: the system and its parameters, the dataset shape (e.g.
-    ``test_chunks * chunk`` within a trajectory), the model for the run's scene (its options,
-    coordinates it accepts), and each integrator with that model. The integrator rule is the
-    model's capability, asked of ``models.rollout`` itself (an abstract trace, no compile): e.g.
-    leapfrog needs a second-order continuous model, so ``node`` with ``leapfrog`` is rejected
-    with the integrators that ``node`` allows. Checks are cached per model, scene and method.
+    The model's name, the model for the run's scene (its options, the coordinates it accepts)
+    and each integrator with that model. The integrator rule is the model's capability, asked
+    of ``models.rollout`` itself (an abstract trace, no compile): e.g. leapfrog needs a
+    second-order continuous model, so ``node`` with ``leapfrog`` is rejected with the
+    integrators that ``node`` allows. Checks are cached per model, scene and method.
     """
-    cfg.validate()
-    if cfg.observation == "pixels":  # its own data and models (bench.core._pixels)
-        from ._pixels import check_pixels
+    import models
 
-        return check_pixels(cfg)
-    cfg.dataset_config()  # the system, its parameters, the dataset's shape (ValueError)
+    check_choice("model", cfg.model, models.available())
+    if cfg.observation == "pixels":  # its own models (bench.core._pixels)
+        from ._pixels import check_pixel_model
+
+        check_pixel_model(cfg)
+        return cfg
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)
     if cfg.train_target == "derivative":
-        import models
-
         if models.spec(cfg.model).discrete:
             allowed = [m for m in models.available() if not models.spec(m).discrete]
             raise ValueError(

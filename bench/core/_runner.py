@@ -109,12 +109,13 @@ def sweep(
     ``workers``: local processes (1 = in-process; None = one per core). Each finished row is
     written atomically as it arrives and the tables are rebuilt, so a killed sweep resumes.
 
-    Before anything runs, every run to execute is checked by
-    :func:`bench.core._runnable.check_runnable` (ValueError for a run that can never run, e.g.
-    leapfrog on a first-order model). A write that fails for want of space or permission (in
-    a run or when storing its row) stops the sweep with :class:`bench.core._errors.StorageError`;
-    the rows stored so far are whole and the next sweep resumes. A damaged row file counts
-    as not done (see :func:`bench.core._store.scan_rows`): its run is executed again.
+    Before anything is written, every run to execute is checked by
+    :func:`bench.core._runnable.check_runnable` (ValueError for a run the models cannot run,
+    e.g. leapfrog on a first-order model; the configurations checked themselves when built).
+    A write that fails for want of space or permission (in a run or when storing its row)
+    stops the sweep with :class:`bench.core._errors.StorageError`; the rows stored so far are
+    whole and the next sweep resumes. A damaged row file counts as not done (see
+    :func:`bench.core._store.scan_rows`): its run is executed again.
 
     ``ensemble`` (``auto``, ``on``, ``off``; ``auto``: on when jax's default backend is an
     accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
@@ -134,25 +135,29 @@ def sweep(
         tags, label = {}, experiment
 
     check_choice("executor", executor, EXECUTORS)
-    results_dir = _store.check_results_dir(results_dir)  # ValueError: a file, not writable...
+    existed = Path(results_dir).is_dir()
+    # ValueError: a file, under a file, not writable; a missing folder is made further down
+    results_dir = _store.check_results_dir(results_dir, create=False)
     cache_root = Path(cache_root or systems.cache_root()).resolve()
-    for d in (results_dir, results_dir / _store.ROWS):  # a killed sweep's half-written files
-        _store.clear_orphans(d)
     done = _store.done_hashes(results_dir)
     todo, seen = [], set()
     for c in configs:
         if c.config_hash not in done and c.config_hash not in seen:
             seen.add(c.config_hash)
             todo.append(c)
-    if order is not None:
-        todo = _schedule(todo, order)
-    if todo:
-        _store.check_results_dir(cache_root, what="cache folder ($DECON_CACHE)")
-    for c in todo:
+    for c in todo:  # before anything is written, the results folder included
         try:
             check_runnable(c)
         except ValueError as e:
             raise ValueError(f"run {_label(c)} ({c.config_hash}): {e}") from None
+    if not existed:
+        _store.check_results_dir(results_dir)
+    for d in (results_dir, results_dir / _store.ROWS):  # a killed sweep's half-written files
+        _store.clear_orphans(d)
+    if order is not None:
+        todo = _schedule(todo, order)
+    if todo:
+        _store.check_results_dir(cache_root, what="cache folder ($DECON_CACHE)")
     new_rows: list[dict] = []
     if not todo:
         if progress:
@@ -308,9 +313,12 @@ def _pin_worker(slots) -> None:
 
 
 def _star_execute(job):
+    import systems
+
     from ._env import configure_compilation_cache
 
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
+    systems.enable_x64()
     dicts, cache_root = job
     if draining():  # the sweep is being drained: this job ends without running
         return []

@@ -411,7 +411,10 @@ def prepare(model, dataset, config: TrainConfig):
             f"make the model with dtype={config.dtype!r}"
         )
     if config.dtype == "float64" and not jax.config.jax_enable_x64:
-        raise ValueError("float64 training needs jax_enable_x64 (import systems enables it)")
+        raise ValueError(
+            "float64 training needs jax's 64-bit mode: call systems.enable_x64() or "
+            'jax.config.update("jax_enable_x64", True) first'
+        )
     # a derivative target needs no interval: chunks of one state are the seeds' random states
     ts, z, args = _check_dataset(dataset, 1 if config.target == "derivative" else 2)
     scene = getattr(model, "scene", None)

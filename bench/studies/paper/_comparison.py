@@ -13,7 +13,49 @@ from ...core._query import load_tables
 from .._text import folder_label, md_escape
 from ._replication import judge, stored_counts
 
-__all__ = ["comparison_section", "load_other", "pending"]
+__all__ = [
+    "Cause",
+    "ComparisonRow",
+    "comparison_rows",
+    "comparison_section",
+    "load_other",
+    "pending",
+]
+
+# The kinds of likely cause of two folders' verdicts of one claim disagreeing, in the order
+# they are named (:class:`Cause`).
+CAUSES = ("not comparable", "stability", "test set", "failed runs", "metric", "seeds", "budget")
+
+
+@dataclasses.dataclass(frozen=True)
+class Cause:
+    """A likely cause of a disagreement: its ``kind`` (one of :data:`CAUSES`), the folder it
+    is about where it names one (``folder``: its label), and the sentence the report prints."""
+
+    kind: str
+    text: str
+    folder: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class ComparisonRow:
+    """One claim (``key``) in every folder: ``verdicts`` here first, then the other folders'
+    (None where a folder has none of the claim), each folder's ``state`` (one of
+    :data:`STATES`); ``agree`` compares the judged ones (None when fewer than two are),
+    ``causes`` each cause once."""
+
+    key: str
+    claim: int
+    labels: tuple[str, ...]
+    verdicts: tuple
+    states: tuple[str, ...]
+    agree: bool | None
+    causes: tuple[Cause, ...]
+
+
+# A folder's state for a claim: judged, none of its runs, its campaign under way, or some of
+# the cells the claim needs missing.
+STATES = ("judged", "no runs", "pending", "cells missing")
 
 
 def _disc_mark(v) -> str:
@@ -42,26 +84,35 @@ def _absent(v) -> bool:
     return v is None or (v.detail == "no runs" and not _is_pending(v))
 
 
-def _cell_text(v) -> str:
+def _state(v) -> str:
     if _is_pending(v):
-        return v.verdict
+        return "pending"
     if _absent(v):
         return "no runs"
-    if v.n_seeds == 0:
+    return "cells missing" if v.n_seeds == 0 else "judged"
+
+
+def _cell_text(v) -> str:
+    state = _state(v)
+    if state == "pending":
+        return v.verdict
+    if state == "no runs":
+        return "no runs"
+    if state == "cells missing":
         return f"**{v.verdict}** (cells missing)"
     return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
 
 
-def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> list[str]:
+def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> list[Cause]:
     """The likely causes of two verdicts of one claim disagreeing."""
     if _no_runs(a) or _no_runs(b):
         # name the side that has some runs (pending or cells missing) before one with none
         sides = [(v, lab) for v, lab in ((a, label_a), (b, label_b)) if _no_runs(v)]
         v, label = next(((v, lab) for v, lab in sides if not _absent(v)), sides[0])
         if _is_pending(v):
-            return [f"{v.verdict} at {label}: not comparable yet"]
+            return [Cause("not comparable", f"{v.verdict} at {label}: not comparable yet", label)]
         what = "no runs" if _absent(v) else "cells missing"
-        return [f"{what} at {label}: not comparable"]
+        return [Cause("not comparable", f"{what} at {label}: not comparable", label)]
     causes = []
     # A verdict the replication checks demoted (does not replicate, changes without a seed):
     # where its own seeds read what the other folder reads, the folders agree in direction and
@@ -73,39 +124,98 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> l
         why = v.verdict.split(" (", 1)[1].rstrip(")")
         if v.primary == _outcome(o):
             agree_but_unstable = o.primary is None
-            causes.append(
+            text = (
                 f"stability: {lab} reads {v.primary} on its own seeds, as {o_lab} does, but "
                 f"{why} ({v.readings})"
             )
         else:
-            causes.append(f"stability: at {lab} the verdict {why} ({v.readings})")
+            text = f"stability: at {lab} the verdict {why} ({v.readings})"
+        causes.append(Cause("stability", text, lab))
     if agree_but_unstable:
         return causes
     if a.discriminating != b.discriminating:
-        causes.append(
+        text = (
             f"test set: discriminating {_disc_mark(a)} at {label_a}, {_disc_mark(b)} at {label_b}"
         )
+        causes.append(Cause("test set", text))
     if a.n_failed != b.n_failed:
-        causes.append(f"failed runs ({a.n_failed} vs {b.n_failed})")
+        causes.append(Cause("failed runs", f"failed runs ({a.n_failed} vs {b.n_failed})"))
     if same_profile_metric:
-        causes.append(same_profile_metric)
+        causes.append(Cause("metric", same_profile_metric))
     if a.n_seeds != b.n_seeds and min(a.n_seeds, b.n_seeds) < 2:
-        causes.append("too few seeds on one side")
-    causes.append(
+        causes.append(Cause("seeds", "too few seeds on one side"))
+    budget = (
         "budget (training steps, data, width and seeds differ between the profiles: "
         "effects that need the longer training show only at the paper profile)"
     )
-    return causes
+    return [*causes, Cause("budget", budget)]
+
+
+def _labels(profile: str | None, others) -> list[str]:
+    return [f"{profile or 'this folder'} (here)"] + [
+        f"{p or 'unknown'} (`{folder_label(d)}/`)" for d, p, _ in others
+    ]
+
+
+def comparison_rows(verdicts, profile: str | None, others) -> list[ComparisonRow]:
+    """Every claim's verdict here (``verdicts``) and in each other results folder (``others``:
+    ``(folder, profile, verdicts)`` as :func:`load_other` gives them), with whether they agree
+    and the likely causes where they do not."""
+    labels = _labels(profile, others)
+    maps = [{v.key: v for v in verdicts}] + [{v.key: v for v in vs} for _, _, vs in others]
+    keys = list(dict.fromkeys(k for m in maps for k in m))
+
+    def metric_note(m, key) -> str:
+        if not key.startswith("4 ("):
+            return ""
+        other = (
+            key.replace("geometric-mean error", "MSE")
+            if "geometric" in key
+            else key.replace("MSE", "geometric-mean error")
+        )
+        a, b = m.get(key), m.get(other)
+        if a and b and _outcome(a) != _outcome(b) and not (_no_runs(a) or _no_runs(b)):
+            return "metric: geometric-mean error and MSE disagree within a profile"
+        return ""
+
+    rows = []
+    for key in keys:
+        vs = [m.get(key) for m in maps]
+        claim = next(m[key].claim for m in maps if key in m)
+        for i, m in enumerate(maps):  # a key its pending campaign has no rows for yet
+            if vs[i] is None:
+                vs[i] = next(
+                    (v for v in m.values() if v.claim == claim and _is_pending(v)),
+                    None,
+                )
+        real = [v for v in vs if not _no_runs(v)]
+        agree = None if len(real) < 2 else len({_outcome(v) for v in real}) == 1
+        # Causes against the first folder with a comparable verdict (here, unless here is
+        # pending or has no runs: then the others' disagreement is still explained).
+        base = next((i for i, v in enumerate(vs) if not _no_runs(v)), 0)
+        causes = []
+        for i in range(len(vs)):
+            a, b = vs[base], vs[i]
+            # a folder without the claim's runs says so in its cell: no cause to name
+            if i == base or (_no_runs(a) and _no_runs(b)) or _absent(b):
+                continue
+            if a is None or b is None or _outcome(a) != _outcome(b) or _no_runs(a) != _no_runs(b):
+                note = metric_note(maps[base], key) or metric_note(maps[i], key)
+                causes += _cause(a, b, labels[base], labels[i], note)
+        causes = list(dict.fromkeys(causes))  # each cause once, whichever folders share it
+        states = tuple(_state(v) for v in vs)
+        rows.append(
+            ComparisonRow(key, claim, tuple(labels), tuple(vs), states, agree, tuple(causes))
+        )
+    return rows
 
 
 def comparison_section(verdicts, profile: str | None, others) -> list[str]:
-    """Every claim's verdict here and in each other results folder, side by side."""
+    """Every claim's verdict here and in each other results folder, side by side: the
+    markdown of :func:`comparison_rows`."""
     if not others:
         return []
-    labels = [f"{profile or 'this folder'} (here)" if others else profile or "this folder"] + [
-        f"{p or 'unknown'} (`{folder_label(d)}/`)" for d, p, _ in others
-    ]
-    head = ["claim", *labels, "agree", "likely cause of a disagreement"]
+    head = ["claim", *_labels(profile, others), "agree", "likely cause of a disagreement"]
     out = [
         "## Verdicts at both budgets",
         "",
@@ -124,54 +234,11 @@ def comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "| " + " | ".join(head) + " |",
         "|" + " --- |" * len(head),
     ]
-    maps = [{v.key: v for v in verdicts}] + [{v.key: v for v in vs} for _, _, vs in others]
-    keys = list(dict.fromkeys(k for m in maps for k in m))
-
-    def metric_note(m, key) -> str:
-        if not key.startswith("4 ("):
-            return ""
-        other = (
-            key.replace("geometric-mean error", "MSE")
-            if "geometric" in key
-            else key.replace("MSE", "geometric-mean error")
-        )
-        a, b = m.get(key), m.get(other)
-        if a and b and _outcome(a) != _outcome(b) and not (_no_runs(a) or _no_runs(b)):
-            return "metric: geometric-mean error and MSE disagree within a profile"
-        return ""
-
-    for key in keys:
-        vs = [m.get(key) for m in maps]
-        claim = next(m[key].claim for m in maps if key in m)
-        for i, m in enumerate(maps):  # a key its pending campaign has no rows for yet
-            if vs[i] is None:
-                vs[i] = next(
-                    (v for v in m.values() if v.claim == claim and _is_pending(v)),
-                    None,
-                )
-        cells = [_cell_text(v) for v in vs]
-        real = [v for v in vs if not _no_runs(v)]
-        agree = (
-            "-" if len(real) < 2 else ("yes" if len({_outcome(v) for v in real}) == 1 else "**no**")
-        )
-        # Causes against the first folder with a comparable verdict (here, unless here is
-        # pending or has no runs: then the others' disagreement is still explained).
-        base = next((i for i, v in enumerate(vs) if not _no_runs(v)), 0)
-        causes = []
-        for i in range(len(vs)):
-            a, b = vs[base], vs[i]
-            # a folder without the claim's runs says so in its cell: no cause to name
-            if i == base or (_no_runs(a) and _no_runs(b)) or _absent(b):
-                continue
-            if a is None or b is None or _outcome(a) != _outcome(b) or _no_runs(a) != _no_runs(b):
-                note = metric_note(maps[base], key) or metric_note(maps[i], key)
-                causes += _cause(a, b, labels[base], labels[i], note)
-        causes = list(dict.fromkeys(causes))  # each cause once, whichever folders share it
-        out.append(
-            "| "
-            + " | ".join([md_escape(key), *cells, agree, md_escape("; ".join(causes)) or "-"])
-            + " |"
-        )
+    for row in comparison_rows(verdicts, profile, others):
+        agree = {None: "-", True: "yes", False: "**no**"}[row.agree]
+        causes = md_escape("; ".join(c.text for c in row.causes)) or "-"
+        cells = [_cell_text(v) for v in row.verdicts]
+        out.append("| " + " | ".join([md_escape(row.key), *cells, agree, causes]) + " |")
     return out + [""]
 
 

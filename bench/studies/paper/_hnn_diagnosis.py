@@ -245,6 +245,20 @@ def _f(x) -> str:
     return "-" if x is None or not np.isfinite(x) else f"{x:.3g}"
 
 
+def stalled_counts(df: pd.DataFrame) -> dict[str, tuple[int, int]]:
+    """Per variant (in :data:`VARIANTS` order): how many of its seeds stalled at the last
+    probe (:func:`stalled`: the last block's mean loss against the first step's), of how many."""
+    out = {}
+    for v in VARIANTS:
+        flags = [
+            bool(stalled(g["block_loss"].iloc[-1], g["loss"].iloc[0]))
+            for _, g in df[df["variant"] == v].sort_values("step").groupby("seed")
+        ]
+        if flags:
+            out[v] = (sum(flags), len(flags))
+    return out
+
+
 def summary(df: pd.DataFrame, runs: pd.DataFrame | None = None) -> str:
     """Per seed and variant: the loss of the first step and the mean over the last block, the
     largest mass eigenvalue and the motion at the first and last probe, stalled or not; beside
@@ -262,11 +276,10 @@ def summary(df: pd.DataFrame, runs: pd.DataFrame | None = None) -> str:
     ]
     order = {v: i for i, v in enumerate(VARIANTS)}
     keys = sorted(df.groupby(["seed", "variant"]).groups, key=lambda k: (k[0], order.get(k[1], 99)))
-    last_rows = []
     for seed, variant in keys:
         g = df[(df["seed"] == seed) & (df["variant"] == variant)].sort_values("step")
         a, b = g.iloc[0], g.iloc[-1]
-        last_rows.append((variant, bool(stalled(b["block_loss"], a["loss"]))))
+        is_stalled = bool(stalled(b["block_loss"], a["loss"]))
         run = "-"
         if variant.startswith("suite") and a["config_hash"] in stored:
             r = stored[a["config_hash"]]
@@ -276,14 +289,10 @@ def summary(df: pd.DataFrame, runs: pd.DataFrame | None = None) -> str:
             f"| {seed} | {variant} | {a['lr']:g} | {a.get('cores', '-')} | {int(b['step'])} | "
             f"{_f(a['loss'])} -> {_f(b['block_loss'])} | {_f(a['mass_eig_max'])} -> "
             f"{_f(b['mass_eig_max'])} | {_f(a['motion'])} -> {_f(b['motion'])} | "
-            f"{'**yes**' if last_rows[-1][1] else 'no'} | "
+            f"{'**yes**' if is_stalled else 'no'} | "
             f"{'-' if not np.isfinite(same) else int(same)} | {run} |"
         )
-    counts = ", ".join(
-        f"{v}: {sum(x for u, x in last_rows if u == v)} of {sum(u == v for u, _ in last_rows)}"
-        for v in VARIANTS
-        if any(u == v for u, _ in last_rows)
-    )
+    counts = ", ".join(f"{v}: {n} of {m}" for v, (n, m) in stalled_counts(df).items())
     return "\n".join(
         [
             *lines,
