@@ -11,7 +11,7 @@ from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset
 from ._mass_spring import MassSpring
 from ._pendulum import Pendulum
 from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset
-from ._precision import enable_x64
+from ._precision import enable_x64, require_x64
 from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import read_angle, read_state, render
@@ -34,6 +34,7 @@ __all__ = [
     "cache_root",
     "derivatives",
     "enable_x64",
+    "require_x64",
     "make",
     "make_dataset",
     "make_pixel_dataset",

@@ -23,9 +23,9 @@ class BoxStates:
         import jax
         import jax.numpy as jnp
 
-        from systems._precision import require_x64
+        import systems
 
-        require_x64("training on a train_box (its targets)")
+        systems.require_x64("training on a train_box (its targets)")
         self.d = system.dof
         self.low = np.array([box[0]] * self.d + [box[2]] * self.d)
         self.high = np.array([box[1]] * self.d + [box[3]] * self.d)
