@@ -21,6 +21,7 @@ README = ROOT / "README.md"
 BUDGETS = {"quick": "results/reference/quick", "paper-core": "results/reference/paper"}
 BEGIN, END = "<!-- findings:begin -->", "<!-- findings:end -->"
 _HEADER = "| claim | statement | verdict |"
+PROTOCOL_HEADER = "| protocol | ours | the seed's |"  # bench.studies.paper._protocols.HEADER
 
 
 def claims_table(report: str) -> dict[str, dict[str, str]]:
@@ -78,6 +79,61 @@ def _why(row: dict[str, str]) -> str:
     return f"{what}: {value} {row['90% CI']}"
 
 
+def protocol_rows(text: str) -> dict[str, tuple[str, str]]:
+    """The first two-protocol table (``kit.protocol_table``) of ``text``: row -> (ours, the
+    seed's); empty without one."""
+    lines = text.splitlines()
+    if PROTOCOL_HEADER not in lines:
+        return {}
+    out = {}
+    for line in lines[lines.index(PROTOCOL_HEADER) + 2 :]:
+        if not line.startswith("|"):
+            break
+        name, ours, seeds = (c.strip() for c in line.strip().strip("|").split("|"))
+        out[name] = (ours, seeds)
+    return out
+
+
+def protocols(report: str) -> dict[int, dict[str, tuple[str, str]]]:
+    """claim -> its :func:`protocol_rows`, for every report section ``## ... (claim N)`` with
+    a two-protocol table."""
+    out = {}
+    for part in re.split(r"^(?=## )", report, flags=re.M):
+        m = re.match(r"## .*\(claim (\d+)\)", part)
+        rows = protocol_rows(part) if m else {}
+        if rows:
+            out[int(m.group(1))] = rows
+    return out
+
+
+def _protocol_lines(reports: dict[str, str]) -> list[str]:
+    quick, core = (protocols(reports[b]) for b in ("quick", "paper-core"))
+    if not quick and not core:
+        return []
+    lines = [
+        "",
+        "Where the seed's own protocol differs from ours, both are run; the seed's decides "
+        "(each claim's section of REPORT.md sets them side by side):",
+        "",
+        "| claim | models learned: ours / the seed's (quick) | quick: ours / the seed's | "
+        "paper-core: ours / the seed's | still differs from the seed's code |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for claim in sorted({*quick, *core}):
+        q, c = quick.get(claim, {}), core.get(claim, {})
+
+        def pair(rows, key):
+            ours, seeds = rows.get(key, ("not run", "not run"))
+            return f"{ours} / {seeds}"
+
+        differs = (q or c).get("still differs from the seed's code", ("", "-"))[1]
+        lines.append(
+            f"| {claim} | {pair(q, 'learned')} | {pair(q, 'verdict')} | {pair(c, 'verdict')} | "
+            f"{differs} |"
+        )
+    return lines
+
+
 def findings(root: Path = ROOT) -> str:
     """The findings block (Markdown table) from the committed reports under ``root``."""
     reports = {b: (root / d / "REPORT.md").read_text() for b, d in BUDGETS.items()}
@@ -97,6 +153,7 @@ def findings(root: Path = ROOT) -> str:
     lines += [f"| {q} | {m} | {b} |" for q, m, b in policy_rows(reports["paper-core"])]
     dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())
     lines += ["", f"Margin-dependent inside the bands: {dependent}."]
+    lines += _protocol_lines(reports)
     return "\n".join(lines)
 
 

@@ -50,3 +50,29 @@ def test_claims_table_reads_every_column_and_refuses_a_report_without_one():
     assert {"statement", "verdict", "effect", "90% CI", "discriminating"} <= set(table["1"])
     with pytest.raises(ValueError, match="no claims table"):
         findings.claims_table("# a report\n\nno table here\n")
+
+
+def test_the_seeds_protocols_come_from_each_claims_section():
+    from bench import findings as F
+    from bench.studies.paper._protocols import HEADER, Protocol, protocol_table
+
+    assert F.PROTOCOL_HEADER == HEADER
+    ours = Protocol("a", "dz/dt", "squared error", "AdamW", "100", "energy")
+    seeds = Protocol("b", "dz/dt", "L1", "Adam", "600000", "energy")
+    report = "\n".join(
+        [
+            "## Claims",
+            "",
+            "## Something (claim 9)",
+            *protocol_table(ours, seeds, "the steps"),
+            "",
+            "## Other (claim 10)",
+            "no table here",
+        ]
+    )
+    got = F.protocols(report)
+    assert list(got) == [9]
+    assert got[9]["loss"] == ("squared error", "L1")
+    assert got[9]["verdict"] == ("not run", "not run")
+    lines = F._protocol_lines({"quick": report, "paper-core": "## Claims"})
+    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run | the steps |"

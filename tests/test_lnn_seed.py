@@ -326,3 +326,18 @@ def test_diagnosis_summary_counts_blowups_after_a_singular_hessian():
     # 3 trajectories, 2 near-singular, 1 at t = 0, 1 blow-up after it; P = 1/2 and 0/1
     assert line.startswith("| t | 1 | 3 | 2 | 1 | 1 | 1 | 1 | 0.50 | 0.00 |")
     assert line.endswith("| - |")  # no adaptive rollouts in this table
+
+
+def test_the_section_sets_the_two_protocols_side_by_side(tmp_path):
+    from bench.findings import protocol_rows
+
+    text = _tables(energy_ratio=20.0, loss_ratio=1.0, spread=0.1)
+    stuck = _tables(20.0, 1.0, 0.1, experiment=S.LNN_SEED_NOTEBOOK, lnn_error=0.8)
+    pd.concat([text, stuck], ignore_index=True).to_parquet(tmp_path / "runs.parquet", index=False)
+    rows = protocol_rows(S.section(tmp_path))
+    assert rows["verdict"] == ("reproduced (5 seeds)", "inconclusive (5 seeds)")
+    assert rows["learned"] == (
+        "pure LNN yes, NODE+SO (baseline) yes",
+        "pure LNN no, NODE+SO (baseline) yes",
+    )
+    assert rows["loss"] == ("squared error", "L1")

@@ -50,6 +50,7 @@ from ._discrimination import (
 )
 from ._gates import Gate, apply_gates, condition, gated, learned
 from ._holm import holm, margin_ranges
+from ._protocols import Protocol, protocol_table
 from ._seeds import (
     BOUNDED_SLOPE,
     LINEAR_SLOPE,
@@ -91,6 +92,9 @@ from ._verdict import (
 from .policy import POLICY, Margin, margin, override, stated
 
 __all__ = [
+    # two readings of a claim: the suite's protocol and the seed's
+    "Protocol",
+    "protocol_table",
     # parts
     "ALPHA",
     "Part",

@@ -1,0 +1,53 @@
+"""Two readings of one claim side by side: the suite's protocol and the seed's own, each with the
+verdict of its runs. A claim judged on both renders one :func:`protocol_table` in its report
+section; README's findings take the seeds' protocols from those tables (``bench.findings``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._verdict import Verdict
+
+HEADER = "| protocol | ours | the seed's |"
+ROWS = ("data", "targets", "loss", "optimiser", "steps", "metric")
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """One reading: how its runs were trained and scored (:data:`ROWS`, one short phrase
+    each), and ``verdict`` the rule's verdict on its runs alone (None: no runs)."""
+
+    data: str
+    targets: str
+    loss: str
+    optimiser: str
+    steps: str
+    metric: str
+    verdict: Verdict | None = None
+
+
+def learned_text(v: Verdict | None) -> str:
+    """Each model's learning gate on the headline part: ``HNN yes, MLP no`` (``?`` unknown)."""
+    if v is None or not v.parts:
+        return "-"
+    gates = [g for g in v.parts[0].gates if not g.text.startswith("condition")]
+    if not gates:
+        return "-"
+    mark = {True: "yes", False: "no", None: "?"}
+    return ", ".join(f"{g.label} {mark[g.open]}" for g in gates)
+
+
+def verdict_text(v: Verdict | None) -> str:
+    return "not run" if v is None else f"{v.verdict} ({v.n_seeds} seeds)"
+
+
+def protocol_table(ours: Protocol, seeds: Protocol, differs: str) -> list[str]:
+    """The markdown table: a row per :data:`ROWS`, then each model's learning gate, the verdict
+    of each reading and ``differs``, one line on what still separates the seed's reading from
+    the seed's code (the claim's verdict is the seed's reading's where it has runs)."""
+    lines = ["", HEADER, "|---|---|---|"]
+    lines += [f"| {row} | {getattr(ours, row)} | {getattr(seeds, row)} |" for row in ROWS]
+    lines.append(f"| learned | {learned_text(ours.verdict)} | {learned_text(seeds.verdict)} |")
+    lines.append(f"| verdict | {verdict_text(ours.verdict)} | {verdict_text(seeds.verdict)} |")
+    lines.append(f"| still differs from the seed's code | - | {differs} |")
+    return lines
