@@ -179,7 +179,7 @@ LNN_SEED_NOTEBOOK = Experiment(
     fixed=_NOTEBOOK,
     profile_overrides={
         "smoke": {**_SMOKE, "n_generated": 1, "n_train": 1, "batch": 8},
-        "quick": {"steps": _NOTEBOOK_PROFILE_STEPS["quick"], "width": 128},
+        "quick": {"steps": _NOTEBOOK_PROFILE_STEPS["quick"], "width": 128, "batch": 128},
         "paper-core": {"steps": _NOTEBOOK_PROFILE_STEPS["paper-core"]},
     },
     include=_include_notebook,
