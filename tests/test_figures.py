@@ -37,7 +37,7 @@ def test_every_experiment_with_runs_has_png_and_pdf(results):
     for name in FIGURES:
         for ext in ("png", "pdf"):
             path = d / "figures" / f"{figure_stem(name)}.{ext}"
-            if name == "relativistic":
+            if name.startswith("relativistic"):  # both claim-7 experiments
                 assert not path.exists()
             else:
                 assert path in written and path.stat().st_size > 1000, path
@@ -80,7 +80,7 @@ def test_a_claim_judged_in_one_folder_only_names_no_cause(results):
 def test_every_experiment_table_has_trivial_row_and_discriminating_mark(results):
     _, _, text = results
     for name in FIGURES:
-        if name == "relativistic":
+        if name.startswith("relativistic"):
             continue
         section = text.split(f"## {name}")[1].split("\n## ")[0]
         assert "(trivial) |" in section, name
