@@ -530,7 +530,8 @@ def _verdicts(runs, curves, profile) -> dict[str, str]:
             if v.n_seeds == 0 and seeds is not None and seeds is not primary:
                 continue
             where = f" (seeds {seed_span(seeds)})" if seeds is not None else ""
-            out.setdefault(v.key, []).append(f"{v.verdict}{where}")
+            said = "no runs" if v.detail.startswith("no runs") else v.verdict
+            out.setdefault(v.key, []).append(f"{said}{where}")
     return {k: "; ".join(x) for k, x in out.items()}
 
 
