@@ -110,21 +110,28 @@ def _status_counts(runs: pd.DataFrame) -> str:
     return f"{len(runs)} runs (" + ", ".join(f"{k}: {v}" for k, v in counts.items()) + ")"
 
 
+def _study_section(study, results_dir: Path, *, figure: bool = True) -> list[str]:
+    """A study's own section (and its figure, ``figure``); a broken one is named, not fatal."""
+    try:
+        out = [study.section(results_dir), ""]
+        stem = study.stem or study.name
+        if figure and (results_dir / "figures" / f"{stem}.png").exists():
+            out += [f"![{stem}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
+        return out
+    except Exception as e:  # noqa: BLE001 - a broken section must not lose the report
+        title = study.section_title or study.name
+        return [f"## {title}", "", f"(section failed: {md_escape(str(e))})", ""]
+
+
 def _extra_sections(results_dir: Path) -> list[str]:
     """The sections of the studies with their own tables (trade-off, stability), where their
-    data exist, and the performance section."""
+    data exist, and the performance section. A study that also draws its experiment's figure
+    has its section inside its experiment's (``write_report``)."""
     out: list[str] = []
     for study in studies():
-        if study.section is None:
+        if study.section is None or study.figure is not None:
             continue
-        try:
-            out += [study.section(results_dir), ""]
-            stem = study.stem or study.name
-            if (results_dir / "figures" / f"{stem}.png").exists():
-                out += [f"![{stem}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]
-        except Exception as e:  # noqa: BLE001 - a broken section must not lose the report
-            title = study.section_title or study.name
-            out += [f"## {title}", "", f"(section failed: {md_escape(str(e))})", ""]
+        out += _study_section(study, results_dir)
     out += _perf_section(results_dir)
     return out
 
@@ -269,6 +276,8 @@ def write_report(results_dir: Path, compare=None) -> Path:
             lines += ["(no figure: no finished runs)", ""]
         else:
             lines += ["(figure not generated: run `python -m bench figures`)", ""]
+        if study.section is not None:  # its own table closes its experiment's section
+            lines += _study_section(study, results_dir, figure=False)
     lines += _extra_sections(results_dir)
     lines += _provenance_section(results_dir, runs, others)
     lines += ["## What the suite does not copy from the reference", "", DEFECTS]

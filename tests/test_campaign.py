@@ -41,6 +41,13 @@ def test_paper_core_covers_every_claim_and_drops_the_extras():
         (c.model, c.coordinates, c.model_options) for c in E.expand("relativistic", "paper-core")
     }
     assert rel == set(P.RELATIVISTIC_CELLS)
+    # claim 7's second reading, the LNN seed's protocol, every cell
+    assert "relativistic_seed" in C.campaign_experiments("paper-core")
+    seed = {
+        (c.model, c.coordinates, c.model_options)
+        for c in E.expand("relativistic_seed", "paper-core")
+    }
+    assert seed == set(P.SEED_CELLS)
     coords = E.expand("coordinates", "paper-core")
     assert {c.system_params for c in coords if c.system == "spring_pendulum"} == {
         P.SPRING_PAPER,

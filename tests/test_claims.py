@@ -21,6 +21,7 @@ from bench.core._query import initial_state, option, params_of
 from bench.studies import paper as C
 from bench.studies.paper import kit as R
 from bench.studies.paper import policy
+from bench.studies.paper import relativistic as REL
 
 ERR = policy.margin("error")  # 1.25x
 TWO = policy.margin("learning")  # 2x
@@ -78,6 +79,7 @@ KEYS = [
     "5",
     "6",
     "7",
+    "7 (rollout loss)",
     "8",
 ]
 CLAIM_4 = "4 (geometric-mean error, spring from paper)"
@@ -122,8 +124,16 @@ def _damped(runs, system, model, **fields):
     return _mask(runs, system=system, model=model, **fields) & (runs["friction"] > 0)
 
 
-def _rel(runs, model, coordinates="velocity"):
-    return _mask(runs, system="relativistic_particle", model=model, coordinates=coordinates)
+def _rel(runs, model, coordinates="velocity", target="rollout"):
+    """A claim-7 cell of one protocol: ``target`` "rollout" (ours, ``relativistic``) or
+    "derivative" (the LNN seed's, ``relativistic_seed``)."""
+    return _mask(
+        runs,
+        system="relativistic_particle",
+        model=model,
+        coordinates=coordinates,
+        train_target=target,
+    )
 
 
 def _vin(runs, model, n_train=8, noise=0.0):
@@ -261,8 +271,8 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
         assert v.discriminating is None, v.key
         # claim 7's parts (b)-(d) compare with the trivial predictor: without it only (a) is left
         assert v.verdict == R.REPRODUCED, (v.key, v.detail)
-    v7 = C.CLAIMS[7](runs, curves)
-    assert [p.name[:3] for p in v7.parts] == ["(a)", "(e)", "(f)"]
+    for v7 in C.CLAIMS[7](runs, curves):  # both readings
+        assert [p.name[:3] for p in v7.parts] == ["(a)", "(e)", "(f)"]
 
 
 @pytest.fixture(scope="module")
@@ -968,15 +978,23 @@ def test_claim_6_b_a_difference_inside_the_margin_is_a_tie(tables):
 
 
 # ----------------------------------------------------------------------------- claim 7
+# Two readings with the same parts: the LNN seed's protocol (derivative targets, the claim's
+# verdict "7") and ours (rollout loss, "7 (rollout loss)"). Each part is pinned on both.
+READINGS = {
+    "derivative": ("7", REL.claim_7_seed),
+    "rollout": ("7 (rollout loss)", REL.claim_7_ours),
+}
+TARGETS = list(READINGS)
 
 
 def test_claim_7_scores_every_model_on_velocities(reproducing, tables):
     # log(0.3 / 0.02) in the construction; the (q, p) HNN's own rollout_error is 4x smaller
     # and must not be used
-    assert reproducing["7"].effect == pytest.approx(math.log(0.3 / 0.02), abs=0.1)
-    runs, curves = tables
-    old = runs.drop(columns=["rollout_error_velocity"])
-    assert "scored in (q, p)" in C.CLAIMS[7](old, curves).detail
+    for key, rule in READINGS.values():
+        assert reproducing[key].effect == pytest.approx(math.log(0.3 / 0.02), abs=0.1)
+        runs, curves = tables
+        old = runs.drop(columns=["rollout_error_velocity"])
+        assert "scored in (q, p)" in rule(old, curves).detail
 
 
 def _rel_set(runs, a, ref, factor):
@@ -989,43 +1007,102 @@ def _rel_set(runs, a, ref, factor):
     return _assign(runs, a, vals * factor, col_a)
 
 
-def test_claim_7_a_naive_hnn_worse_than_hnn_qp(tables, contradicting):
+@pytest.mark.parametrize("target", TARGETS)
+def test_claim_7_a_naive_hnn_worse_than_hnn_qp(tables, contradicting, target):
+    key, rule = READINGS[target]
     runs, curves = tables
-    naive, hp = _rel(runs, "hnn"), _rel(runs, "hnn", "momentum")
+    naive, hp = _rel(runs, "hnn", target=target), _rel(runs, "hnn", "momentum", target)
     # the contradicting table's HNN(q, p) does not learn: (a) is not tested there
-    assert _status(contradicting["7"], "(a)") == "not tested"
-    v = C.CLAIMS[7](_rel_set(runs, naive, hp, 1.0), curves)
+    assert _status(contradicting[key], "(a)") == "not tested"
+    v = rule(_rel_set(runs, naive, hp, 1.0), curves)
     assert _status(v, "(a)") == "contradicts"
-    v = C.CLAIMS[7](_rel_set(runs, naive, hp, _spread(1.25)), curves)
+    v = rule(_rel_set(runs, naive, hp, _spread(1.25)), curves)
     assert _status(v, "(a)") == "undecided"
 
 
-def test_claim_7_b_naive_hnn_fails_against_the_trivial_predictor(tables, contradicting):
+@pytest.mark.parametrize("target", TARGETS)
+def test_claim_7_b_naive_hnn_fails_against_the_trivial_predictor(tables, contradicting, target):
+    key, rule = READINGS[target]
     runs, curves = tables
-    naive, cv = _rel(runs, "hnn"), _rel(runs, "constant_velocity")
-    b = _part(C.CLAIMS[7](runs, curves), "(b)")
+    naive = _rel(runs, "hnn", target=target)
+    cv = _rel(runs, "constant_velocity", target=target)
+    b = _part(rule(runs, curves), "(b)")
     assert b.status == "holds" and b.kind == "at most" and b.margin == "2x"
-    assert _status(contradicting["7"], "(b)") == "contradicts"
-    v = C.CLAIMS[7](_rel_set(runs, naive, cv, 0.1), curves)  # 10x better than trivial
+    assert _status(contradicting[key], "(b)") == "contradicts"
+    v = rule(_rel_set(runs, naive, cv, 0.1), curves)  # 10x better than trivial
     assert _status(v, "(b)") == "contradicts" and _status(v, "(a)") == "holds"
     assert v.verdict == R.PARTLY
-    v = C.CLAIMS[7](_rel_set(runs, naive, cv, 1 / _spread(2.0)), curves)
+    v = rule(_rel_set(runs, naive, cv, 1 / _spread(2.0)), curves)
     assert _status(v, "(b)") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
+@pytest.mark.parametrize("target", TARGETS)
 @pytest.mark.parametrize(
     ("label", "model", "coords"), [("(c)", "hnn", "momentum"), ("(d)", "lnn", "velocity")]
 )
-def test_claim_7_c_d_hnn_qp_and_lnn_succeed(tables, contradicting, label, model, coords):
+def test_claim_7_c_d_hnn_qp_and_lnn_succeed(tables, contradicting, label, model, coords, target):
+    key, rule = READINGS[target]
     runs, curves = tables
-    cell, cv = _rel(runs, model, coords), _rel(runs, "constant_velocity")
-    p = _part(C.CLAIMS[7](runs, curves), label)
+    cell = _rel(runs, model, coords, target)
+    cv = _rel(runs, "constant_velocity", target=target)
+    p = _part(rule(runs, curves), label)
     assert p.status == "holds" and p.kind == "greater" and p.margin == "2x"
-    assert _status(contradicting["7"], label) == "contradicts"
-    v = C.CLAIMS[7](_rel_set(runs, cell, cv, 1 / 1.2), curves)  # barely beats trivial
+    assert _status(contradicting[key], label) == "contradicts"
+    v = rule(_rel_set(runs, cell, cv, 1 / 1.2), curves)  # barely beats trivial
     assert _status(v, label) == "contradicts"
-    v = C.CLAIMS[7](_rel_set(runs, cell, cv, 1 / _spread(2.0)), curves)
+    v = rule(_rel_set(runs, cell, cv, 1 / _spread(2.0)), curves)
     assert _status(v, label) == "undecided"
+
+
+@pytest.mark.parametrize("target", TARGETS)
+def test_claim_7_e_f_the_lnn_against_both_hnns(tables, target):
+    _, rule = READINGS[target]
+    runs, curves = tables
+    lnn, hp = _rel(runs, "lnn", target=target), _rel(runs, "hnn", "momentum", target)
+    naive = _rel(runs, "hnn", target=target)
+    v = rule(runs, curves)
+    assert _status(v, "(e)") == "holds" and _status(v, "(f)") == "holds"
+    v = rule(_rel_set(runs, lnn, hp, 3.0), curves)  # 3x worse than HNN(q, p)
+    assert _status(v, "(e)") == "contradicts" and v.verdict == R.PARTLY
+    v = rule(_rel_set(runs, lnn, hp, _spread(1.25)), curves)
+    assert _status(v, "(e)") == "undecided"
+    v = rule(_rel_set(runs, lnn, naive, 1.0), curves)  # no better than the naive HNN
+    assert _status(v, "(f)") == "contradicts"
+
+
+def test_claim_7_verdict_is_the_seeds_protocol_where_the_readings_differ(tables):
+    runs, curves = tables
+    # the seed's protocol: the LNN barely beats the trivial predictor (fails); ours holds
+    lnn = _rel(runs, "lnn", target="derivative")
+    cv = _rel(runs, "constant_velocity", target="derivative")
+    seed_fails = _rel_set(runs, lnn, cv, 1 / 1.2)
+    final, ours = C.CLAIMS[7](seed_fails, curves)
+    assert (final.key, ours.key) == ("7", "7 (rollout loss)")
+    assert final.verdict == R.PARTLY and ours.verdict == R.REPRODUCED
+    assert _status(final, "(d)") == "contradicts" and _status(ours, "(d)") == "holds"
+    assert "rollout-loss reading, 7 (rollout loss): reproduced" in final.detail
+    # and the other way round: the rollout-trained LNN fails, the seed's holds
+    lnn, cv = _rel(runs, "lnn"), _rel(runs, "constant_velocity")
+    final, ours = C.CLAIMS[7](_rel_set(runs, lnn, cv, 1 / 1.2), curves)
+    assert final.verdict == R.REPRODUCED and ours.verdict == R.PARTLY
+
+
+def test_claim_7_protocols_do_not_mix(tables):
+    runs, curves = tables
+    seed_rows = runs["train_target"] == "derivative"
+    particle = runs["system"] == "relativistic_particle"
+    # without the seed's runs the claim is inconclusive and says why; ours is unchanged
+    final, ours = C.CLAIMS[7](runs[~seed_rows], curves)
+    assert final.verdict == R.INCONCLUSIVE and final.n_seeds == 0
+    assert "no runs of the seed's protocol" in final.detail
+    assert ours.verdict == R.REPRODUCED
+    # without ours, the seed's reading stands alone
+    final, ours = C.CLAIMS[7](runs[seed_rows | ~particle], curves)
+    assert final.verdict == R.REPRODUCED and ours.verdict == R.INCONCLUSIVE
+    assert ours.detail == "no runs"
+    # rows from before derivative targets (no train_target column) are rollout-trained
+    old = runs[~seed_rows].drop(columns=["train_target"])
+    assert REL.claim_7_ours(old, curves).verdict == R.REPRODUCED
 
 
 # ----------------------------------------------------------------------------- claim 8

@@ -201,3 +201,33 @@ def test_paper_budget_note_takes_the_curves_cells_only_and_names_each_folder():
         "HNN+SO 0.02 (8000 steps, n_train 800, n=2, `paper_gpu`)"
     )
     assert _paper_budget_note(ref.iloc[0:0], "chain_pendulum", "()") == ""
+
+
+def test_a_claim_whose_runs_train_for_different_budgets_settles_at_a_fraction():
+    """Claim 7 reads two protocols whose runs train for different numbers of steps: its rows
+    have no one step per checkpoint, so its settling budget is a fraction of its runs'
+    training; the columns keep the other claims' steps."""
+    from bench.studies.learning import _settling_lines
+
+    rows = []
+    for key, claim, steps, verdicts in (
+        ("1", 1, [100.0, 300.0], ["inconclusive", "inconclusive"]),
+        ("7", 7, [np.nan, np.nan], ["inconclusive", "reproduced"]),
+        ("7 (rollout loss)", 7, [np.nan, np.nan], ["partly reproduced"] * 2),
+    ):
+        for position, (step, verdict) in enumerate(zip(steps, verdicts, strict=True)):
+            rows.append(
+                {
+                    "key": key,
+                    "claim": claim,
+                    "position": position,
+                    "fraction": 2.0 ** (position - 1),
+                    "step": step,
+                    "verdict": verdict,
+                    "effect": 0.0,
+                }
+            )
+    text = "\n".join(_settling_lines(pd.DataFrame(rows)))
+    assert "verdict at 1/2 (100 steps) | verdict at 1 (300 steps)" in text
+    assert "| 7 | inconclusive | reproduced | 1 of its runs' training (their step budgets" in text
+    assert "| 7 (rollout loss) | partly reproduced | partly reproduced | 1/2 of its runs'" in text

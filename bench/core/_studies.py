@@ -43,7 +43,9 @@ class Study:
     ``figure(rows, curves, outdir) -> list[Path]`` draws the finished rows of the study's first
     experiment into ``outdir/<stem>.{png,pdf}``. Studies with their own tables instead give
     ``results_figure(results_dir) -> list[Path]`` and ``section(results_dir) -> str`` (a
-    Markdown section of the report, its figure ``figures/<stem>.png``)."""
+    Markdown section of the report, its figure ``figures/<stem>.png``). A study with both a
+    ``figure`` and a ``section`` has its section closing its experiment's section of the report
+    (claim 7's comparison of its two protocols)."""
 
     name: str
     experiments: tuple[Experiment, ...] = ()

@@ -109,7 +109,8 @@ def verdicts_along_curve(
     profile: str | None,
 ) -> pd.DataFrame:
     """One row per (verdict, checkpoint): key, claim, position, fraction (nominal, of the
-    budget), step (median over the claim's trained runs), verdict, effect. Claims whose trained
+    budget), step (median over the claim's trained runs; NaN where they train for different
+    numbers of steps), verdict, effect. Claims whose trained
     runs lack checkpoints are left out. Empty when no run has checkpoints."""
     cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
     if not len(checkpoints) or not len(runs):
@@ -127,6 +128,11 @@ def verdicts_along_curve(
         per_run = cp[cp["config_hash"].isin(hashes)].groupby("config_hash").size()
         if hashes and len(per_run) == len(hashes) and (per_run == n).all():
             judged[study.claim] = hashes
+    # a claim whose runs train for different numbers of steps (claim 7: two protocols, one per
+    # reading) has no one step per checkpoint: its rows give the fraction only (step NaN)
+    budgets = {
+        c: runs.loc[runs["config_hash"].isin(h), "steps"].nunique() for c, h in judged.items()
+    }
     out = []
     for position in range(n):
         runs_i, _ = runs_at(runs, cp, position)
@@ -135,6 +141,8 @@ def verdicts_along_curve(
             if v.claim not in judged:
                 continue
             steps = runs_i.loc[runs_i["config_hash"].isin(judged[v.claim]), "checkpoint_step"]
+            if budgets[v.claim] > 1:
+                steps = steps.iloc[0:0]  # no one step: NaN
             out.append(along_row(v, position, n, steps))
     return pd.DataFrame(out, columns=cols)
 

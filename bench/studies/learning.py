@@ -251,9 +251,12 @@ def _steps(x) -> str:
     return "-" if x is None or not np.isfinite(x) else f"{x:.0f}"
 
 
+def _fraction(fraction: float) -> str:
+    return "1" if fraction >= 1 else f"1/{round(1 / fraction)}"
+
+
 def _budget_label(fraction: float, step: float) -> str:
-    frac = "1" if fraction >= 1 else f"1/{round(1 / fraction)}"
-    return f"{frac} ({_steps(step)} steps)"
+    return f"{_fraction(fraction)} ({_steps(step)} steps)"
 
 
 def _settling_lines(along: pd.DataFrame) -> list[str]:
@@ -271,6 +274,9 @@ def _settling_lines(along: pd.DataFrame) -> list[str]:
     ]
     for _, r in table.iterrows():
         settle = f"{_steps(r['settles_at'])} steps"
+        if not np.isfinite(r["settles_at"]):  # its runs train for different numbers of steps
+            settle = f"{_fraction(r['settles_fraction'])} of its runs' training (their step "
+            settle += "budgets differ)"
         if not r["settled"]:
             settle += " (changed at the last checkpoint: not settled)"
         elif r["settles_fraction"] <= min(along["fraction"]):

@@ -33,12 +33,19 @@ from ._common import (
 )
 from ._rules import CLAIM_TITLES, claim_studies, evaluate_claims
 from .kit import MODEL_LABELS, TRIVIAL_FACTOR, VERDICTS, Verdict, discrimination, scored, succeeds
-from .relativistic import RELATIVISTIC_CELLS, RELATIVISTIC_EXTRAS, velocity_scores
+from .relativistic import (
+    RELATIVISTIC_CELLS,
+    RELATIVISTIC_EXTRAS,
+    SEED_CELLS,
+    velocity_scores,
+)
 
 _MODULES = (energy, symplectic, second_order, coordinates, damped, loss, relativistic)
 _MODULES += (double_pendulum, vin)
+_STUDIES = tuple(m.STUDY for m in _MODULES[:7]) + (relativistic.SEED_STUDY,)
+_STUDIES += tuple(m.STUDY for m in _MODULES[7:])
 # experiment name -> figure function, in the report's order
-FIGURES = {m.STUDY.name: m.STUDY.figure for m in _MODULES}
+FIGURES = {s.name: s.figure for s in _STUDIES}
 # claim number -> verdict rule
 CLAIMS = {m.STUDY.claim: m.STUDY.rule for m in _MODULES if m.STUDY.rule is not None}
 
@@ -53,6 +60,7 @@ __all__ = [
     "RELATIVISTIC_CELLS",
     "RELATIVISTIC_EXTRAS",
     "RELATIVISTIC_TEST_PARAMS",
+    "SEED_CELLS",
     "SHARED_OVERRIDES",
     "SPRING_EQUILIBRIUM",
     "SPRING_PAPER",

@@ -15,7 +15,7 @@ from .damped import DAMPED
 from .double_pendulum import DOUBLE_PENDULUM_ENERGY
 from .energy import ENERGY
 from .loss import LOSS
-from .relativistic import RELATIVISTIC
+from .relativistic import RELATIVISTIC, RELATIVISTIC_SEED
 from .second_order import SECOND_ORDER
 from .symplectic import SYMPLECTIC
 from .vin import VIN
@@ -28,6 +28,7 @@ PAPER_EXPERIMENTS: tuple[Experiment, ...] = (
     SYMPLECTIC,
     DAMPED,
     RELATIVISTIC,
+    RELATIVISTIC_SEED,
     DOUBLE_PENDULUM_ENERGY,
     VIN,
 )
@@ -115,6 +116,14 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("derivative", "node_so", 500, 8): (2.7, 5.0),
     ("derivative", "lnn", 128, 8): (1.9, 16.7),
     ("derivative", "node_so", 128, 8): (0.4, 4.4),
+    # Claim 7 on the LNN seed's protocol (relativistic_seed, float64, depth 4, 16 chunks of 2
+    # states). quick: medians of its 5-seed sweep at 1 worker under load (the HNN: both
+    # coordinates); paper: ms per step of 300-step runs under load, the rest estimated
+    # (50,000 trajectories of data, 200 test rollouts, 4 checkpoints)
+    ("derivative", "lnn", 128, 16): (5.1, 7.5),
+    ("derivative", "hnn", 128, 16): (1.7, 4.8),
+    ("derivative", "lnn", 500, 16): (30.8, 60.0),
+    ("derivative", "hnn", 500, 16): (15.5, 45.0),
     # Claim 2 at paper-core (chain-2, width 256, batch 200): the campaign's stored rows,
     # (cpu_seconds - 12 s of evaluation) / 8000 steps; the penalty's Jacobian, and
     # its gradient, cost more than the quick-to-paper scaling assumed (550 s a run), and at
