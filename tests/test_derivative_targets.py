@@ -115,7 +115,16 @@ def test_derivative_targets_need_targets_and_a_vector_field():
 
 def test_the_new_field_leaves_existing_hashes_alone():
     c = RunConfig(system="chain_pendulum", k=2, model="node_so")
-    new = ("train_target", "eval_checkpoints", "duration", "observation")
+    new = (
+        "train_target",
+        "eval_checkpoints",
+        "duration",
+        "observation",
+        "optimizer",
+        "lr_schedule",
+        "weight_decay",
+        "train_box",
+    )
     old = _hash({a: b for a, b in c.to_dict().items() if a not in new})
     assert c.config_hash == old
     d = dataclasses.replace(c, train_target="derivative")

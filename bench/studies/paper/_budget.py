@@ -116,6 +116,15 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("derivative", "node_so", 500, 8): (2.7, 5.0),
     ("derivative", "lnn", 128, 8): (1.9, 16.7),
     ("derivative", "node_so", 128, 8): (0.4, 4.4),
+    # The LNN seed's notebook reading (fresh box states; batch in states): 400-step runs of
+    # `expand("lnn_seed_notebook", ...)`'s configs at paper-core (width 600, batch 512) and
+    # 2000-step runs at quick (width 128, batch 128), under load (load average 5-9 on the 2
+    # cores: upper bounds; the campaign's calibration corrects them); evaluation as the quick
+    # rows' wall_seconds minus train_seconds
+    ("derivative", "lnn", 600, 512): (213.8, 60.0),
+    ("derivative", "node_so", 600, 512): (31.4, 10.0),
+    ("derivative", "lnn", 128, 128): (31.7, 58.0),
+    ("derivative", "node_so", 128, 128): (0.9, 7.0),
     # Claim 7 on the LNN seed's protocol (relativistic_seed, float64, depth 4, 16 chunks of 2
     # states). quick: medians of its 5-seed sweep at 1 worker under load (the HNN: both
     # coordinates); paper: ms per step of 300-step runs under load, the rest estimated

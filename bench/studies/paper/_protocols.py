@@ -38,7 +38,19 @@ def learned_text(v: Verdict | None) -> str:
 
 
 def verdict_text(v: Verdict | None) -> str:
-    return "not run" if v is None else f"{v.verdict} ({v.n_seeds} seeds)"
+    """``reproduced (5 seeds)``; a headline part that was not tested says why: the models that
+    did not learn (the claim is then untested, not refuted), or its unmet condition."""
+    if v is None:
+        return "not run"
+    text = f"{v.verdict} ({v.n_seeds} seeds)"
+    if v.parts and v.parts[0].status == "not tested":
+        gates = [g for g in v.parts[0].gates if g.open is False]
+        stuck = [g.label for g in gates if not g.text.startswith("condition")]
+        if stuck:
+            text += f", untested: {' and '.join(stuck)} did not learn"
+        elif gates:
+            text += f", untested: condition {gates[0].label} not met"
+    return text
 
 
 def protocol_table(ours: Protocol, seeds: Protocol, differs: str) -> list[str]:
