@@ -178,7 +178,8 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
 
 def _trained_models(profile: str, cache_root):
     """(label, config) of the trained LNNs the diagnosis reads: rollout-trained with the
-    suite's prior, rollout-trained pure with pinv, and the seed's protocol's pure LNN."""
+    suite's prior, rollout-trained pure with pinv, and the pure LNN of each of the seed's
+    protocols (its text's and its notebook's)."""
     _, seeds, steps = SIZES[profile]
     out = []
     for seed in seeds:
@@ -198,7 +199,14 @@ def _trained_models(profile: str, cache_root):
             )
             for c in seed_cfgs
         ]
-        # ablation: the seed's protocol with its notebook's initialisation (appendix B / 200)
+        # the seed's notebook's protocol (fresh box states, L1, Adam with OneCycle): the claim's
+        notebook = get("lnn_seed_notebook")
+        out += [
+            ("derivative (notebook protocol), pure, pinv", c)
+            for c in expand(notebook, profile)
+            if c.model == "lnn" and c.seed == seed
+        ]
+        # ablation: the seed's protocol with the notebook's first optimiser state (appendix B / 200)
         out += [
             (
                 "derivative (seed protocol), pure, pinv, init / 200",
