@@ -92,6 +92,9 @@ PIXELS_S = 300.0 / 2
 # The LNN seed's double pendulum at quick (claim 9): 15 runs, 294 s of run time at 1 worker
 # under load (lnn_seed.MEASURED), /2 workers
 LNN_SEED_S = 294.0 / 2
+# Claim 9's notebook reading at quick (lnn_seed_notebook, seeds 0-4): 210 s of CPU time summed
+# over its 15 runs (the rows' cpu_seconds: the time an idle core would take), /2 workers
+LNN_NOTEBOOK_S = 210.0 / 2
 
 
 # Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
@@ -268,7 +271,8 @@ def estimate_seconds(
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
     """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks``, from
+    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks + the
+    LNN seed's two readings``, from
     :func:`estimate_seconds` and the measured shares of the others (the learning-curve
     experiment is read from the registry: ``bench.studies.learning`` imports this package, not
     the reverse)."""
@@ -282,4 +286,5 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
         + SEED_TASKS_S
         + PIXELS_S
         + LNN_SEED_S
+        + LNN_NOTEBOOK_S
     )
