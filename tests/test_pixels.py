@@ -166,18 +166,27 @@ def test_observation_field_keeps_old_hashes_and_checks_pixel_runs():
 def test_pixel_smoke_sweep_through_the_store(tmp_path):
     from bench.core import _runner
 
-    configs = expand(P.PIXEL_HNN, "smoke") + expand(P.PIXEL_VIN, "smoke")
+    configs = [*(expand(e, "smoke") for e in (P.PIXEL_HNN, P.PIXEL_VIN, P.PIXEL_HNN_SEED))]
+    configs = [c for cs in configs for c in cs]
     res, cache = tmp_path / "res", tmp_path / "cache"
     rows = _runner.sweep(configs, res, progress=False, cache_root=cache, workers=1)
-    assert len(rows) == 4 and all(r["status"] == "ok" for r in rows), [r.get("error") for r in rows]
+    assert len(rows) == 6 and all(r["status"] == "ok" for r in rows), [r.get("error") for r in rows]
     runs = _store.load_runs(res)
     assert set(runs["observation"]) == {"pixels"} and runs["config_hash"].is_unique
-    for col in ("pixel_mse", "pixel_mse_static", "recon_mse", "decoded_energy_mse"):
+    for col in (
+        "pixel_mse",
+        "pixel_mse_static",
+        "recon_mse",
+        "decoded_energy_mse",
+        "seed_energy_mse",
+        "seed_energy_mse_floor",
+    ):
         assert np.all(np.isfinite(runs[col].astype(float))), col
-    drift = runs.set_index("model")["latent_energy_drift"].astype(float)
+    ours = runs[~P.seed_protocol(runs)]
+    drift = ours.set_index("model")["latent_energy_drift"].astype(float)
     assert np.isfinite(drift["hnn"]) and np.isfinite(drift["vin"]) and np.isnan(drift["node"])
     again = _runner.sweep(configs, res, progress=False, cache_root=cache, workers=1)
-    assert len(_store.load_runs(res)) == 4 and not [r for r in again if r["status"] != "ok"]
+    assert len(_store.load_runs(res)) == 6 and not [r for r in again if r["status"] != "ok"]
 
 
 # -------------------------------------------------------------------------- the verdicts

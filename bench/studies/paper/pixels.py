@@ -3,8 +3,11 @@ forecasts (claim 12), their verdict rules, a table beside the seeds' numbers and
 predicted frames against the truth.
 
 An autoencoder maps two stacked 28 x 28 frames of the pendulum to a 2-number latent on which a
-registered dynamics model (HNN, MLP field, VIN, ResNet) runs. The task, the models, the budgets
-and why quick's latent HNN does not learn the motion: docs/studies/pixels.md.
+registered dynamics model (HNN, MLP field, VIN, ResNet) runs. Claim 11 is read twice: under our
+protocol (``pixel_pendulum_hnn``) and under the HNN seed's (``pixel_pendulum_hnn_seed``: its
+optimiser, latent step, initialisation and energy metric); the verdict is the seed's where it
+has runs. The task, the models, the budgets, the seed's protocol read from its code, and why
+quick's latent HNN does not learn the motion: docs/studies/pixels.md.
 """
 
 from __future__ import annotations
@@ -507,7 +510,13 @@ def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
         x = v.get(key)
         if x is None or not x.n_seeds:
             return "no runs"
-        return f"**{x.verdict}** ({x.n_seeds} seeds; {x.effect_name} {x.effect:.3g})"
+        head = x.parts[0]
+        why = f"; (a) {head.status}" + (f": {head.note}" if head.note else "")
+        disc = "; not discriminating" if x.discriminating is False else ""
+        return (
+            f"**{x.verdict}** ({x.n_seeds} seeds; {x.effect_name} {x.effect:.3g} = "
+            f"{math.exp(x.effect):.3g}x{why}{disc})"
+        )
 
     names = {
         "data": "data",
