@@ -19,9 +19,11 @@ class GeneralHamiltonian(eqx.Module):
     features: Features
     net: MLP
 
-    def __init__(self, features: Features, width, depth, activation, dtype, *, key):
+    def __init__(
+        self, features: Features, width, depth, activation, dtype, *, key, init="orthogonal"
+    ):
         self.features = features
-        self.net = MLP(features.size(True), 1, width, depth, activation, dtype, key=key)
+        self.net = MLP(features.size(True), 1, width, depth, activation, dtype, key=key, init=init)
 
     def __call__(self, q: Array, p: Array, args: Array) -> Array:
         return self.net(self.features(q, p, args))[0]

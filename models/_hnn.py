@@ -60,12 +60,21 @@ class HNN(AbstractContinuousModel):
         separable=False,
         dissipation=False,
         momentum_map=True,
+        init="orthogonal",
     ):
         self.scene, self.dtype = scene, dtype
         kh, km, kd = jr.split(key, 3)
         features = Features(scene)
-        part = SeparableHamiltonian if separable else GeneralHamiltonian
-        self.hamiltonian_part = part(features, width, depth, activation, dtype, key=kh)
+        if separable:
+            if init != "orthogonal":
+                raise ValueError(f"init {init!r}: the separable HNN takes the default only")
+            self.hamiltonian_part = SeparableHamiltonian(
+                features, width, depth, activation, dtype, key=kh
+            )
+        else:  # init: H's network (the mass and dissipation networks keep the default)
+            self.hamiltonian_part = GeneralHamiltonian(
+                features, width, depth, activation, dtype, key=kh, init=init
+            )
         self.mass = (
             None
             if scene.canonical or not momentum_map

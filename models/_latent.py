@@ -41,7 +41,8 @@ class LatentModel(eqx.Module):
     them. ``predict(x0, ts, integrator)`` encodes x0, rolls the latent state out over ``ts``
     and decodes every state: (len(ts), *obs_shape); ``latent_energy(z)`` the model's learned
     conserved scalar (the HNN's H, the VIN's discrete energy 1/2 v^T M v + U), None for a
-    model without one."""
+    model without one. ``options``: the dynamics model's options (``models.make``), e.g.
+    ``{"init": "hnn_seed"}``."""
 
     autoencoder: Autoencoder
     dynamics: AbstractModel
@@ -59,6 +60,7 @@ class LatentModel(eqx.Module):
         activation: str | None = None,
         ae_activation: str = "relu",
         dtype: str = "float32",
+        options=(),
     ):
         ka, kd = jr.split(key)
         scene = latent_scene(name, latent_dof)
@@ -66,7 +68,14 @@ class LatentModel(eqx.Module):
             obs_shape, 2 * latent_dof, ae_width, 2, ae_activation, dtype, key=ka
         )
         self.dynamics = make(
-            name, scene, key=kd, width=width, depth=depth, activation=activation, dtype=dtype
+            name,
+            scene,
+            key=kd,
+            width=width,
+            depth=depth,
+            activation=activation,
+            dtype=dtype,
+            **dict(options),
         )
 
     def encode(self, x) -> Array:

@@ -18,7 +18,7 @@ ACTIVATIONS = {
     "silu": jax.nn.silu,
     "sigmoid": jax.nn.sigmoid,
 }
-INITS = ("orthogonal", "lnn", "lnn_notebook")
+INITS = ("orthogonal", "lnn", "lnn_notebook", "hnn_seed")
 # The LNN seed's notebook (DoublePendulum.ipynb) divides every appendix-B parameter by 200
 LNN_NOTEBOOK_SCALE = 1.0 / 200.0
 DTYPES = ("float32", "float64")
@@ -40,6 +40,9 @@ class MLP(eqx.Module):
     biases. ``init="lnn"``: Gaussian weights with the LNN seed's per-layer sigma, zero biases;
     ``init="lnn_notebook"``: the same divided by 200 (an optimiser state the seed's notebook
     built and then replaced before training; an ablation).
+    ``init="hnn_seed"``: the HNN seed's MLP (greydanus/hamiltonian-nn, nn_models.py) as PyTorch
+    builds it: orthogonal weights at gain 1, PyTorch's default biases U(-1/sqrt(fan_in),
+    1/sqrt(fan_in)) on the hidden layers, none on the output layer (zero here).
     """
 
     weights: tuple[Array, ...]
@@ -59,6 +62,8 @@ class MLP(eqx.Module):
         init: str = "orthogonal",
         gain: float = 0.5,
     ):
+        if init not in INITS:
+            raise ValueError(f"init must be one of {INITS}, got {init!r}")
         sizes = [in_size] + [width] * depth + [out_size]
         n_layers = len(sizes) - 1
         keys = jr.split(key, n_layers)
@@ -66,6 +71,8 @@ class MLP(eqx.Module):
         for i, (k, a, b) in enumerate(zip(keys, sizes[:-1], sizes[1:], strict=True)):
             if init == "orthogonal":
                 w = jax.nn.initializers.orthogonal(scale=gain)(k, (a, b), dtype)
+            elif init == "hnn_seed":
+                w = jax.nn.initializers.orthogonal(scale=1.0)(k, (a, b), dtype)
             else:
                 w = _lnn_sigma(i, n_layers, width) * jr.normal(k, (a, b), dtype)
                 if init == "lnn_notebook":
@@ -73,6 +80,12 @@ class MLP(eqx.Module):
             weights.append(w)
         self.weights = tuple(weights)
         self.biases = tuple(jnp.zeros((b,), dtype) for b in sizes[1:])
+        if init == "hnn_seed":  # the hidden layers' biases; their keys apart from the weights'
+            bkeys = jr.split(jr.fold_in(key, 1), n_layers)
+            self.biases = tuple(
+                jr.uniform(k, (b,), dtype, -1.0 / math.sqrt(a), 1.0 / math.sqrt(a))
+                for k, a, b in zip(bkeys[:-1], sizes[:-2], sizes[1:-1], strict=True)
+            ) + (self.biases[-1],)
         self.activation = activation
 
     def __call__(self, x: Array) -> Array:

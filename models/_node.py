@@ -29,11 +29,20 @@ class NeuralODE(AbstractContinuousModel):
     features: Features
     net: MLP
 
-    def __init__(self, scene, width, depth, activation, dtype, *, key, weight=0.0):
+    def __init__(
+        self, scene, width, depth, activation, dtype, *, key, weight=0.0, init="orthogonal"
+    ):
         self.scene, self.dtype, self.weight = scene, dtype, float(weight)
         self.features = Features(scene)
         self.net = MLP(
-            self.features.size(True), 2 * scene.dof, width, depth, activation, dtype, key=key
+            self.features.size(True),
+            2 * scene.dof,
+            width,
+            depth,
+            activation,
+            dtype,
+            key=key,
+            init=init,
         )
 
     def vector_field(self, t, z, args):

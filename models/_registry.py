@@ -20,7 +20,8 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 
 ``hnn`` takes ``momentum_map`` (default True: p = M(q) qdot with a learned M in a velocity
 scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
-in for p and dz/dt = J grad H on (q, qdot).
+in for p and dz/dt = J grad H on (q, qdot). ``hnn`` (its H network), ``node`` and ``lnn`` take
+``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation).
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
@@ -83,11 +84,17 @@ def _boolean(name):
     return check
 
 
-def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True):
+def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True, init="orthogonal"):
     if separable and not scene.canonical:
         return SeparableHNN(scene, *a, key=key, dissipation=dissipation)
     return HNN(
-        scene, *a, key=key, separable=separable, dissipation=dissipation, momentum_map=momentum_map
+        scene,
+        *a,
+        key=key,
+        separable=separable,
+        dissipation=dissipation,
+        momentum_map=momentum_map,
+        init=init,
     )
 
 
@@ -122,9 +129,14 @@ def _plain(cls):
 
 _V, _P = "velocity", "momentum"
 _REGISTRY = {
-    "node": _Entry(NeuralODE, _plain(NeuralODE)),
+    "node": _Entry(NeuralODE, _plain(NeuralODE), {"init": _choice("init", INITS)}),
     "node_so": _Entry(SecondOrderODE, _plain(SecondOrderODE)),
-    "hnn": _Entry(HNN, _build_hnn, {"momentum_map": _boolean("momentum_map")}, True),
+    "hnn": _Entry(
+        HNN,
+        _build_hnn,
+        {"momentum_map": _boolean("momentum_map"), "init": _choice("init", INITS)},
+        True,
+    ),
     "hnn_so": _Entry(
         SeparableHNN,
         lambda s, *a, key, dissipation: _build_hnn(

@@ -137,7 +137,7 @@ def test_spec_agrees_with_the_built_models():
     assert [n for n in models.available() if models.spec(n).trivial] == models.trivial_models()
     hnn, lnn, vin, node = (models.spec(n) for n in ("hnn", "lnn", "vin", "node"))
     assert hnn.hamiltonian and lnn.lagrangian and vin.lagrangian and node.structure is None
-    assert vin.discrete and not vin.continuous and hnn.options == ("momentum_map",)
+    assert vin.discrete and not vin.continuous and hnn.options == ("init", "momentum_map")
     with pytest.raises(ValueError, match="unknown model 'nope'"):
         models.spec("nope")
 
@@ -167,7 +167,7 @@ def test_registry_and_errors():
     with pytest.raises(ValueError, match="weight"):
         models.make("node_symreg", CHAIN2, key=key, wieght=1.0)
     with pytest.raises(ValueError, match="allowed: \\[\\]"):
-        models.make("node", CHAIN2, key=key, weight=1.0)
+        models.make("node_so", CHAIN2, key=key, weight=1.0)
     with pytest.raises(ValueError, match="solve"):
         models.make("lnn", CHAIN2, key=key, solve="qr")
     for bad in (

@@ -10,6 +10,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pandas as pd
 import pytest
 
 import models
@@ -168,30 +169,48 @@ def test_observation_field_keeps_old_hashes_and_checks_pixel_runs():
 def test_pixel_smoke_sweep_through_the_store(tmp_path):
     from bench.core import _runner
 
-    configs = expand(P.PIXEL_HNN, "smoke") + expand(P.PIXEL_VIN, "smoke")
+    configs = [*(expand(e, "smoke") for e in (P.PIXEL_HNN, P.PIXEL_VIN, P.PIXEL_HNN_SEED))]
+    configs = [c for cs in configs for c in cs]
     res, cache = tmp_path / "res", tmp_path / "cache"
     rows = _runner.sweep(configs, res, progress=False, cache_root=cache, workers=1)
-    assert len(rows) == 4 and all(r["status"] == "ok" for r in rows), [r.get("error") for r in rows]
+    assert len(rows) == 6 and all(r["status"] == "ok" for r in rows), [r.get("error") for r in rows]
     runs = _store.load_runs(res)
     assert set(runs["observation"]) == {"pixels"} and runs["config_hash"].is_unique
-    for col in ("pixel_mse", "pixel_mse_static", "recon_mse", "decoded_energy_mse"):
+    for col in (
+        "pixel_mse",
+        "pixel_mse_static",
+        "recon_mse",
+        "decoded_energy_mse",
+        "seed_energy_mse",
+        "seed_energy_mse_floor",
+    ):
         assert np.all(np.isfinite(runs[col].astype(float))), col
-    drift = runs.set_index("model")["latent_energy_drift"].astype(float)
+    ours = runs[~P.seed_protocol(runs)]
+    drift = ours.set_index("model")["latent_energy_drift"].astype(float)
     assert np.isfinite(drift["hnn"]) and np.isfinite(drift["vin"]) and np.isnan(drift["node"])
     again = _runner.sweep(configs, res, progress=False, cache_root=cache, workers=1)
-    assert len(_store.load_runs(res)) == 4 and not [r for r in again if r["status"] != "ok"]
+    assert len(_store.load_runs(res)) == 6 and not [r for r in again if r["status"] != "ok"]
 
 
 # -------------------------------------------------------------------------- the verdicts
 def _tables(
-    energy_ratio=100.0, loss_ratio=1.0, forecast_ratio=3.0, spread=0.1, static=1.0, hnn_pixel=0.01
+    energy_ratio=100.0,
+    loss_ratio=1.0,
+    forecast_ratio=3.0,
+    spread=0.1,
+    static=1.0,
+    hnn_pixel=0.01,
+    experiments=P.EXPERIMENTS,
+    seed_energy_ratio=None,
 ):
-    """Rows of both experiments at smoke on seeds 0-4: the MLP's decoded energy MSE
+    """Rows of ``experiments`` at smoke on seeds 0-4: the MLP's decoded energy MSE
     ``energy_ratio`` x the HNN's, the HNN's test loss ``loss_ratio`` x the MLP's, the ResNet's
     pixel MSE ``forecast_ratio`` x the VIN's (each per seed times exp(spread * SPREAD)); the
-    HNN's pixel MSE ``hnn_pixel`` (x the same jitter), holding the first frame ``static``."""
+    HNN's pixel MSE ``hnn_pixel`` (x the same jitter), holding the first frame ``static``; the
+    seed's energy MSE of the MLP ``seed_energy_ratio`` x the HNN's (default: energy_ratio)."""
+    ratio = energy_ratio if seed_energy_ratio is None else seed_energy_ratio
     rows = []
-    for exp in P.EXPERIMENTS:
+    for exp in experiments:
         for c0 in expand(exp, "smoke"):
             for s in SEEDS:
                 c = RunConfig(**{**c0.to_dict(), "seed": s})
@@ -202,6 +221,7 @@ def _tables(
                     "vin": (1e-3, 1e-3, 0.005),
                     "resnet": (1e-2, 1e-3, 0.005 * forecast_ratio * j),
                 }[c.model]
+                seed_energy = 2e-4 * (ratio * j if c.model == "node" else 1.0)
                 row = c.to_dict()
                 row.update(
                     config_hash=c.config_hash,
@@ -210,6 +230,7 @@ def _tables(
                     profile="smoke",
                     status="ok",
                     decoded_energy_mse=energy,
+                    seed_energy_mse=seed_energy,
                     pixel_loss_test=loss,
                     pixel_mse=pixel,
                     pixel_mse_late=pixel * 1.5,
@@ -284,3 +305,188 @@ def test_section_beside_the_seeds_numbers(tmp_path):
     text = P.section(tmp_path)
     line = next(x for x in text.splitlines() if x.startswith("| MLP"))
     assert f"{P.SEED_ENERGY_MSE[0]:.3g}" in line and "| 0.01 |" in line
+
+
+# ------------------------------------------------------------ claim 11: the seed's protocol
+def _seed(**kw):
+    return _tables(experiments=(P.PIXEL_HNN_SEED,), **kw)
+
+
+def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
+    from bench.core._pixels import dataset_config, train_config
+
+    for profile in ("paper", "paper-core", "quick"):
+        cfgs = expand(P.PIXEL_HNN_SEED, profile)
+        assert {c.model for c in cfgs} == {"hnn", "node"} and {c.seed for c in cfgs} == set(SEEDS)
+        for c in cfgs:
+            # torch.optim.Adam(lr=1e-3, weight_decay=1e-5), no schedule, no clipping
+            assert (c.optimizer, c.lr_schedule, c.weight_decay, c.lr) == (
+                "adam_l2",
+                "constant",
+                1e-5,
+                1e-3,
+            )
+            # z_next = z + f(z) in the loss; the test rollout a fourth-order Runge-Kutta
+            assert (c.train_integrator, c.train_substeps, c.eval_integrator) == ("euler", 1, "rk4")
+            assert c.steps == 10000 and c.observation == "pixels" and c.chunk == 3
+            assert dict(c.model_options) == {"init": "hnn_seed"}
+        # a cell of its own: today's runs keep their hashes, the two never share a run
+        ours = {c.config_hash for c in expand(P.PIXEL_HNN, profile)}
+        assert ours.isdisjoint({c.config_hash for c in cfgs})
+        assert dataset_config(cfgs[0]) == dataset_config(expand(P.PIXEL_HNN, profile)[0])
+    paper = expand(P.PIXEL_HNN_SEED, "paper")[0]
+    assert (paper.batch, paper.width) == (200, 200)
+    tc = train_config(paper)
+    assert (tc.optimizer, tc.schedule, tc.weight_decay, tc.integrator.method) == (
+        "adam_l2",
+        "constant",
+        1e-5,
+        "euler",
+    )
+    rows = pd.concat([_tables(), _seed()], ignore_index=True)
+    is_seed = P.seed_protocol(rows)
+    assert set(rows.loc[is_seed, "experiment"]) == {P.PIXEL_HNN_SEED.name}
+    assert P.PIXEL_HNN_SEED.name not in set(rows.loc[~is_seed, "experiment"])
+
+
+def test_the_seeds_latent_step_is_z_plus_f_of_z():
+    from bench.core._pixels import seed_loss
+
+    c = expand(P.PIXEL_HNN_SEED, "smoke")[0]
+    integ = models.Integrator(c.train_integrator, substeps=c.train_substeps)
+    m = models.LatentModel(
+        "hnn", (2, 8, 8), key=jax.random.PRNGKey(1), width=8, ae_width=8, dtype="float64"
+    )
+    frames = jnp.asarray(np.random.default_rng(0).uniform(0, 1, (4, 3, 8, 8)))
+    loss, (ae, cc, dyn) = seed_loss(m, frames, integ)
+    obs = jnp.stack([frames[:, :-1], frames[:, 1:]], axis=2)
+    z = jax.vmap(jax.vmap(m.encode))(obs)  # (4, 2 observations, 2)
+    f = jax.vmap(lambda z0: m.dynamics.vector_field(0.0, z0, None))(z[:, 0])
+    want = jnp.mean((z[:, 1] - (z[:, 0] + f)) ** 2)  # the seed's hnn_loss
+    assert float(dyn) == pytest.approx(float(want), rel=1e-10)
+    assert float(loss) == pytest.approx(float(ae + cc + 0.1 * dyn), rel=1e-12)
+
+
+class _SumEncoder(eqx.Module):
+    """A latent that is a fixed linear functional of each frame of an observation."""
+
+    a: jax.Array
+    b: jax.Array
+
+    def encode(self, x):
+        return jnp.stack([jnp.sum(x[0] * self.a), jnp.sum(x[1] * self.b)])
+
+
+def test_the_seeds_latent_map_is_the_affine_least_squares_fit_at_each_first_frame():
+    from bench.core._pixel_eval import _mapped, latent_map
+
+    rng = np.random.default_rng(2)
+    enc = _SumEncoder(jnp.asarray(rng.normal(size=(6, 6))), jnp.asarray(rng.normal(size=(6, 6))))
+    frames = rng.uniform(0, 1, (5, 7, 6, 6))
+    obs = np.stack([frames[:, :-1], frames[:, 1:]], axis=2)
+    z = np.asarray(jax.vmap(jax.vmap(enc.encode))(jnp.asarray(obs)))  # (5, 6, 2)
+    w_true = np.array([[0.3, -1.2], [2.0, 0.5], [0.1, -0.4]])  # (z0, z1, 1) -> (q, qdot)
+    states = np.full((5, 7, 2), 1e6)  # the last frame starts no observation: left out
+    states[:, :-1] = _mapped(z, w_true)
+    w = latent_map(enc, frames, states, "float64")
+    np.testing.assert_allclose(w, w_true, rtol=1e-8, atol=1e-10)
+
+
+def test_claim_11_passes_fails_and_stays_undecided_under_the_seeds_protocol():
+    margin = policy.margin("energy", squared=True).value
+    v = P.claim_11(_seed(seed_energy_ratio=100.0, energy_ratio=1.0))
+    assert v.verdict == "reproduced", v.detail
+    assert v.effect == pytest.approx(math.log(100.0), rel=1e-6)
+    assert "energy MSE (the seed's)" in v.parts[0].name
+    # ours beside it, not tested
+    assert "decoded energy MSE MLP / HNN 1x (not tested)" in v.detail
+    # no gap, or the HNN worse, on the seed's metric: against the claim, whatever ours says
+    assert P.claim_11(_seed(seed_energy_ratio=1.0, energy_ratio=100.0)).verdict == (
+        "not reproduced"
+    )
+    assert P.claim_11(_seed(seed_energy_ratio=0.01)).verdict == "not reproduced"
+    v = P.claim_11(_seed(seed_energy_ratio=margin, spread=1.0))
+    assert v.verdict == "inconclusive" and v.parts[0].status == "undecided", v.detail
+    v = P.claim_11(_seed(seed_energy_ratio=100.0, loss_ratio=30.0))
+    assert v.verdict == "inconclusive" and v.parts[0].status == "not tested"
+    v = P.claim_11(_seed(seed_energy_ratio=100.0, hnn_pixel=0.96))
+    assert v.verdict == "inconclusive" and _gates(v, False) == {"HNN"}
+
+
+def test_claim_11_takes_the_seeds_protocol_where_it_has_runs():
+    ours_yes, ours_no = _tables(energy_ratio=100.0), _tables(energy_ratio=1.0)
+    seed_yes, seed_no = _seed(seed_energy_ratio=100.0), _seed(seed_energy_ratio=1.0)
+    v = P.claim_11(pd.concat([ours_yes, seed_no], ignore_index=True))
+    assert v.verdict == "not reproduced" and "(ours: reproduced)" in v.detail, v.detail
+    v = P.claim_11(pd.concat([ours_no, seed_yes], ignore_index=True))
+    assert v.verdict == "reproduced" and "(ours: not reproduced)" in v.detail, v.detail
+    # without the seed's runs, ours; the readings apart
+    assert P.claim_11(ours_no).verdict == "not reproduced"
+    both = P.readings(pd.concat([ours_no, seed_yes], ignore_index=True))
+    assert (both["ours"].verdict, both["seed"].verdict) == ("not reproduced", "reproduced")
+    assert P.readings(ours_yes)["seed"].verdict == "inconclusive"
+    # ours tests the decoded frames' energy even where its rows carry the seed's metric
+    assert P.claim_11(_tables(energy_ratio=1.0, seed_energy_ratio=100.0)).verdict == (
+        "not reproduced"
+    )
+
+
+def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_learns(tmp_path):
+    r = pd.concat([_tables(energy_ratio=1.0), _seed(seed_energy_ratio=100.0)], ignore_index=True)
+    r["recon_mse"] = np.where(r["seed"] == 1, 2e-5, 2e-6)
+    r.loc[r["seed"] == 1, "pixel_mse"] = 0.9  # nothing learns on seed 1
+    r.to_parquet(tmp_path / "runs.parquet", index=False)
+    pd.DataFrame(
+        [
+            {"profile": "smoke", "model": "vin", "seed": 1, "aux_weight": w, "recon_mse": rec,
+             "pixel_mse": pix, "pixel_mse_static": 1.0, "pixel_mse_late": pix,
+             "decoded_energy_mse": 1e-3, "pixel_loss_test": 1e-3, "source": "trained here"}
+            for w, rec, pix in ((1.0, 2e-5, 0.9), (0.0, 5e-6, 0.1))
+        ]
+    ).to_csv(tmp_path / "vin_diagnosis.csv", index=False)  # fmt: skip
+    text = P.section(tmp_path)
+    lines = text.splitlines()
+    head = next(x for x in lines if x.startswith("| | ours"))
+    assert "pixel_pendulum_hnn`" in head and "seed's protocol" in head
+    opt = next(x for x in lines if x.startswith("| optimiser |"))
+    assert "AdamW" in opt and "Adam with the weight decay as an L2 term" in opt
+    step = next(x for x in lines if x.startswith("| targets |"))
+    assert "explicit Euler z + f(z)" in step
+    verdict = next(x for x in lines if x.startswith("| verdict |"))
+    # seed 1 learns nowhere: neither reading discriminates
+    assert verdict.count("**inconclusive**") == 2
+    assert "| MLP (HNN seed's baseline) | seed's | 5 |" in text
+    one = next(x for x in lines if x.startswith("| 1 |"))
+    assert one.startswith("| 1 | none |") and one.endswith("| 5e-06, 10x |")
+    note = next(x for x in lines if x.startswith("Seed 1:"))
+    assert "no model learns the motion (6 runs)" in note and "10x the median" in note
+    assert "reconstructs at 5e-06 and learns (10x below" in note
+    assert next(x for x in lines if x.startswith("| 0 |")).startswith("| 0 | HNN (ours), MLP")
+
+
+def test_the_hnn_seeds_initialisation_is_pytorchs():
+    """nn_models.MLP of the seed: torch.nn.Linear layers (biases U(-1/sqrt(fan_in),
+    1/sqrt(fan_in))), orthogonal weights at gain 1, no bias on the output layer."""
+    from models._mlp import MLP
+
+    net = MLP(2, 1, 64, 2, "tanh", "float64", key=jax.random.PRNGKey(0), init="hnn_seed")
+    w1, w2, w3 = (np.asarray(w) for w in net.weights)
+    np.testing.assert_allclose(w1 @ w1.T, np.eye(2), atol=1e-10)  # orthonormal rows, gain 1
+    np.testing.assert_allclose(w2.T @ w2, np.eye(64), atol=1e-10)
+    assert np.linalg.norm(w3) == pytest.approx(1.0, rel=1e-10)
+    b1, b2, b3 = (np.asarray(b) for b in net.biases)
+    assert np.abs(b1).max() <= 1 / math.sqrt(2) and np.abs(b1).std() > 0.2
+    assert np.abs(b2).max() <= 1 / math.sqrt(64) and np.abs(b2).max() > 0.05
+    assert not b3.any()
+    # the paper's default is unchanged, and a latent HNN takes the option
+    ref = MLP(2, 1, 64, 2, "tanh", "float64", key=jax.random.PRNGKey(0))
+    assert not any(np.asarray(b).any() for b in ref.biases)
+    m = models.LatentModel(
+        "hnn", (2, 8, 8), key=jax.random.PRNGKey(0), width=16, ae_width=8,
+        options={"init": "hnn_seed"},
+    )  # fmt: skip
+    assert np.asarray(m.dynamics.hamiltonian_part.net.biases[0]).any()
+    with pytest.raises(ValueError, match="init must be one of"):
+        MLP(2, 1, 4, 1, "tanh", "float32", key=jax.random.PRNGKey(0), init="torch")
+    with pytest.raises(ValueError, match="option init must be one of"):
+        models.LatentModel("node", (2, 8, 8), key=jax.random.PRNGKey(0), options={"init": "x"})

@@ -1,6 +1,7 @@
 """The evaluate step of a pixel run: encode the first observation of each test trajectory,
 roll the latent state out with the evaluation integrator, decode every state, and score the
-frames against the truth and the states read off them (:func:`evaluate_pixels`)."""
+frames against the truth, the states read off them, and the states the HNN seed's linear map
+reads off their encodings (:func:`evaluate_pixels`, :func:`latent_map`)."""
 
 from __future__ import annotations
 
@@ -34,6 +35,43 @@ def _loss_jit(model, frames, integ):
 
 
 @_jit
+def _encode(m, x):
+    """Encodings (..., 2 latent_dof) of observations x (..., 2, S, S)."""
+    import jax
+
+    flat = x.reshape(-1, *x.shape[-3:])
+    return jax.vmap(m.encode)(flat).reshape(*x.shape[:-3], -1)
+
+
+def latent_map(model, frames, states, dtype) -> np.ndarray:
+    """The HNN seed's map from a latent to the state (its analysis notebook's
+    ``learn_z2canonical``): an affine map fitted by least squares from the encodings of the
+    training observations to the true state at each one's first frame. ``frames`` (N, T, S, S),
+    ``states`` (N, T, 2 dof); returns W (2 latent_dof + 1, 2 dof), state = [z, 1] @ W.
+
+    The seed fits a ``torch.nn.Linear(2, 2)`` by Adam (4000 steps of 400) to (theta, 0.25
+    theta_dot); this is that fit's optimum, and a scale on a target column scales its column of
+    W alone, so fitting (q, qdot) or (q, p = m l^2 qdot) reads the same energy."""
+    import jax.numpy as jnp
+
+    import systems
+
+    obs = systems.PixelDataset.observations(np.asarray(frames))  # (N, T-1, 2, S, S)
+    z = np.asarray(_encode(model, jnp.asarray(obs, dtype)), np.float64)
+    z = z.reshape(-1, z.shape[-1])
+    y = np.asarray(states, np.float64)[:, : obs.shape[1]].reshape(len(z), -1)
+    a = np.concatenate([z, np.ones((len(z), 1))], axis=-1)
+    w, *_ = np.linalg.lstsq(a, y, rcond=None)
+    return w
+
+
+def _mapped(z, w) -> np.ndarray:
+    """States [z, 1] @ w of latents z (..., 2 latent_dof)."""
+    z = np.asarray(z, np.float64)
+    return np.concatenate([z, np.ones((*z.shape[:-1], 1))], axis=-1) @ w
+
+
+@_jit
 def _roll(m, x0, n_t: int, integ):
     """Latent rollouts of n_t frame steps from observations x0 and their decoded frames."""
     import jax
@@ -57,7 +95,12 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     decoded frame (``systems.read_state``: q from the first frame, qdot the difference to the
     second over dt): ``rollout_error``, ``energy_violation``, ``mse`` and
     ``decoded_energy_mse`` (mean of (H(read x_hat) - H(read x))^2, H the true energy), the
-    read-off truth scored by the same reader. ``curves`` also hold per-time ``pixel_mse`` and
+    read-off truth scored by the same reader. The HNN seed's energy metric (its analysis
+    notebook): each decoded frame pair encoded again and mapped to the state by
+    :func:`latent_map`, ``seed_energy_mse`` the mean over t >= 1 and trajectories of
+    (H(mapped) - H(true state))^2 against the true states of the test set (not read off
+    frames); ``seed_energy_mse_floor`` the same map applied to the encoded true observations
+    (every t), what the map alone costs. ``curves`` also hold per-time ``pixel_mse`` and
     a few decoded frames of the first test trajectory (``frames_true``, ``frames_pred``, at
     ``frame_index``) for the figure.
     """
@@ -84,7 +127,8 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     finite = bool(np.all(np.isfinite(pred)))
     sq = (pred - obs) ** 2
     pixel_t = sq.mean(axis=(0, 2, 3, 4))
-    recon = jax.vmap(jax.vmap(lambda x: model.decode(model.encode(x))))(jnp.asarray(obs, dtype))
+    x_all = jnp.asarray(obs, dtype)
+    recon = jax.vmap(jax.vmap(lambda x: model.decode(model.encode(x))))(x_all)
     recon_mse = float(np.mean((np.asarray(recon, np.float64) - obs) ** 2))
     static = float(np.mean((obs[:, :1] - obs[:, 1:]) ** 2))
 
@@ -110,6 +154,21 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     d_h = (h_hat - h_true) ** 2
     decoded_energy_mse = float(np.mean(d_h)) if np.all(np.isfinite(d_h)) else float("nan")
 
+    # the seed's energy: decoded frames encoded again, mapped linearly to the state, true H
+    w = latent_map(model, data.frames_train, data.z_train, dtype)
+    h_state = np.asarray(energy(jnp.asarray(data.z_test[:, :n_t])), np.float64)
+    seed_energy_mse = seed_energy_floor = float("nan")
+    if finite:
+        z_re = _encode(model, jnp.asarray(pred, dtype))
+        h_seed = np.asarray(energy(jnp.asarray(_mapped(z_re, w))), np.float64)
+        d_seed = (h_seed - h_state)[:, 1:] ** 2
+        if np.all(np.isfinite(d_seed)):
+            seed_energy_mse = float(np.mean(d_seed))
+    h_floor = np.asarray(energy(jnp.asarray(_mapped(_encode(model, x_all), w))), np.float64)
+    d_floor = (h_floor - h_state) ** 2
+    if np.all(np.isfinite(d_floor)):
+        seed_energy_floor = float(np.mean(d_floor))
+
     train_integ = models.Integrator(c.train_integrator, substeps=c.train_substeps)
     metrics = {
         "pixel_mse": float(pixel_t[1:].mean()) if finite else float("nan"),
@@ -120,6 +179,8 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
         "pixel_loss_test": _loss_on(model, data.frames_test, c.chunk, train_integ, c.seed),
         "latent_energy_drift": drift,
         "decoded_energy_mse": decoded_energy_mse,
+        "seed_energy_mse": seed_energy_mse,
+        "seed_energy_mse_floor": seed_energy_floor,
         "rollout_error": float(M.geometric_mean(err_t[..., 1:])),
         "energy_violation": float(M.geometric_mean(ev_t[..., 1:])),
         "mse": M.mse(z_hat, z_true, angular),

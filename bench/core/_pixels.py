@@ -30,6 +30,8 @@ PIXEL_METRICS = (
     "pixel_loss_test",
     "latent_energy_drift",
     "decoded_energy_mse",
+    "seed_energy_mse",
+    "seed_energy_mse_floor",
 )
 
 
@@ -44,7 +46,13 @@ def check_pixel_model(c: RunConfig) -> None:
         allowed = [m for m in models.available() if not models.spec(m).trivial]
         raise ValueError(f"pixel runs need a learned model; allowed: {', '.join(allowed)}")
     models.LatentModel(
-        c.model, (2, 8, 8), key=jax.random.PRNGKey(0), width=2, ae_width=2, dtype=c.dtype
+        c.model,
+        (2, 8, 8),
+        key=jax.random.PRNGKey(0),
+        width=2,
+        ae_width=2,
+        dtype=c.dtype,
+        options=dict(c.model_options),
     )
 
 
@@ -66,6 +74,7 @@ def build(c: RunConfig):
         ae_width=c.width,
         activation=c.activation,
         dtype=c.dtype,
+        options=dict(c.model_options),
     )
     return system, data, model
 

@@ -198,6 +198,17 @@ _RUN = {
         "H units^2",
         "pixels: mean of (H(state read off decoded frames) - H(state read off true frames))^2",
     ),
+    "seed_energy_mse": (
+        "H units^2",
+        "pixels, the HNN seed's energy metric: mean over t >= 1 of (H(state) - H(true state))^2, "
+        "the state an affine least-squares map (fitted on the training encodings) of the "
+        "decoded frames encoded again",
+    ),
+    "seed_energy_mse_floor": (
+        "H units^2",
+        "pixels: the same map applied to the encoded true test observations (every t): what "
+        "the map alone costs",
+    ),
 }
 
 _PROVENANCE = {
