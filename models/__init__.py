@@ -23,6 +23,7 @@ from ._integrators import (
     rollout_batch,
 )
 from ._latent import LatentModel, latent_scene
+from ._position_latent import PositionLatentModel
 from ._registry import (
     available,
     coordinates,
@@ -46,6 +47,7 @@ __all__ = [
     "ORDERS",
     "Integrator",
     "LatentModel",
+    "PositionLatentModel",
     "implicit_tolerance",
     "count_evaluations",
     "rollout",

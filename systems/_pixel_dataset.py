@@ -26,7 +26,8 @@ from ._render import read_state, render
 class PixelDatasetConfig:
     """``n_train`` training and ``n_test`` test trajectories of ``train_points`` and
     ``test_points`` frames ``dt`` apart, ``size`` x ``size`` pixels; starts q0 ~ U(-max_angle,
-    max_angle), qdot0 ~ U(-max_speed, max_speed) (rad, rad/s)."""
+    max_angle), qdot0 ~ U(-max_speed, max_speed) (rad, rad/s). With ``min_angle`` > 0, |q0| ~
+    U(min_angle, max_angle) with a random sign instead (the VIN seed's starts, far from rest)."""
 
     system: str = "pendulum"
     system_params: tuple = ()
@@ -39,6 +40,7 @@ class PixelDatasetConfig:
     max_angle: float = math.pi / 6
     max_speed: float = 1.0
     seed: int = 0
+    min_angle: float = 0.0
 
     def __post_init__(self):
         for name in ("size", "n_train", "n_test", "train_points", "test_points", "seed"):
@@ -55,6 +57,10 @@ class PixelDatasetConfig:
                 raise ValueError(f"{name} must be a finite number > 0; got {v!r}")
         if not (math.isfinite(self.max_speed) and self.max_speed >= 0):
             raise ValueError(f"max_speed must be a finite number >= 0; got {self.max_speed!r}")
+        if not (math.isfinite(self.min_angle) and 0 <= self.min_angle < self.max_angle):
+            raise ValueError(
+                f"min_angle must be a finite number in [0, max_angle); got {self.min_angle!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -79,9 +85,14 @@ class PixelDataset:
         return np.asarray(read_state(observations, self.config.dt))
 
 
-def _starts(key, n: int, dof: int, max_angle: float, max_speed: float):
+def _starts(key, n: int, dof: int, max_angle: float, max_speed: float, min_angle: float = 0.0):
     kq, kv = jax.random.split(key)
-    q = jax.random.uniform(kq, (n, dof), jnp.float64, -max_angle, max_angle)
+    if min_angle > 0:  # |q0| in [min_angle, max_angle], either sign
+        ka, ks = jax.random.split(kq)
+        q = jax.random.uniform(ka, (n, dof), jnp.float64, min_angle, max_angle)
+        q = q * jnp.where(jax.random.bernoulli(ks, 0.5, (n, dof)), 1.0, -1.0)
+    else:
+        q = jax.random.uniform(kq, (n, dof), jnp.float64, -max_angle, max_angle)
     v = jax.random.uniform(kv, (n, dof), jnp.float64, -max_speed, max_speed)
     return jnp.concatenate([q, v], axis=-1)
 
@@ -98,7 +109,7 @@ def make_pixel_dataset(config: PixelDatasetConfig) -> PixelDataset:
         ("train", k_train, config.n_train, config.train_points),
         ("test", k_test, config.n_test, config.test_points),
     ):
-        z0 = _starts(key, n, system.dof, config.max_angle, config.max_speed)
+        z0 = _starts(key, n, system.dof, config.max_angle, config.max_speed, config.min_angle)
         ts = jnp.arange(points, dtype=jnp.float64) * config.dt
         zs = system.simulate_batch(z0, ts)
         out[f"z_{split}"] = np.asarray(zs, dtype=np.float64)

@@ -10,6 +10,7 @@ import pytest
 from bench.core import _schema, _store
 from bench.core._execute import execute_run
 from bench.core._experiments import RunConfig
+from bench.core._frames import FRAME_METRICS
 from bench.core._pixels import PIXEL_METRICS
 from bench.core._runnable import check_runnable
 
@@ -20,8 +21,9 @@ SMOKE = dict(
 # Columns that only some runs carry: a run that fails has no metrics, an ensemble member sets
 # ensemble_size, and the runner adds experiment/profile/ensemble_size when it stores a row.
 OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
-# Pixel runs' own metrics (observation "pixels"): stored by tests/test_pixels.py's sweep.
-OPTIONAL |= set(PIXEL_METRICS)
+# Pixel and frames runs' own metrics: stored by the sweeps of tests/test_pixels.py and
+# tests/test_vin_blog.py.
+OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS)
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 ``execute_run(config)`` never raises (a storage error, which stops a sweep, aside): every
 outcome is a row with ``status`` ``ok``, ``diverged`` (training went non-finite at
 ``diverged_step``) or ``failed`` (``error`` holds the message, the traceback is in the run's
-artifact folder). The observation kinds, state and pixels, are variants of the build, train and
-evaluate steps (:class:`Steps`); an ensemble's member is a variant of the train step.
+artifact folder). The observation kinds, state, pixels and frames, are variants of the build,
+train and evaluate steps (:class:`Steps`); an ensemble's member is a variant of the train step.
 """
 
 from __future__ import annotations
@@ -80,9 +80,32 @@ def _evaluate_pixels(config: RunConfig, built, model, meta: dict, cache_root: Pa
     return {**metrics, "curves": curves}, {}
 
 
+def _build_frames(config: RunConfig, cache_root: Path):
+    from ._frames import build
+
+    return build(config)
+
+
+def _train_frames(config: RunConfig, built, cache_root: Path, progress: bool):
+    from ._frames import train_cached_frames
+
+    _, data, model = built
+    return train_cached_frames(config, model, data, cache_root, progress)
+
+
+def _evaluate_frames(config: RunConfig, built, model, meta: dict, cache_root: Path):
+    from ._frames import evaluate_frames
+
+    system, data, _ = built
+    metrics, curves = evaluate_frames(config, system, data, model)
+    return {**metrics, "curves": curves}, {}
+
+
 STATE = Steps(build=_build_state, train=_train_state, evaluate=evaluate_state)
 PIXELS = Steps(build=_build_pixels, train=_train_pixels, evaluate=_evaluate_pixels)
-OBSERVATIONS = {"state": STATE, "pixels": PIXELS}  # RunConfig.observation -> its steps
+FRAMES = Steps(build=_build_frames, train=_train_frames, evaluate=_evaluate_frames)
+# RunConfig.observation -> its steps
+OBSERVATIONS = {"state": STATE, "pixels": PIXELS, "frames": FRAMES}
 
 
 def ensemble_member(trained: tuple, rolled=None) -> Steps:

@@ -48,7 +48,8 @@ COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
-OBSERVATIONS = ("state", "pixels")  # what the models see (pixels: bench.core._pixels)
+# what the models see (pixels: bench.core._pixels; frames: bench.core._frames)
+OBSERVATIONS = ("state", "pixels", "frames")
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
@@ -57,6 +58,11 @@ LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedu
 PIXEL_SIZE = 28
 PIXEL_MAX_ANGLE = math.pi / 6
 PIXEL_MAX_SPEED = 1.0
+# The VIN seed's pixel task (observation "frames": single frames, each encoded to a position):
+# its starts |q0| in [pi/2, pi - 0.1] with either sign, qdot0 ~ U(-1, 1) (the authors' code,
+# steindoringi/Variational_Integrator_Networks, systems.py), far from rest so that the frames
+# go round most of the circle.
+FRAMES_ANGLES = (math.pi / 2, math.pi - 0.1)
 PIXEL_DEFAULTS = (
     ("noise", 0.0),
     ("random_args", False),
@@ -104,8 +110,9 @@ class RunConfig:
     # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
     train_target: str = "rollout"
-    # what the models observe: "state" (z itself) or "pixels" (rendered frames of the state,
-    # an autoencoder and latent dynamics: bench.core._pixels)
+    # what the models observe: "state" (z itself), "pixels" (rendered frames of the state,
+    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels) or
+    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames)
     observation: str = "state"
     # the optimisation (bench.core._train.optimizer): "adamw" (the suite's: clipping, AdamW,
     # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
@@ -226,7 +233,7 @@ class RunConfig:
                 raise ValueError(
                     "train_box supports no noise, random_args or pixels; allowed: their defaults"
                 )
-        if self.observation == "pixels":
+        if self.observation in ("pixels", "frames"):
             self._check_pixels()
         else:  # the system, its parameters and the dataset's shape (systems checks them)
             object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
@@ -304,12 +311,13 @@ class RunConfig:
 
     def pixel_dataset_config(self):
         """A pixel run's ``systems.PixelDatasetConfig``: ``n_train`` training and ``n_test``
-        test trajectories from the :data:`PIXEL_MAX_ANGLE` / :data:`PIXEL_MAX_SPEED` starts,
-        frames of :data:`PIXEL_SIZE` pixels ``dt`` apart; a training trajectory spans
-        ``duration`` (``round(duration / dt)`` frames), a test trajectory
-        ``chunk * test_chunks`` frames."""
+        test trajectories from the :data:`PIXEL_MAX_ANGLE` / :data:`PIXEL_MAX_SPEED` starts
+        (observation "frames": |q0| in :data:`FRAMES_ANGLES`), frames of :data:`PIXEL_SIZE`
+        pixels ``dt`` apart; a training trajectory spans ``duration`` (``round(duration /
+        dt)`` frames), a test trajectory ``chunk * test_chunks`` frames."""
         import systems
 
+        angles = FRAMES_ANGLES if self.observation == "frames" else (0.0, PIXEL_MAX_ANGLE)
         return systems.PixelDatasetConfig(
             system=self.system,
             system_params=tuple(sorted(self.system_kwargs().items())),
@@ -319,9 +327,10 @@ class RunConfig:
             train_points=max(self.chunk, round(self.duration / self.dt)),
             test_points=self.chunk * self.test_chunks,
             dt=self.dt,
-            max_angle=PIXEL_MAX_ANGLE,
+            max_angle=angles[1],
             max_speed=PIXEL_MAX_SPEED,
             seed=self.seed,
+            min_angle=angles[0],
         )
 
     def _identity(self) -> dict:

@@ -27,6 +27,11 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
 
         check_pixel_model(cfg)
         return cfg
+    if cfg.observation == "frames":  # the VIN seed's latent models (bench.core._frames)
+        from ._frames import check_frame_model
+
+        check_frame_model(cfg)
+        return cfg
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)

@@ -59,8 +59,10 @@ _CONFIG = {
     "seed": ("-", "seed of the data split, initialisation and batches"),
     "observation": (
         "-",
-        "what the models observe: state (z) or pixels (28 x 28 frames, an autoencoder and "
-        "latent dynamics; empty in rows from before the field: state)",
+        "what the models observe: state (z), pixels (28 x 28 frames, two stacked per "
+        "observation, an autoencoder and latent dynamics) or frames (the VIN seed's task: single "
+        "frames encoded to positions, the dynamics carrying the velocity); empty in rows from "
+        "before the field: state",
     ),
     "train_target": (
         "-",
@@ -183,10 +185,37 @@ _RUN = {
     ),
     "ensemble_size": ("count", "runs trained together as one vmapped ensemble (1: alone)"),
     # pixel runs (observation "pixels", bench.core._pixels); empty for state runs
-    "pixel_mse": ("1 (intensity^2)", "pixels: mean over t >= 1 of (decoded - true frames)^2"),
+    "pixel_mse": (
+        "1 (intensity^2)",
+        "pixels: mean over t >= 1 of (decoded - true frames)^2 (frames: t >= 2, forecasts "
+        "from the first two frames, the decoder's probabilities)",
+    ),
     "pixel_mse_late": ("1 (intensity^2)", "pixels: pixel_mse over the last third of the horizon"),
-    "pixel_mse_static": ("1 (intensity^2)", "pixels: pixel_mse of holding the first observation"),
+    "pixel_mse_static": (
+        "1 (intensity^2)",
+        "pixels: pixel_mse of holding the first observation (frames: the second frame)",
+    ),
     "recon_mse": ("1 (intensity^2)", "pixels: autoencoder reconstruction error, test frames"),
+    # frames runs (observation "frames", bench.core._frames); empty for the others
+    "frame_mse_mean": (
+        "1 (intensity^2)",
+        "frames: the mean training frame against the test frames (the trivial autoencoder)",
+    ),
+    "embedding_trust": (
+        "1",
+        "frames: trustworthiness (k = 10) of the encoder's embedding of test frames against "
+        "the bob's true position on the circle (bench.core._embedding); 1 best, ~0.5 random",
+    ),
+    "embedding_jumps": (
+        "1",
+        "frames: share of consecutive test frames whose learned neighbour rank exceeds 4 x "
+        "max(10, their true rank): jumps in time",
+    ),
+    "embedding_defect": (
+        "1",
+        "frames: max(1 - embedding_trust, embedding_jumps); 0 for an embedding continuous and "
+        "one-to-one on the true circle",
+    ),
     "pixel_loss_train": ("1", "pixels: the HNN seed's three-term loss on training windows"),
     "pixel_loss_test": ("1", "pixels: the same on test windows (the seed's test loss)"),
     "latent_energy_drift": (

@@ -10,7 +10,7 @@ the budgets: docs/studies/paper.md.
 # The import order is the registration order: the report's and the figures' order.
 from . import energy, symplectic, second_order, coordinates, damped, loss
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: F401
-from . import pixels, _hnn_diagnosis  # noqa: F401
+from . import pixels, vin_blog, _hnn_diagnosis  # noqa: F401
 from . import _commands, _sections  # noqa: F401 - the paper's verbs and report sections
 
 # isort: on

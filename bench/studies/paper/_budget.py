@@ -100,9 +100,9 @@ LNN_NOTEBOOK_S = 210.0 / 2
 # Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
 # seed, claim 9) and pixel frames (claims 11 and 12). (ms per training step, seconds of
 # everything else but the data) at the sizes the profiles run, keyed (kind, model, width, batch),
-# kind "pixels" or "derivative". Pixels at paper-core (batch 200, width 200): the difference of
-# 200- and 600-step runs of `expand(..., "paper-core")`'s configs, one process, the campaign
-# paused; at quick (batch 64, width 128): the quick rows' train_seconds / steps.
+# kind "pixels", "frames" or "derivative". Pixels at paper-core (batch 200, width 200): the
+# difference of 200- and 600-step runs of `expand(..., "paper-core")`'s configs, one process,
+# the campaign paused; at quick (batch 64, width 128): the quick rows' train_seconds / steps.
 # The LNN seed: lnn_seed.MEASURED at paper (width 500, 8 chunks of 4 states), the quick rows at
 # quick. Other sizes fall back to WALL_S's scaling (the HNN seed's tasks, whose estimate was
 # 0.14 CPU h against 0.19 h measured at paper-core).
@@ -115,6 +115,16 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("pixels", "node", 128, 64): (5.8, 5.0),
     ("pixels", "vin", 128, 64): (5.5, 5.0),
     ("pixels", "resnet", 128, 64): (5.1, 4.5),
+    # The VIN seed's frames (claim 12's second reading, vin_blog): at quick (width 128, 32
+    # windows of 11 frames) the quick rows' median train_seconds / steps and wall - train; at
+    # paper-core (width 256, full batches of 120 windows) 300-step runs of seed 0, one process
+    # under load (vin: two potential gradients per Verlet step)
+    ("frames", "vin", 128, 32): (12.9, 8.0),
+    ("frames", "resnet", 128, 32): (12.0, 1.2),
+    ("frames", "at_rest", 128, 32): (12.3, 4.6),
+    ("frames", "vin", 256, 200): (100.6, 20.0),
+    ("frames", "resnet", 256, 200): (56.9, 20.0),
+    ("frames", "at_rest", 256, 200): (54.7, 20.0),
     ("derivative", "lnn", 500, 8): (14.8, 20.0),
     ("derivative", "node_so", 500, 8): (2.7, 5.0),
     ("derivative", "lnn", 128, 8): (1.9, 16.7),
@@ -175,7 +185,7 @@ def _wall(c: RunConfig) -> tuple[float, float]:
 
 
 def _kind(c: RunConfig) -> str:
-    return "pixels" if c.observation == "pixels" else c.train_target
+    return c.observation if c.observation != "state" else c.train_target
 
 
 def _cost_name(c: RunConfig) -> str:

@@ -98,6 +98,18 @@ POLICY: dict[str, Quantity] = {
             "half-way to the nearest other growth law: 0.5 is a random walk",
         ),
         Quantity(
+            "embedding",
+            "embedding defect (1 - trustworthiness, or the share of steps that jump)",
+            0.05,
+            (0.025, 0.1),
+            False,
+            "consistent with the ground truth, fails to capture the global structure, "
+            "discontinuous with respect to time",
+            "one neighbour or time step in twenty out of place: an embedding continuous and "
+            "one-to-one on the true circle with small noise scores 0.01-0.03, a cut crossed "
+            "on every swing 0.06, a fold 0.2-0.3 (bench.core._embedding)",
+        ),
+        Quantity(
             "learning",
             "learning gate (error ratio, best trivial predictor / model)",
             2.0,
