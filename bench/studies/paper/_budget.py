@@ -95,6 +95,10 @@ LNN_SEED_S = 294.0 / 2
 # Claim 9's notebook reading at quick (lnn_seed_notebook, seeds 0-4): 210 s of CPU time summed
 # over its 15 runs (the rows' cpu_seconds: the time an idle core would take), /2 workers
 LNN_NOTEBOOK_S = 210.0 / 2
+# The seeds' own pixel protocols at quick, seeds 0-4 (CPU seconds summed over the runs, /2
+# workers): claim 11's pixel_pendulum_hnn_seed (10 runs, 660 s) and claim 12's
+# pixel_pendulum_vin_blog (20 runs, 642 s)
+PIXELS_SEED_S = (660.0 + 642.0) / 2
 
 
 # Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
@@ -281,8 +285,8 @@ def estimate_seconds(
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
     """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks + the
-    LNN seed's two readings``, from
+    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks (ours and
+    the seeds') + the LNN seed's two readings``, from
     :func:`estimate_seconds` and the measured shares of the others (the learning-curve
     experiment is read from the registry: ``bench.studies.learning`` imports this package, not
     the reverse)."""
@@ -297,4 +301,5 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
         + PIXELS_S
         + LNN_SEED_S
         + LNN_NOTEBOOK_S
+        + PIXELS_SEED_S
     )
