@@ -106,30 +106,38 @@ def protocols(report: str) -> dict[int, dict[str, tuple[str, str]]]:
     return out
 
 
+_VERDICT_WORD = re.compile(r"(partly reproduced|not reproduced|reproduced|inconclusive|not run)")
+
+
+def _short(cell: str) -> str:
+    """The verdict a protocol-table cell states (its first), or the cell."""
+    m = _VERDICT_WORD.search(cell)
+    return m.group(1) if m else cell
+
+
 def _protocol_lines(reports: dict[str, str]) -> list[str]:
     quick, core = (protocols(reports[b]) for b in ("quick", "paper-core"))
     if not quick and not core:
         return []
     lines = [
         "",
-        "Where the seed's own protocol differs from ours, both are run; the seed's decides "
-        "(each claim's section of REPORT.md sets them side by side):",
+        "Where a seed's own protocol differs from ours, both run and the seed's decides; each "
+        "model's learning gate at quick (REPORT.md sets the protocols side by side):",
         "",
-        "| claim | models learned: ours / the seed's (quick) | quick: ours / the seed's | "
-        "paper-core: ours / the seed's | still differs from the seed's code |",
-        "| --- | --- | --- | --- | --- |",
+        "| claim | learned at quick: ours / the seed's | quick: ours / the seed's | "
+        "paper-core: ours / the seed's |",
+        "| --- | --- | --- | --- |",
     ]
     for claim in sorted({*quick, *core}):
         q, c = quick.get(claim, {}), core.get(claim, {})
 
-        def pair(rows, key):
+        def pair(rows, key, short=True):
             ours, seeds = rows.get(key, ("not run", "not run"))
-            return f"{ours} / {seeds}"
+            return f"{_short(ours)} / {_short(seeds)}" if short else f"{ours} / {seeds}"
 
-        differs = (q or c).get("still differs from the seed's code", ("", "-"))[1]
         lines.append(
-            f"| {claim} | {pair(q, 'learned')} | {pair(q, 'verdict')} | {pair(c, 'verdict')} | "
-            f"{differs} |"
+            f"| {claim} | {pair(q, 'learned', False)} | {pair(q, 'verdict')} | "
+            f"{pair(c, 'verdict')} |"
         )
     return lines
 

@@ -75,4 +75,4 @@ def test_the_seeds_protocols_come_from_each_claims_section():
     assert got[9]["loss"] == ("squared error", "L1")
     assert got[9]["verdict"] == ("not run", "not run")
     lines = F._protocol_lines({"quick": report, "paper-core": "## Claims"})
-    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run | the steps |"
+    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run |"

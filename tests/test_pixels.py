@@ -313,7 +313,7 @@ def _seed(**kw):
 
 
 def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
-    from bench.core._pixels import dataset_config, train_config
+    from bench.core._pixels import train_config
 
     for profile in ("paper", "paper-core", "quick"):
         cfgs = expand(P.PIXEL_HNN_SEED, profile)
@@ -333,7 +333,9 @@ def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
         # a cell of its own: today's runs keep their hashes, the two never share a run
         ours = {c.config_hash for c in expand(P.PIXEL_HNN, profile)}
         assert ours.isdisjoint({c.config_hash for c in cfgs})
-        assert dataset_config(cfgs[0]) == dataset_config(expand(P.PIXEL_HNN, profile)[0])
+        assert (
+            cfgs[0].pixel_dataset_config() == expand(P.PIXEL_HNN, profile)[0].pixel_dataset_config()
+        )
     paper = expand(P.PIXEL_HNN_SEED, "paper")[0]
     assert (paper.batch, paper.width) == (200, 200)
     tc = train_config(paper)
@@ -446,8 +448,9 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
     ).to_csv(tmp_path / "vin_diagnosis.csv", index=False)  # fmt: skip
     text = P.section(tmp_path)
     lines = text.splitlines()
-    head = next(x for x in lines if x.startswith("| | ours"))
-    assert "pixel_pendulum_hnn`" in head and "seed's protocol" in head
+    assert "| protocol | ours | the seed's |" in lines
+    learned = next(x for x in lines if x.startswith("| learned |"))
+    assert learned.count("HNN") == 2
     opt = next(x for x in lines if x.startswith("| optimiser |"))
     assert "AdamW" in opt and "Adam with the weight decay as an L2 term" in opt
     step = next(x for x in lines if x.startswith("| targets |"))

@@ -53,12 +53,14 @@ def verdict_text(v: Verdict | None) -> str:
     return text
 
 
-def protocol_table(ours: Protocol, seeds: Protocol, differs: str) -> list[str]:
+def protocol_table(ours: Protocol, seeds: Protocol, differs: str, extra: tuple = ()) -> list[str]:
     """The markdown table: a row per :data:`ROWS`, then each model's learning gate, the verdict
     of each reading and ``differs``, one line on what still separates the seed's reading from
-    the seed's code (the claim's verdict is the seed's reading's where it has runs)."""
+    the seed's code (the claim's verdict is the seed's reading's where it has runs); ``extra``:
+    more (row, ours, the seed's) rows before those."""
     lines = ["", HEADER, "|---|---|---|"]
     lines += [f"| {row} | {getattr(ours, row)} | {getattr(seeds, row)} |" for row in ROWS]
+    lines += [f"| {row} | {a} | {b} |" for row, a, b in extra]
     lines.append(f"| learned | {learned_text(ours.verdict)} | {learned_text(seeds.verdict)} |")
     lines.append(f"| verdict | {verdict_text(ours.verdict)} | {verdict_text(seeds.verdict)} |")
     lines.append(f"| still differs from the seed's code | - | {differs} |")

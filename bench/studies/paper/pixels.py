@@ -25,6 +25,8 @@ from ...core._store import read_rows
 from ...core._studies import Study, register_study
 from .._figure import new_figure, save_figure
 from . import _vin_diagnosis, policy
+from ._protocols import HEADER as PROTOCOL_HEADER
+from ._protocols import learned_text
 from ._rules import CLAIM_TITLES
 from .kit import (
     Discrimination,
@@ -543,11 +545,17 @@ def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
         "Claim 11 under two protocols (the verdict is the seed's protocol's where it has runs; "
         "`claim_11`):",
         "",
-        "| | ours (`pixel_pendulum_hnn`) | seed's protocol (`pixel_pendulum_hnn_seed`) |",
+        PROTOCOL_HEADER,
         "|---|---|---|",
     ]
     for what, label in names.items():
         lines.append(f"| {label} | {cell('ours', what)} | {cell('seed', what)} |")
+    lines.append(f"| learned | {learned_text(v.get('ours'))} | {learned_text(v.get('seed'))} |")
+    lines.append(
+        "| still differs from the seed's code | - | our pendulum and renderer (the seed: Gym's "
+        "Pendulum-v0); zero autoencoder biases; both observations reconstructed (the seed: the "
+        "first); RK4 test rollouts (the seed: RK45); every test trajectory (the seed: one) |"
+    )
     return lines
 
 

@@ -57,6 +57,8 @@ from ._plot import (
     _trivial_lines,
     split_trivial,
 )
+from ._protocols import HEADER as PROTOCOL_HEADER
+from ._protocols import learned_text
 from ._rules import CLAIM_TITLES
 from .kit import (
     Verdict,
@@ -577,11 +579,26 @@ def comparison_section(results_dir) -> str:
         "their own units: the seed's protocol runs the seed's physics with time and length "
         "10x longer (qdot(t) is the seed's), so that g has the spread the seed's networks see.",
         "",
-        "| | ours (`relativistic`) | seed's protocol (`relativistic_seed`) |",
+        "Ours is `relativistic`, the seed's protocol `relativistic_seed`.",
+        "",
+        PROTOCOL_HEADER,
         "| --- | --- | --- |",
     ]
     for row in ("data", "targets", "loss", "optimiser", "steps", "network", "metric", "verdict"):
         lines.append(f"| {row} | {ours.get(row, '-')} | {seed.get(row, '-')} |")
+    read = {}
+    if len(runs):
+        from ._rules import evaluate_claims
+
+        read = {v.key: v for v in evaluate_claims(runs, curves, profile, claims=[7])}
+    ours_v, seed_v = read.get(f"7 ({ROLLOUT_VARIANT})"), read.get("7")
+    lines.append(f"| learned | {learned_text(ours_v)} | {learned_text(seed_v)} |")
+    lines.append(
+        "| still differs from the seed's code | - | time and length 10x the seed's (its input "
+        "scaling); g uniform (the seed: normal); states from trajectories (the seed: independent "
+        "draws); unweighted L1; the (q, p) HNN trained in (q, p); AdamW with cosine decay (the "
+        "seed: Adam, one cycle); the suite's rollout error as the metric (the seed: a figure) |"
+    )
     errs = {t: _errors(runs, t) for t in ("rollout", "derivative")}
     if any(errs.values()):
         lines += [
