@@ -95,11 +95,11 @@ def protocol_rows(text: str) -> dict[str, tuple[str, str]]:
 
 
 def protocols(report: str) -> dict[int, dict[str, tuple[str, str]]]:
-    """claim -> its :func:`protocol_rows`, for every report section ``## ... (claim N)`` with
-    a two-protocol table."""
+    """claim -> its :func:`protocol_rows`, for every report section ``## ... (claim N)`` (or
+    ``(claims N and M)``: the table is claim N's) with a two-protocol table."""
     out = {}
     for part in re.split(r"^(?=## )", report, flags=re.M):
-        m = re.match(r"## .*\(claim (\d+)\)", part)
+        m = re.match(r"## .*\(claims? (\d+)", part)  # a shared section: its first claim
         rows = protocol_rows(part) if m else {}
         if rows:
             out[int(m.group(1))] = rows
@@ -122,7 +122,8 @@ def _protocol_lines(reports: dict[str, str]) -> list[str]:
     lines = [
         "",
         "Where a seed's own protocol differs from ours, both run and the seed's decides; each "
-        "model's learning gate at quick (REPORT.md sets the protocols side by side):",
+        "model's learning gate at quick (a model that did not learn leaves its comparison "
+        "untested, not refuted; REPORT.md sets the protocols side by side):",
         "",
         "| claim | learned at quick: ours / the seed's | quick: ours / the seed's | "
         "paper-core: ours / the seed's |",
