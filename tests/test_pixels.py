@@ -20,6 +20,7 @@ from bench.core._experiments import RunConfig, expand
 from bench.core._runnable import check_runnable
 from bench.studies.paper import pixels as P
 from bench.studies.paper import policy
+from bench.studies.paper import vin_blog as V
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32
@@ -282,22 +283,22 @@ def test_pixel_claims_are_judged_only_on_models_that_learned_the_motion():
     v = P.claim_11(_tables(hnn_pixel=0.2))
     assert v.verdict == "reproduced" and len(v.parts) == 2
     # claim 12: a ResNet that did not learn (the VIN did) leaves it untested too
-    v = P.claim_12(_tables(forecast_ratio=150.0))
+    v = V.claim_12(_tables(forecast_ratio=150.0))
     assert v.verdict == "inconclusive" and _gates(v, False) == {"ResNet"}
     # a compared model without runs is named
     r = _tables()
-    v = P.claim_12(r[r["model"] != "resnet"])
+    v = V.claim_12(r[r["model"] != "resnet"])
     assert v.verdict == "inconclusive" and "ResNet" in _gates(v, None)
 
 
 def test_claim_12_passes_fails_and_stays_undecided():
-    assert P.claim_12(_tables(forecast_ratio=3.0)).verdict == "reproduced"
-    assert P.claim_12(_tables(forecast_ratio=0.3)).verdict == "not reproduced"
-    v = P.claim_12(_tables(forecast_ratio=1.25, spread=1.0))
+    assert V.claim_12(_tables(forecast_ratio=3.0)).verdict == "reproduced"
+    assert V.claim_12(_tables(forecast_ratio=0.3)).verdict == "not reproduced"
+    v = V.claim_12(_tables(forecast_ratio=1.25, spread=1.0))
     assert v.verdict == "inconclusive" and {p.status for p in v.parts} == {"undecided"}
     # state runs of the same models are not the pixel claim's
     r = _tables().assign(observation="state")
-    assert P.claim_12(r).verdict == "inconclusive"
+    assert V.claim_12(r).verdict == "inconclusive"
 
 
 def test_section_beside_the_seeds_numbers(tmp_path):

@@ -487,5 +487,6 @@ STUDY_VIN = register_study(
         pixels.STUDY_VIN,
         experiments=(pixels.PIXEL_VIN, VIN_BLOG),
         title=CLAIM_TITLES[12],
+        rule=claim_12,
     )
 )
