@@ -238,7 +238,7 @@ def test_the_replication_phase_runs_the_same_cells_on_seeds_5_to_9(tmp_path):
 
 def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     """Claims whose seeds 0-4 verdict is signed are replicated first; inconclusive and pending
-    ones (which no replication can change) after them, each group in campaign order."""
+    ones (which no replication can change) after them, each group cheapest first."""
     from bench.core import _query
     from bench.studies.paper import _replication
     from bench.studies.paper.kit import Verdict
@@ -257,16 +257,22 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     judged = _replication.Judgement(final=primary, primary={x.key: x for x in primary})
     monkeypatch.setattr(_replication, "judge", lambda *a, **k: judged)
     monkeypatch.setattr(_query, "load_tables", lambda d: (None, None, None))
-    # an empty folder: the campaign's own order
-    assert C.replication_order(tmp_path) == C.CAMPAIGN_CLAIMS
+    seeds = E.replication_seeds("paper-core")
+
+    def cheapest(claims):
+        return C.cheapest_first(claims, tmp_path, seeds=seeds)
+
+    # an empty folder: nothing signed, every claim cheapest first
+    assert C.replication_order(tmp_path) == cheapest(C.CAMPAIGN_CLAIMS)
     (tmp_path / "runs.parquet").write_bytes(b"")  # a folder with runs (holds_runs)
     order = C.replication_order(tmp_path)
-    assert order[:3] == (4, 2, 7) and sorted(order) == sorted(C.CAMPAIGN_CLAIMS)
-    assert order[3:] == tuple(c for c in C.CAMPAIGN_CLAIMS if c not in (4, 2, 7))
+    signed = tuple(c for c in C.CAMPAIGN_CLAIMS if c in (4, 2, 7))
+    rest = tuple(c for c in C.CAMPAIGN_CLAIMS if c not in signed)
+    assert order == cheapest(signed) + cheapest(rest)
+    assert set(order[:3]) == {4, 2, 7} and sorted(order) == sorted(C.CAMPAIGN_CLAIMS)
     names = C.campaign_experiments("paper-core", order)
-    assert [E.get(n).claim for n in names][:3] == [4, 2, 7]
+    assert {E.get(n).claim for n in names[:4]} <= {4, 2, 7}
     # a shared run goes with the first claim that reads it: claim 4 brings the L2 cells
-    seeds = E.replication_seeds("paper-core")
     rep = C.campaign_runs("paper-core", seeds, order)
     first = {c.config_hash for c in E.expand("coordinates", "paper-core", seeds=seeds)}
     assert {c.config_hash for n, c in rep if n == "coordinates"} == first
@@ -291,3 +297,14 @@ def test_plan_reads_a_stored_run_of_every_claim(tmp_path):
     plan = C.plan("paper-core", tmp_path, workers=2)
     total = plan.set_index("claim").loc["total"]
     assert total["stored"] >= len(first)
+
+
+def test_the_cheapest_claims_run_first(tmp_path):
+    """A claim with fewer hours left starts before a longer one, whatever the campaign order
+    says (ties keep that order); a claim whose runs are all stored keeps its place."""
+    first = C.cheapest_first(C.CAMPAIGN_CLAIMS, tmp_path)
+    hours = C.plan("paper-core", tmp_path).set_index("claim")["cpu_hours_left"]
+    assert sorted(first) == sorted(C.CAMPAIGN_CLAIMS)
+    assert [hours[c] for c in first] == sorted(hours[c] for c in C.CAMPAIGN_CLAIMS)
+    assert hours[first[0]] < hours[first[-1]]
+    assert C.cheapest_first((), tmp_path) == ()

@@ -22,12 +22,13 @@ def _estimate_arguments(p):
 
 def _estimate(args) -> int:
     from ...core._experiments import SELECTIONS, replication_seeds
-    from ._campaign import format_plan, plan, replication_order
+    from ._campaign import CAMPAIGN_CLAIMS, cheapest_first, format_plan, plan, replication_order
 
     check_choice("profile", args.profile, list(PROFILES))
     if args.workers < 1:
         raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
-    df = plan(args.profile, args.results, workers=args.workers)
+    first = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
+    df = plan(args.profile, args.results, workers=args.workers, order=first)
     print(f"results: {args.results}")
     print(format_plan(df, args.profile, args.workers))
     seeds = replication_seeds(args.profile)
@@ -100,7 +101,13 @@ def _campaign_arguments(p):
 
 def _campaign(args) -> int:
     from ...core._experiments import replication_seeds
-    from ._campaign import CAMPAIGN_CLAIMS, campaign_experiments, priority, replication_order
+    from ._campaign import (
+        CAMPAIGN_CLAIMS,
+        campaign_experiments,
+        cheapest_first,
+        priority,
+        replication_order,
+    )
 
     check_sweep_args(args)
     if not campaign_experiments(args.profile):
@@ -114,6 +121,8 @@ def _campaign(args) -> int:
     usable_results(args)
     if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
         order = replication_order(args.results, args.profile)
+    else:  # the cheapest claims first: the most verdicts per hour
+        order = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
     names = campaign_experiments(args.profile, order)
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
     print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
