@@ -23,12 +23,15 @@ UNTRAINED = {
 }
 
 
-def train_config(config: RunConfig):
-    """The :class:`bench.TrainConfig` of a run."""
+def train_config(config: RunConfig, *, block: int = TRAIN_BLOCK, weight_decay=None):
+    """The :class:`bench.TrainConfig` of a run: its optimiser, schedule, loss, target and
+    checkpoints, ``block`` steps per compiled block. ``weight_decay``: the observation's
+    default, taken where the run sets none (None: the TrainConfig's, 1e-4)."""
     import models
 
     from ._train import TrainConfig, checkpoint_steps
 
+    decay = config.weight_decay if config.weight_decay is not None else weight_decay
     return TrainConfig(
         steps=config.steps,
         batch=config.batch,
@@ -37,12 +40,12 @@ def train_config(config: RunConfig):
         integrator=models.Integrator(config.train_integrator, substeps=config.train_substeps),
         dtype=config.dtype,
         seed=config.seed,
-        steps_per_call=TRAIN_BLOCK,
-        checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, TRAIN_BLOCK),
+        steps_per_call=block,
+        checkpoints=checkpoint_steps(config.steps, config.eval_checkpoints, block),
         target=config.train_target,
         optimizer=config.optimizer,
         schedule=config.lr_schedule,
-        **({} if config.weight_decay is None else {"weight_decay": config.weight_decay}),
+        **({} if decay is None else {"weight_decay": decay}),
     )
 
 

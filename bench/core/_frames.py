@@ -179,24 +179,12 @@ class FrameObjective:
 
 
 def train_config(c: RunConfig):
-    """The optimisation of a frames run: the run's optimiser and schedule (the seed's: Adam,
-    a constant rate, no weight decay, set by the experiment), :data:`BLOCK` steps per block."""
-    import models
+    """The optimisation of a frames run (:func:`bench.core._fit.train_config`): no weight
+    decay unless the run sets one (the seed's Adam is set by the experiment), :data:`BLOCK`
+    steps per compiled block."""
+    from ._fit import train_config as run_train_config
 
-    from ._train import TrainConfig
-
-    return TrainConfig(
-        steps=c.steps,
-        batch=c.batch,
-        lr=c.lr,
-        weight_decay=0.0 if c.weight_decay is None else c.weight_decay,
-        integrator=models.Integrator(c.train_integrator, substeps=c.train_substeps),
-        dtype=c.dtype,
-        seed=c.seed,
-        steps_per_call=BLOCK,
-        optimizer=c.optimizer,
-        schedule=c.lr_schedule,
-    )
+    return run_train_config(c, block=BLOCK, weight_decay=0.0)
 
 
 def fit_frames(c: RunConfig, model, data, progress: bool = False):

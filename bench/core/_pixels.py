@@ -173,25 +173,11 @@ class PixelObjective:
 
 
 def train_config(c: RunConfig):
-    """The optimisation of a pixel run: the run's optimiser and schedule (by default the suite's
-    AdamW, cosine decay and clipping) with the seed's weight decay unless the run sets one,
-    :data:`BLOCK` steps per compiled block, the run's train integrator."""
-    import models
+    """The optimisation of a pixel run (:func:`bench.core._fit.train_config`): the seed's
+    weight decay unless the run sets one, :data:`BLOCK` steps per compiled block."""
+    from ._fit import train_config as run_train_config
 
-    from ._train import TrainConfig
-
-    return TrainConfig(
-        steps=c.steps,
-        batch=c.batch,
-        lr=c.lr,
-        weight_decay=WEIGHT_DECAY if c.weight_decay is None else c.weight_decay,
-        integrator=models.Integrator(c.train_integrator, substeps=c.train_substeps),
-        dtype=c.dtype,
-        seed=c.seed,
-        steps_per_call=BLOCK,
-        optimizer=c.optimizer,
-        schedule=c.lr_schedule,
-    )
+    return run_train_config(c, block=BLOCK, weight_decay=WEIGHT_DECAY)
 
 
 def fit_pixels(c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS):
