@@ -98,6 +98,31 @@ POLICY: dict[str, Quantity] = {
             "half-way to the nearest other growth law: 0.5 is a random walk",
         ),
         Quantity(
+            "proportionality",
+            "log-log slope of energy violation on rollout error, tolerance about 1",
+            0.5,
+            (0.25, 0.75),
+            False,
+            "Rollout Error proportional to Energy Violation, scattered around the line x = y",
+            'slope 1: "Rollout Error proportional to Energy Violation", "scattered around '
+            'the line x = y" on log axes (seeds/004, Fig. 2 left, lines 85-87; Appendix B.1: '
+            "the violation is first order in the dynamics error); 0.5 is half-way to the "
+            "nearest other law, a quadratic one (slope 2) or none (slope 0); the paper "
+            "states no number",
+        ),
+        Quantity(
+            "correlation",
+            "rank correlation, on Fisher's z scale (z = atanh rho)",
+            math.atanh(0.3),
+            (math.atanh(0.1), math.atanh(0.5)),
+            False,
+            "not positively correlated, negatively correlated",
+            'a positive rank correlation of practical size: rho = 0.3 (z = 0.31), a "medium" '
+            'correlation; the band runs from a "small" 0.1 to a "large" 0.5 (Cohen\'s '
+            'conventions). The paper states no number: "not positively correlated ... in '
+            'some cases even negatively" (seeds/004, line 112; Fig. 3 right)',
+        ),
+        Quantity(
             "embedding",
             "embedding defect (1 - trustworthiness, or the share of steps that jump)",
             0.05,
