@@ -16,6 +16,7 @@ from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import read_angle, read_state, render
 from ._spring import SpringPendulum
+from ._three_body import ThreeBody
 from ._two_body import TwoBody
 
 __all__ = [
@@ -27,6 +28,7 @@ __all__ = [
     "PixelDataset",
     "PixelDatasetConfig",
     "TwoBody",
+    "ThreeBody",
     "DatasetConfig",
     "RelativisticParticle",
     "SpringPendulum",

@@ -12,6 +12,7 @@ from ._mass_spring import mass_spring
 from ._pendulum import pendulum
 from ._relativistic import relativistic_particle
 from ._spring import spring_pendulum
+from ._three_body import three_body
 from ._two_body import two_body
 
 DAMPED_FRICTION = 0.4  # the paper's damped runs
@@ -26,6 +27,7 @@ _FACTORIES: dict[str, tuple[Callable[..., AbstractSystem], dict]] = {
     "mass_spring": (mass_spring, {}),
     "pendulum": (pendulum, {}),
     "two_body": (two_body, {}),
+    "three_body": (three_body, {}),
 }
 
 

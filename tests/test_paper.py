@@ -165,6 +165,7 @@ def test_smoke_is_small_and_quick_budget_does_not_grow():
     # keeps the estimate from growing further while the budget is open. Claim 7's second
     # reading (relativistic_seed, the LNN seed's protocol) took the estimate from 33.8 to 36.5 min,
     # claim 9's (lnn_seed_notebook) to 38.3, claims 11 and 12's (the seeds' pixel protocols) to
-    # 49.2. The last fresh-clone make bench measured 26.5 min when the estimate read 33.8: the
-    # seeds' protocols put make bench past its 30 minutes (docs/measured.md, "Known limits").
-    assert P.make_bench_seconds("quick") <= 50 * 60, quick
+    # 49.2, claims 14 and 15 (the HNN seed's three-body and real pendulum) to 53.2. The last
+    # fresh-clone make bench measured 26.5 min when the estimate read 33.8: the seeds' protocols
+    # put make bench past its 30 minutes (docs/measured.md, "Known limits").
+    assert P.make_bench_seconds("quick") <= 54 * 60, quick

@@ -11,6 +11,7 @@ from bench.core import _schema, _store
 from bench.core._execute import execute_run
 from bench.core._experiments import RunConfig
 from bench.core._frames import FRAME_METRICS
+from bench.core._measured import METRIC_COLUMNS
 from bench.core._pixels import PIXEL_METRICS
 from bench.core._runnable import check_runnable
 
@@ -21,9 +22,9 @@ SMOKE = dict(
 # Columns that only some runs carry: a run that fails has no metrics, an ensemble member sets
 # ensemble_size, and the runner adds experiment/profile/ensemble_size when it stores a row.
 OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
-# Pixel and frames runs' own metrics: stored by the sweeps of tests/test_pixels.py and
-# tests/test_vin_blog.py.
-OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS)
+# Pixel, frames and measured runs' own columns: stored by the sweeps of tests/test_pixels.py,
+# tests/test_vin_blog.py and tests/test_real_pendulum.py.
+OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS) | set(METRIC_COLUMNS)
 
 
 @pytest.fixture(scope="module")

@@ -67,6 +67,7 @@ def test_available_names():
         "mass_spring",
         "pendulum",
         "two_body",
+        "three_body",
     ]:
         assert name in names
 

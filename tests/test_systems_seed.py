@@ -1,7 +1,9 @@
 """The HNN seed's systems against closed forms and second derivations: the
 mass-spring's exact solution and Hamiltonian, the pendulum's Hamiltonian, its small-angle
 period and the chain pendulum's field, two-body circular orbits in closed form, and energy and
-angular momentum kept to 1e-9 over ten orbits of the seed's near-circular draws."""
+angular momentum kept to 1e-9 over ten orbits of the seed's near-circular draws; the three-body
+energy by hand, Lagrange's equilateral solution, and energy and both momenta kept to 1e-9 over
+the seed's span."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ import numpy as np
 import pytest
 
 import systems
+from systems._three_body import lagrange_orbit
 from systems._two_body import circular_orbit
 
 KEY = jax.random.PRNGKey(3)
@@ -93,8 +96,87 @@ def test_two_body_seed_orbits_conserve_energy_and_angular_momentum_over_ten_orbi
         ("pendulum", {"r_min": 2.0, "r_max": 1.0}, "r_min must be <= r_max"),
         ("two_body", {"masses": (1.0,)}, "masses"),
         ("two_body", {"k": 2}, "unknown parameter"),
+        ("three_body", {"masses": (1.0, 1.0)}, "masses"),
+        ("three_body", {"r_min": 1.5}, "r_min must be <= r_max"),
     ],
 )
 def test_bad_params_of_the_seed_systems_raise(name, params, match):
     with pytest.raises(ValueError, match=match):
         systems.make(name, **params)
+
+
+# ------------------------------------------------------------------------------ three-body
+def _three_body_invariants(s, zs):
+    flat = zs.reshape(-1, 12)
+    e = np.asarray(_vmapped(s.energy)(flat)).reshape(zs.shape[:2])
+    lz = np.asarray(_vmapped(s.angular_momentum)(flat)).reshape(zs.shape[:2])
+    p = np.asarray(_vmapped(s.linear_momentum)(flat)).reshape(*zs.shape[:2], 2)
+    return e, lz, p
+
+
+def test_three_body_energy_is_kinetic_plus_pairwise_gravity():
+    s = systems.make("three_body", masses=(1.0, 2.0, 0.5), gravity=1.5)
+    z = np.asarray(s.sample_initial(KEY, 5))
+    x, v = z[:, :6].reshape(-1, 3, 2), z[:, 6:].reshape(-1, 3, 2)
+    m = np.array([1.0, 2.0, 0.5])
+    t = 0.5 * np.sum(m * np.sum(v**2, -1), -1)
+    u = sum(
+        -1.5 * m[i] * m[j] / np.linalg.norm(x[:, i] - x[:, j], axis=-1)
+        for i, j in ((0, 1), (0, 2), (1, 2))
+    )
+    np.testing.assert_allclose(np.asarray(_vmapped(s.energy)(z)), t + u, rtol=1e-13)
+
+
+def test_three_body_lagrange_equilateral_orbit_closed_form():
+    s = systems.make("three_body")
+    r = 1.0
+    period = 2 * np.pi / np.sqrt(3.0 / (np.sqrt(3.0) * r) ** 3)  # w^2 = G M / s^3
+    ts = np.linspace(0.0, period, 50)
+    exact = lagrange_orbit(r, ts)
+    zs = np.asarray(s.simulate_batch(exact[:1], ts))[0]
+    # Lagrange's equal-mass triangle is unstable: errors grow, but not to 1e-8 in one turn
+    np.testing.assert_allclose(zs, exact, atol=1e-8)
+
+
+def test_three_body_seed_draw_without_noise_is_lagrange_rigid_rotation():
+    s = systems.make("three_body", orbit_noise=0.0)
+    z0 = np.asarray(s.sample_initial(KEY, 3))
+    x0 = z0[:, :6].reshape(-1, 3, 2)
+    r = np.linalg.norm(x0, axis=-1)
+    assert np.all((r >= 0.9 - 1e-12) & (r <= 1.2 + 1e-12))
+    np.testing.assert_allclose(r, r[:, :1] * np.ones(3), rtol=1e-13)
+    ts = np.linspace(0.0, 5.0, 20)  # the seed's span and grid
+    zs = np.asarray(s.simulate_batch(z0, ts))
+    for zi, ri in zip(zs, r[:, 0], strict=True):
+        # the closed form, rotated to the drawn start
+        angle = np.arctan2(zi[0, 1], zi[0, 0])
+        c, sn = np.cos(angle), np.sin(angle)
+        exact = lagrange_orbit(ri, ts).reshape(len(ts), 6, 2)
+        exact = np.stack([c * exact[..., 0] - sn * exact[..., 1],
+                          sn * exact[..., 0] + c * exact[..., 1]], -1)  # fmt: skip
+        np.testing.assert_allclose(zi, exact.reshape(len(ts), 12), atol=1e-8)
+
+
+def test_three_body_seed_orbits_conserve_energy_and_momenta():
+    s = systems.make("three_body")
+    z0 = np.asarray(s.sample_initial(KEY, 16))
+    # speeds within the seed's 20% of the circular orbit's, per component
+    x0, v0 = z0[:, :6].reshape(-1, 3, 2), z0[:, 6:].reshape(-1, 3, 2)
+    r = np.linalg.norm(x0[:, :1], axis=-1, keepdims=True)
+    circ = 3**-0.25 * r**-0.5 * np.stack([-x0[..., 1], x0[..., 0]], -1) / r
+    scale = v0 / circ
+    assert np.all((scale > 0.8 - 1e-12) & (scale < 1.2 + 1e-12)) and scale.std() > 0.05
+    ts = np.linspace(0.0, 5.0, 20)
+    zs = np.asarray(s.simulate_batch(z0, ts))
+    e, lz, p = _three_body_invariants(s, zs)
+    assert np.max(np.abs(e - e[:, :1]) / np.abs(e[:, :1])) < 1e-9
+    assert np.max(np.abs(lz - lz[:, :1])) < 1e-9 * np.max(np.abs(lz))
+    assert np.max(np.abs(p - p[:, :1])) < 1e-9
+
+
+def test_three_body_refuses_coincident_bodies():
+    s = systems.make("three_body")
+    z = np.asarray(lagrange_orbit(1.0, np.zeros(1)))
+    z[0, 2:4] = z[0, 0:2]
+    with pytest.raises(ValueError, match="bodies 1 and 2 coincide"):
+        s.simulate_batch(z, np.linspace(0.0, 1.0, 3))

@@ -48,8 +48,9 @@ COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
-# what the models see (pixels: bench.core._pixels; frames: bench.core._frames)
-OBSERVATIONS = ("state", "pixels", "frames")
+# what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
+# measured trajectory read from a file, bench.core._measured)
+OBSERVATIONS = ("state", "pixels", "frames", "measured")
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
@@ -68,6 +69,17 @@ PIXEL_DEFAULTS = (
     ("random_args", False),
     ("train_target", "rollout"),
     ("friction", 0.0),
+)
+# A measured run's fixed fields (observation "measured": the states of the file, taken as
+# canonical, and their finite differences as targets)
+MEASURED_FIELDS = (
+    ("noise", 0.0),
+    ("random_args", False),
+    ("train_target", "derivative"),
+    ("coordinates", "momentum"),
+    ("friction", 0.0),
+    ("system_params", ()),
+    ("k", None),
 )
 
 
@@ -235,6 +247,8 @@ class RunConfig:
                 )
         if self.observation in ("pixels", "frames"):
             self._check_pixels()
+        elif self.observation == "measured":
+            self._check_measured()
         else:  # the system, its parameters and the dataset's shape (systems checks them)
             object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
 
@@ -252,6 +266,15 @@ class RunConfig:
         system = _system(self.system, tuple(sorted(self.system_kwargs().items())))
         systems._render.reach(system)  # the renderable systems (ValueError naming them)
         self.pixel_dataset_config()
+
+    def _check_measured(self) -> None:
+        from systems._real_pendulum import DATASETS
+
+        check_choice("measured dataset (system of a measured run)", self.system, DATASETS)
+        for name, value in MEASURED_FIELDS:
+            if getattr(self, name) != value:
+                what = f"{name} {getattr(self, name)!r}"
+                raise ValueError(f"measured runs support no {what}; allowed: {value!r}")
 
     def to_dict(self) -> dict:
         """Every field, JSON-ready (tuples of pairs become lists)."""

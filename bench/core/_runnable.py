@@ -32,6 +32,11 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
 
         check_frame_model(cfg)
         return cfg
+    if cfg.observation == "measured":  # a measured trajectory (bench.core._measured)
+        from ._measured import check_measured_model
+
+        check_measured_model(cfg)
+        return cfg
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)

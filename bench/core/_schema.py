@@ -17,7 +17,11 @@ from __future__ import annotations
 SCHEMA_VERSION = 1
 
 _CONFIG = {
-    "system": ("-", "registered system (`systems.available()`)"),
+    "system": (
+        "-",
+        "registered system (`systems.available()`); a measured run's data: real_pend_h_1 (the "
+        "user's file) or real_pend_synthetic (the stand-in)",
+    ),
     "k": ("count", "links / bobs of chain_pendulum and spring_pendulum; empty for others"),
     "friction": ("1/s", "drag coefficient of the damped scenes (0: undamped)"),
     "system_params": ("-", "other system parameters, JSON list of [name, value] pairs"),
@@ -61,7 +65,8 @@ _CONFIG = {
         "-",
         "what the models observe: state (z), pixels (28 x 28 frames, two stacked per "
         "observation, an autoencoder and latent dynamics) or frames (the VIN seed's task: single "
-        "frames encoded to positions, the dynamics carrying the velocity); empty in rows from "
+        "frames encoded to positions, the dynamics carrying the velocity) or measured (a "
+        "measured trajectory read from a file: the HNN seed's real pendulum); empty in rows from "
         "before the field: state",
     ),
     "train_target": (
@@ -238,6 +243,14 @@ _RUN = {
         "pixels: the same map applied to the encoded true test observations (every t): what "
         "the map alone costs",
     ),
+    # measured runs (observation "measured", bench.core._measured); empty for the others
+    "data_source": (
+        "-",
+        "measured runs: where the data came from (measured: the file's name, or the synthetic "
+        "stand-in)",
+    ),
+    "data_sha256": ("-", "measured runs: sha256 of the data's bytes as read"),
+    "data_points": ("count", "measured runs: states in the trajectory (train and test)"),
 }
 
 _PROVENANCE = {

@@ -99,6 +99,9 @@ LNN_NOTEBOOK_S = 210.0 / 2
 # workers): claim 11's pixel_pendulum_hnn_seed (10 runs, 660 s) and claim 12's
 # pixel_pendulum_vin_blog (20 runs, 642 s)
 PIXELS_SEED_S = (660.0 + 642.0) / 2
+# The HNN seed's three-body and real pendulum at quick (claims 14 and 15), seeds 0-4: 362 s and
+# 131 s of CPU time summed over their 15 runs each (the rows' cpu_seconds), /2 workers
+SEED_APPENDIX_S = (362.0 + 131.0) / 2
 
 
 # Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
@@ -156,12 +159,26 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     # weight 0 the model skips the penalty (280 s a run)
     ("rollout", "node_so_symreg", 256, 200): (112.0, 12.0),
     ("rollout", "node_so_symreg (weight 0)", 256, 200): (34.0, 12.0),
+    # The HNN seed's three-body (claim 14; width 200, 30 orbits of 20 states) and real pendulum
+    # (claim 15; full batches of the measured states): medians of the quick sweeps of seeds
+    # 0-9, train_seconds / steps and wall - train, under load (load average 7-12 on the 2
+    # cores: upper bounds). Paper evaluates 4x the three-body test orbits of quick.
+    ("derivative", "hnn", 200, 30): (10.1, 116.0),
+    ("derivative", "node", 200, 30): (4.0, 11.9),
+    ("derivative", "constant_velocity", 200, 30): (0.0, 7.8),
+    ("measured", "hnn", 200, 100_000): (20.1, 11.0),
+    ("measured", "node", 200, 100_000): (6.1, 6.7),
+    ("measured", "at_rest", 200, 100_000): (0.0, 0.1),
 }
 # Ground truth of a derivative-target dataset, ms per simulated second of one trajectory (the
 # double pendulum at Dopri8 and 1e-11: 8.7 ms per 10 s trajectory, lnn_seed.MEASURED), keyed
 # (system, k); charged once per dataset (the models of a seed share it), see data_seconds.
 # Elsewhere the data is inside WALL_S's "everything else" (1000 trajectories at most).
-DATA_MS_PER_S: dict[tuple[str, int | None], float] = {("chain_pendulum", 2): 0.87}
+# three_body: 1000 of the seed's orbits of 5 s at Dopri8 and 1e-13 in 9.0 s, compile included.
+DATA_MS_PER_S: dict[tuple[str, int | None], float] = {
+    ("chain_pendulum", 2): 0.87,
+    ("three_body", None): 1.8,
+}
 
 
 # Measured sweep time / (sum of per-run wall_seconds / 2 workers): 25.2 / 23.4 min in a quick
@@ -285,8 +302,9 @@ def estimate_seconds(
 
 def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
     """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks + the pixel tasks (ours and
-    the seeds') + the LNN seed's two readings``, from
+    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks (its three-body and real
+    pendulum included) + the pixel tasks (ours and the seeds') + the LNN seed's two readings``,
+    from
     :func:`estimate_seconds` and the measured shares of the others (the learning-curve
     experiment is read from the registry: ``bench.studies.learning`` imports this package, not
     the reverse)."""
@@ -302,4 +320,5 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
         + LNN_SEED_S
         + LNN_NOTEBOOK_S
         + PIXELS_SEED_S
+        + SEED_APPENDIX_S
     )
