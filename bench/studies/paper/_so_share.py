@@ -22,6 +22,8 @@ def so_share(
     advantage_name: str,
     share_name: str,
     gates: Mapping[str, Gate],
+    *,
+    either_way: bool = False,
 ) -> tuple[Part | None, Part | None, int]:
     """NODE+SO's share of the NODE -> HNN gap in ``cell``, as (condition, part, seeds).
 
@@ -30,12 +32,20 @@ def so_share(
     judged where the HNN has an advantage to explain (the condition: ``gap`` a *greater* part
     at the error margin) and where ``gates`` (``node``, ``node_so``, ``hnn``: learning gates)
     are open. (None, None, 0) without paired seeds.
+
+    ``either_way``: "SO accounts for the difference" whichever model leads: where the mean gap
+    is negative (the NODE ahead of the HNN) both ``closed`` and ``gap`` change sign, so the part
+    asks whether NODE+SO lands at least ``s`` of the way from the NODE to the HNN, and the
+    condition whether the NODE's lead exceeds the error margin.
     """
     closed = paired(runs, {**cell, "model": "node"}, {**cell, "model": "node_so"})
     gap = paired(runs, {**cell, "model": "node"}, {**cell, "model": hnn})
     both = pd.concat([closed, gap], axis=1, keys=["c", "g"]).dropna()
     if not len(both):
         return None, None, 0
+    if either_way and both["g"].mean() < 0:
+        both = -both
+        advantage_name += " reversed: the NODE leads"
     part = share(
         share_name,
         both["c"].to_numpy(),
