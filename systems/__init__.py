@@ -8,6 +8,7 @@ from ._base import AbstractSystem, reference_masses_lengths
 from ._chain import ChainPendulum
 from ._coordinates import derivatives, to_momentum, to_velocity
 from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset
+from ._magnet import MagnetPendulum
 from ._mass_spring import MassSpring
 from ._pendulum import Pendulum
 from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset
@@ -15,6 +16,7 @@ from ._precision import enable_x64, require_x64
 from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import read_angle, read_state, render
+from ._rigid import Gyroscope, Rotor
 from ._spring import SpringPendulum
 from ._three_body import ThreeBody
 from ._two_body import TwoBody
@@ -23,6 +25,8 @@ __all__ = [
     "AbstractSystem",
     "ChainPendulum",
     "Dataset",
+    "Gyroscope",
+    "MagnetPendulum",
     "MassSpring",
     "Pendulum",
     "PixelDataset",
@@ -31,6 +35,7 @@ __all__ = [
     "ThreeBody",
     "DatasetConfig",
     "RelativisticParticle",
+    "Rotor",
     "SpringPendulum",
     "available",
     "cache_root",

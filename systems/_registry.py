@@ -8,9 +8,11 @@ from collections.abc import Callable
 
 from ._base import AbstractSystem
 from ._chain import chain_pendulum
+from ._magnet import magnet_pendulum
 from ._mass_spring import mass_spring
 from ._pendulum import pendulum
 from ._relativistic import relativistic_particle
+from ._rigid import gyroscope, rotor
 from ._spring import spring_pendulum
 from ._three_body import three_body
 from ._two_body import two_body
@@ -28,6 +30,10 @@ _FACTORIES: dict[str, tuple[Callable[..., AbstractSystem], dict]] = {
     "pendulum": (pendulum, {}),
     "two_body": (two_body, {}),
     "three_body": (three_body, {}),
+    # the Deconstructing paper's App. D.2 systems (Finzi et al. 2020)
+    "gyroscope": (gyroscope, {}),
+    "rotor": (rotor, {}),
+    "magnet_pendulum": (magnet_pendulum, {}),
 }
 
 

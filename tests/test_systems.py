@@ -68,6 +68,9 @@ def test_available_names():
         "pendulum",
         "two_body",
         "three_body",
+        "gyroscope",
+        "rotor",
+        "magnet_pendulum",
     ]:
         assert name in names
 

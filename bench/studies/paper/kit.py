@@ -18,7 +18,8 @@ the one-sided (1 - alpha) t bounds of the mean effect:
 - ``at_most``: holds when hi < m, contradicts when lo > m.
 - ``equivalent`` (TOST): holds when -m < lo and hi < m, contradicts when the interval is outside.
 - ``band``: centre c, holds when c - m < lo and hi < c + m; ``below``: holds when hi < c + m.
-- ``share``: per seed closed - s * gap > 0 at the share margin s ("most of the gap").
+- ``share``: per seed closed - s * gap > 0 at the share margin s ("most of the gap");
+  ``so_share``: NODE+SO's share of the NODE -> HNN gap, as claims 3 and 13 read it.
 - ``undecided``: a part with nothing to test.
 
 Gates (:mod:`._gates`): ``learned`` (the model beats the best trivial predictor by the learning
@@ -67,6 +68,7 @@ from ._seeds import (
     required_seeds,
     scored,
 )
+from ._so_share import so_share
 from ._stats import (
     ALPHA,
     Part,
@@ -128,6 +130,7 @@ __all__ = [
     "paired",
     "paper_spring",
     "required_seeds",
+    "so_share",
     "scored",
     # trivial predictors
     "MODEL_LABELS",

@@ -27,7 +27,6 @@ from ._rules import CLAIM_TITLES
 from .kit import (
     Verdict,
     cell_rows,
-    condition,
     discrimination,
     gated,
     greater,
@@ -35,7 +34,7 @@ from .kit import (
     n_bad,
     paired,
     paper_spring,
-    share,
+    so_share,
     verdict,
 )
 
@@ -111,13 +110,13 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
                 gate["hnn_so"],
             )
         )
-        share_part = share(
+        advantage, share_part, _ = so_share(
+            p,
+            s,
+            "hnn_so",
+            f"{system}: HNN+SO beats NODE (log(NODE / HNN+SO))",
             f"{system}: (b) share of the gap closed by SO",
-            both["c"].to_numpy(),
-            both["g"].to_numpy(),
-            policy.margin("share"),
-            note=f"gap log(NODE/HNN+SO) = {both['g'].mean():.3g}, closed by SO = "
-            f"{both['c'].mean():.3g}",
+            gate,
         )
         if system not in SHARE_SYSTEMS:
             notes.append(
@@ -125,11 +124,7 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
                 "concedes a gap in non-Cartesian coordinates)"
             )
             continue
-        advantage = greater(f"{system}: HNN+SO beats NODE (log(NODE / HNN+SO))", both["g"], err)
-        parts.append(advantage)
-        parts.append(
-            gated(share_part, condition(advantage), gate["node"], gate["node_so"], gate["hnn_so"])
-        )
+        parts += [advantage, share_part]
         head = share_part
     if not parts:
         return verdict(3, CLAIM_TITLES[3], [], None, 0, "fraction of the log gap closed by SO")
