@@ -20,7 +20,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench compare replicate stability perf figures report clean \
+.PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean \
 	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report
 
 install: $(STAMP)
@@ -77,8 +77,16 @@ format: $(STAMP)
 RESULTS ?= results/own
 REFERENCE ?= results/reference/quick
 
+# `make bench`: the Deconstructing paper's experiments and the stability cases; `make
+# bench-seeds`: the seeds' (the HNN, LNN and VIN papers'); each fits a 2-core laptop's 30
+# minutes, both together do not. `make bench-all`: both, one after the other.
 bench: $(STAMP)
-	$(PY) -m bench --results $(RESULTS) bench --profile $(PROFILE) --workers $(WORKERS)
+	$(PY) -m bench --results $(RESULTS) bench --profile $(PROFILE) --workers $(WORKERS) --papers deconstructing
+
+bench-seeds: $(STAMP)
+	$(PY) -m bench --results $(RESULTS) bench --profile $(PROFILE) --workers $(WORKERS) --papers hnn,lnn,vin
+
+bench-all: bench bench-seeds
 
 # Any two results folders side by side (default: the quick reference against your runs).
 compare: $(STAMP)

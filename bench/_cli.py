@@ -130,10 +130,19 @@ def _parser() -> argparse.ArgumentParser:
     dv.add_argument("folder")
 
     b = sub.add_parser(
-        "bench", help="sweep every experiment, the stability cases, then figures and report"
+        "bench",
+        help="sweep every experiment (or those of --papers), the stability cases, then figures "
+        "and report",
     )
     sweep_options(b, default_profile="quick")
     b.add_argument("--skip-stability", action="store_true", help="do not run the stability cases")
+    b.add_argument(
+        "--papers",
+        default=None,
+        metavar="A,B",
+        help="only the experiments of these papers: deconstructing (Gruver et al. 2022, with "
+        "the stability cases), hnn, lnn, vin (its seeds); default all",
+    )
     b.add_argument(
         "--no-compare",
         action="store_true",
@@ -212,10 +221,27 @@ def _cmd_run(args) -> int:
     return 0 if row[0]["status"] != "failed" else 1
 
 
+def paper_list(given: str | None) -> tuple[str, ...]:
+    """``--papers A,B`` as a tuple of :data:`bench.core._experiments.PAPERS` (None: all)."""
+    from .core._experiments import PAPERS, check_choice
+
+    if given is None:
+        return PAPERS
+    names = tuple(x.strip() for x in given.split(",") if x.strip())
+    if not names:
+        raise ValueError(f"--papers needs at least one of {', '.join(PAPERS)}")
+    for name in names:
+        check_choice("paper (--papers)", name, PAPERS)
+    return names
+
+
 def _sweep_names(args) -> list[str]:
     from .core._experiments import available, get
 
-    if getattr(args, "all", False) or args.verb == "bench":
+    if args.verb == "bench":
+        papers = paper_list(getattr(args, "papers", None))
+        return [n for n in available() if get(n).paper in papers]
+    if getattr(args, "all", False):
         return available()
     if not args.experiment:
         raise UsageError("sweep needs an experiment name or --all")
@@ -315,7 +341,8 @@ def _cmd_bench(args) -> int:
     swept = time.time()
     executed = len(done_hashes(Path(args.results))) - before
     stability = next((c for c in commands() if c.name == "stability"), None)
-    if not args.skip_stability and stability is not None:
+    with_stability = "deconstructing" in paper_list(getattr(args, "papers", None))
+    if not args.skip_stability and with_stability and stability is not None:
         args.case = None
         stability.run(args)
     meta = {
@@ -330,6 +357,7 @@ def _cmd_bench(args) -> int:
         "workers": args.workers,
         "ensemble": args.ensemble,
         "experiments": names,
+        "papers": list(paper_list(getattr(args, "papers", None))),
         "provenance": provenance(),  # this process's versions, device and commit
         "schema_version": SCHEMA_VERSION,
     }

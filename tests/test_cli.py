@@ -33,6 +33,8 @@ BAD = [
     (["sweep", "--all", "--workers", "x"], "workers must be an integer"),
     (["sweep"], "experiment name or --all"),
     (["frobnicate"], "invalid choice"),
+    (["bench", "--papers", "hnn,lnm", "--profile", "smoke"], "did you mean 'lnn'"),
+    (["bench", "--papers", ",", "--profile", "smoke"], "--papers needs at least one of"),
     (
         ["campaign", "--profile", "smoke", "--replication"],
         "profile with replication seeds 'smoke'; allowed: quick, paper, paper-core",
@@ -171,3 +173,23 @@ def test_estimate_of_a_campaign_prints_both_phases(capsys, tmp_path):
     seeds = REPLICATION_SEEDS["paper"]
     assert len(titles) == 2 and all(str(s) in titles[1] for s in seeds), titles
     assert sum(x.split()[:1] == ["total"] for x in lines) == 2
+
+
+def test_bench_papers_selects_the_declared_experiments():
+    """``bench --papers`` runs the experiments that declare those papers, and all by default."""
+    from argparse import Namespace
+
+    from bench._cli import _sweep_names
+    from bench.core._experiments import PAPERS, available, get
+
+    seeds = _sweep_names(Namespace(verb="bench", papers="hnn,lnn,vin"))
+    paper = _sweep_names(Namespace(verb="bench", papers="deconstructing"))
+    assert {"vin", "relativistic_seed", "pixel_pendulum_hnn_seed"} <= set(seeds)
+    assert {"energy", "rigid_bodies"} <= set(paper) and not set(seeds) & set(paper)
+    assert {get(n).paper for n in seeds} == {"hnn", "lnn", "vin"}
+    assert sorted(seeds + paper) == sorted(_sweep_names(Namespace(verb="bench", papers=None)))
+    assert sorted(seeds + paper) == available() and set(PAPERS) == {"deconstructing"} | {
+        "hnn",
+        "lnn",
+        "vin",
+    }

@@ -51,6 +51,9 @@ TRAIN_TARGETS = ("rollout", "derivative")
 # what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
 # measured trajectory read from a file, bench.core._measured)
 OBSERVATIONS = ("state", "pixels", "frames", "measured")
+# The papers an experiment can reproduce: Gruver et al. 2022 and its seeds (the HNN, LNN and
+# VIN papers)
+PAPERS = ("deconstructing", "hnn", "lnn", "vin")
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
@@ -536,6 +539,8 @@ class Experiment:
     claim: int | None = None
     # The profiles it runs at (None: every profile); elsewhere it expands to no runs.
     profiles: tuple[str, ...] | None = None
+    # The paper it reproduces (one of PAPERS): `bench --papers` runs a paper's experiments.
+    paper: str = "deconstructing"
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -548,6 +553,7 @@ class Experiment:
         for axis, values in self.axes.items():
             if isinstance(values, str) or len(list(values)) == 0:
                 raise ValueError(f"{self.name}.axes[{axis!r}] must be a non-empty sequence")
+        check_choice(f"paper of {self.name}", self.paper, list(PAPERS))
         for prof in self.profiles or ():
             check_choice(f"profile in {self.name}.profiles", prof, list(PROFILES))
         for prof, over in self.profile_overrides.items():

@@ -104,6 +104,21 @@ PIXELS_SEED_S = (660.0 + 642.0) / 2
 SEED_APPENDIX_S = (362.0 + 131.0) / 2
 
 
+# Per paper, the measured wall seconds of what the estimator does not describe, at quick, 2
+# workers: the Deconstructing paper's stability cases and Fig. 9's rigid bodies (60 runs,
+# 1005 s of CPU time summed over the quick sweep's seeds 0-4 under load: an upper bound, /2);
+# the HNN seed's tasks, its pixel tasks (ours and its protocol's halves) and its appendix
+# tasks; the LNN seed's two double-pendulum readings; the VIN seed's pixel tasks (ours and the
+# blog's)
+RIGID_BODIES_S = 1005.0 / 2
+MEASURED_S = {
+    "deconstructing": STABILITY_S + RIGID_BODIES_S,
+    "hnn": SEED_TASKS_S + PIXELS_S / 2 + 660.0 / 2 + SEED_APPENDIX_S,
+    "lnn": LNN_SEED_S + LNN_NOTEBOOK_S,
+    "vin": PIXELS_S / 2 + 642.0 / 2,
+}
+
+
 # Runs that WALL_S (rollout training on states) does not describe: derivative targets (the LNN
 # seed, claim 9) and pixel frames (claims 11 and 12). (ms per training step, seconds of
 # everything else but the data) at the sizes the profiles run, keyed (kind, model, width, batch),
@@ -300,25 +315,20 @@ def estimate_seconds(
     }
 
 
-def make_bench_seconds(profile: str = "quick", workers: int = 2) -> float:
-    """Predicted wall time of ``make bench``: ``(paper experiments + learning curves +
-    trade-off) * SWEEP_RATIO + stability study + the HNN seed's tasks (its three-body and real
-    pendulum included) + the pixel tasks (ours and the seeds') + the LNN seed's two readings``,
-    from
-    :func:`estimate_seconds` and the measured shares of the others (the learning-curve
-    experiment is read from the registry: ``bench.studies.learning`` imports this package, not
-    the reverse)."""
-    from ...core._experiments import available, get
+def make_bench_seconds(profile: str = "quick", workers: int = 2, papers=None) -> float:
+    """Predicted wall time of ``bench --papers`` (None: every paper) at ``profile``: the
+    estimate (:func:`estimate_seconds`) of the papers' rollout-trained experiments, with the
+    Deconstructing paper's learning curves and trade-off, times ``SWEEP_RATIO``, plus the
+    measured shares of what that estimate does not describe (:data:`MEASURED_S`; the stability
+    cases run with the Deconstructing paper). ``make bench`` is ``papers=("deconstructing",)``,
+    ``make bench-seeds`` the three seeds. (The learning-curve experiment is read from the
+    registry: ``bench.studies.learning`` imports this package, not the reverse.)"""
+    from ...core._experiments import PAPERS, available, get
 
+    papers = PAPERS if papers is None else tuple(papers)
     extra = tuple(get(n) for n in ("learning_curves",) if n in available())
-    paper = estimate_seconds(profile, workers=workers, experiments=PAPER_EXPERIMENTS + extra)
-    return (
-        (paper["seconds"] + TRADEOFF_S) * SWEEP_RATIO
-        + STABILITY_S
-        + SEED_TASKS_S
-        + PIXELS_S
-        + LNN_SEED_S
-        + LNN_NOTEBOOK_S
-        + PIXELS_SEED_S
-        + SEED_APPENDIX_S
-    )
+    mine = tuple(e for e in PAPER_EXPERIMENTS + extra if e.paper in papers)
+    seconds = estimate_seconds(profile, workers=workers, experiments=mine)["seconds"] if mine else 0
+    if "deconstructing" in papers:
+        seconds += TRADEOFF_S
+    return seconds * SWEEP_RATIO + sum(MEASURED_S[p] for p in papers)

@@ -23,6 +23,7 @@ def _double_pendulum_include(c: RunConfig) -> bool:
 # at step 0 on this system.
 DOUBLE_PENDULUM_ENERGY = Experiment(
     name="double_pendulum_energy",
+    paper="lnn",
     title="LNN seed: energy error on the unit double pendulum, % of the max potential energy",
     axes={
         "model": ("node", "lnn", "constant_velocity"),

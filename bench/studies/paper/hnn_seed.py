@@ -128,6 +128,7 @@ def _include(c: RunConfig) -> bool:
 def _experiment(system: str) -> Experiment:
     return Experiment(
         name=f"hnn_seed_{system}",
+        paper="hnn",
         title=f"HNN seed: {system.replace('_', '-')} from states, derivative targets",
         axes={
             "model": tuple(dict.fromkeys(m for m, _ in CELLS)),

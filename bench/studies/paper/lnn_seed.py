@@ -104,6 +104,7 @@ def _include(c: RunConfig) -> bool:
 
 LNN_SEED = Experiment(
     name="lnn_seed_double_pendulum",
+    paper="lnn",
     title="LNN seed: unit double pendulum from instantaneous accelerations, energy % of max PE",
     axes={"model": ("lnn", "node_so", "constant_velocity"), "model_options": ((), PURE_LNN)},
     fixed=_FIXED,
@@ -169,6 +170,7 @@ def _include_notebook(c: RunConfig) -> bool:
 
 LNN_SEED_NOTEBOOK = Experiment(
     name="lnn_seed_notebook",
+    paper="lnn",
     title="LNN seed: unit double pendulum as the seed's notebook trained it (fresh uniform states)",
     axes={
         "model": ("lnn", "node_so", "constant_velocity"),

@@ -89,7 +89,9 @@ _SMOKE = {
 }
 
 
-def _experiment(name: str, title: str, models: tuple[str, ...], claim: int) -> Experiment:
+def _experiment(
+    name: str, title: str, models: tuple[str, ...], claim: int, paper: str
+) -> Experiment:
     return Experiment(
         name=name,
         title=title,
@@ -97,14 +99,19 @@ def _experiment(name: str, title: str, models: tuple[str, ...], claim: int) -> E
         fixed=_COMMON,
         profile_overrides={"smoke": _SMOKE, "quick": _QUICK, "paper-core": {}},
         claim=claim,
+        paper=paper,
     )
 
 
 PIXEL_HNN = _experiment(
-    "pixel_pendulum_hnn", "HNN seed: pixel pendulum, latent HNN vs MLP", ("hnn", "node"), 11
+    "pixel_pendulum_hnn", "HNN seed: pixel pendulum, latent HNN vs MLP", ("hnn", "node"), 11, "hnn"
 )
 PIXEL_VIN = _experiment(
-    "pixel_pendulum_vin", "VIN seed: pixel pendulum, latent VIN vs ResNet", ("vin", "resnet"), 12
+    "pixel_pendulum_vin",
+    "VIN seed: pixel pendulum, latent VIN vs ResNet",
+    ("vin", "resnet"),
+    12,
+    "vin",
 )
 # The HNN seed's protocol (greydanus/hamiltonian-nn: experiment-pixels/train.py, hnn.py,
 # nn_models.py and the analysis notebook analyze-pixels.ipynb; docs/studies/pixels.md):
@@ -130,6 +137,7 @@ SEED_PROTOCOL = {
 SEED_STEPS = 10000
 PIXEL_HNN_SEED = Experiment(
     name="pixel_pendulum_hnn_seed",
+    paper="hnn",
     title="HNN seed: pixel pendulum as the seed trained and scored it (Adam + L2, Euler step)",
     axes={"model": ("hnn", "node")},
     fixed={**_COMMON, **SEED_PROTOCOL, "steps": SEED_STEPS},

@@ -67,6 +67,7 @@ def _include(c: RunConfig) -> bool:
 
 EXPERIMENT = Experiment(
     name="hnn_seed_real_pendulum",
+    paper="hnn",
     title="HNN seed: the real pendulum (measured trajectory), derivative targets",
     axes={"model": MODELS, "system": (R.REAL, R.SYNTHETIC)},
     fixed=_SEED,

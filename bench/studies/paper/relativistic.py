@@ -113,6 +113,7 @@ def _relativistic_include(c: RunConfig) -> bool:
 # experiments stay float32, as in the reference.
 RELATIVISTIC = Experiment(
     name="relativistic",
+    paper="lnn",
     title="LNN seed: relativistic particle, naive HNN on (q, qdot) vs HNN on (q, p) vs LNN",
     axes={
         "model": ("hnn", "lnn", "constant_velocity"),
@@ -194,6 +195,7 @@ def _seed_include(c: RunConfig) -> bool:
 
 RELATIVISTIC_SEED = Experiment(
     name="relativistic_seed",
+    paper="lnn",
     title="LNN seed's protocol: relativistic particle from time derivatives, naive HNN vs "
     "HNN on (q, p) vs LNN",
     axes={

@@ -77,6 +77,7 @@ def _include(c: RunConfig) -> bool:
 
 EXPERIMENT = Experiment(
     name="hnn_seed_three_body",
+    paper="hnn",
     title="HNN seed: three-body from states, derivative targets",
     axes={
         "model": tuple(dict.fromkeys(m for m, _ in CELLS)),

@@ -58,6 +58,7 @@ def _vin_include(c: RunConfig) -> bool:
 
 VIN = Experiment(
     name="vin",
+    paper="vin",
     title="VIN seed: pendulum from few and noisy trajectories, long horizon",
     axes={
         "model": ("vin", "resnet", "node_so", "constant_velocity"),

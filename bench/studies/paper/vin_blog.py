@@ -120,6 +120,7 @@ def _include(c) -> bool:
 
 VIN_BLOG = Experiment(
     name="pixel_pendulum_vin_blog",
+    paper="vin",
     title="VIN seed (blog): pixel pendulum, position latents; VIN-SO(2) vs its baselines",
     axes={"model": ("vin", "resnet", "at_rest"), "model_options": (_opts("so2"), _opts("r2"))},
     fixed=_FIXED,
