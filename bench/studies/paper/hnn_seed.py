@@ -170,7 +170,7 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
         r = r[r["train_target"] == "derivative"]
     if not len(r):
         return verdict(10, CLAIM_TITLES[10], [], None, 0, "log energy-MSE ratio")
-    r = r.assign(rollout_error_any=_rollout_any(r))
+    r = r.assign(rollout_error_any=rollout_any(r))
     parts, seeds, extra = [], [], []
     for system in SYSTEMS:
         rs = r[r["system"] == system]
@@ -216,7 +216,7 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     )
 
 
-def _rollout_any(r: pd.DataFrame) -> pd.Series:
+def rollout_any(r: pd.DataFrame) -> pd.Series:
     """Rollout errors on (q, qdot) for every run: momentum runs decoded (the column
     ``rollout_error_velocity``), velocity runs as they are."""
     v = pd.to_numeric(r.get("rollout_error_velocity"), errors="coerce")
@@ -225,22 +225,29 @@ def _rollout_any(r: pd.DataFrame) -> pd.Series:
 
 
 # ------------------------------------------------------------------------ table and figure
-def _rows(results_dir) -> tuple[pd.DataFrame, str | None]:
+def seed_rows(results_dir, experiments=EXPERIMENTS) -> tuple[pd.DataFrame, str | None]:
+    """The stored runs of ``experiments`` at the folder's profile, with ``rollout_any``."""
     runs = load_runs(results_dir)
     if not len(runs):
         return runs, None
     profile = pick_profile(runs)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
-    parts = [experiment_rows(runs, e.name, profile) for e in EXPERIMENTS]
+    parts = [experiment_rows(runs, e.name, profile) for e in experiments]
     parts = [p for p in parts if len(p)]
     out = pd.concat(parts, ignore_index=True) if parts else runs.iloc[0:0]
     if len(out):
-        out = out.assign(rollout_error_any=_rollout_any(out))
+        out = out.assign(rollout_error_any=rollout_any(out))
     return out, profile
 
 
-def _gm(x) -> float:
+def fmt(x: float) -> str:
+    """Three significant digits, "-" for a missing value."""
+    return "-" if not np.isfinite(x) else f"{x:.3g}"
+
+
+def geometric_mean(x) -> float:
+    """The geometric mean of the positive finite values of ``x`` (nan where there are none)."""
     x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
     x = x[np.isfinite(x) & (x > 0)]
     return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
@@ -248,7 +255,7 @@ def _gm(x) -> float:
 
 def section(results_dir) -> str:
     """The seed's Table 1 laid out as the seed lays it out, ours beside its numbers."""
-    rows, profile = _rows(Path(results_dir))
+    rows, profile = seed_rows(Path(results_dir))
     lines = [
         "## HNN seed tasks (claim 10)",
         "",
@@ -279,9 +286,11 @@ def section(results_dir) -> str:
         def f(x):
             return "-" if not np.isfinite(x) else f"{x:.3g}"
 
-        tl = " / ".join(f(_gm(cell[m]["derivative_mse_test"])) for m in ("mlp", "hnn"))
-        em = " / ".join(f(_gm(cell[m]["energy_mse"])) for m in ("mlp", "hnn", "so"))
-        ro = " / ".join(f(_gm(cell[m]["rollout_error_any"])) for m in ("mlp", "hnn", "so"))
+        tl = " / ".join(f(geometric_mean(cell[m]["derivative_mse_test"])) for m in ("mlp", "hnn"))
+        em = " / ".join(f(geometric_mean(cell[m]["energy_mse"])) for m in ("mlp", "hnn", "so"))
+        ro = " / ".join(
+            f(geometric_mean(cell[m]["rollout_error_any"])) for m in ("mlp", "hnn", "so")
+        )
         lines.append(
             f"| {system} | {rs['seed'].nunique()} | "
             f"{f(seed['test_loss'][0])} / {f(seed['test_loss'][1])} | {tl} | "
@@ -294,7 +303,7 @@ def figure(results_dir) -> list[Path]:
     """Energy MSE and test loss per task and model (geometric mean, min-max over seeds), the
     seed's numbers as black marks."""
 
-    rows, _ = _rows(Path(results_dir))
+    rows, _ = seed_rows(Path(results_dir))
     rows = rows[~bad_rows(rows, "energy_mse")] if len(rows) else rows
     if not len(rows):
         return []

@@ -9,7 +9,6 @@ verdict on it. The data card, the seed's protocol and ours: docs/studies/real_pe
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import policy
 from ._rules import CLAIM_TITLES
+from .hnn_seed import fmt, geometric_mean
 from .kit import bad_rows, gated, greater, learned_cell, paired, undecided, verdict
 
 MODELS = ("node", "hnn", "at_rest")  # the seed's baseline and HNN, and the trivial field
@@ -151,20 +151,10 @@ def _summary(r: pd.DataFrame) -> str:
     for name, cell in (("MLP", BASELINE), ("HNN", HNN), ("dz/dt = 0", TRIVIAL)):
         g = r[r["model"] == cell["model"]]
         out.append(
-            f"{name} test loss {_fmt(_gm(g['derivative_mse_test']))}, energy MSE "
-            f"{_fmt(_gm(g['energy_mse']))}"
+            f"{name} test loss {fmt(geometric_mean(g['derivative_mse_test']))}, energy MSE "
+            f"{fmt(geometric_mean(g['energy_mse']))}"
         )
     return "; ".join(out)
-
-
-def _gm(x) -> float:
-    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
-
-
-def _fmt(x: float) -> str:
-    return "-" if not np.isfinite(x) else f"{x:.3g}"
 
 
 # ------------------------------------------------------------------------ table and figure
@@ -197,8 +187,8 @@ def section(results_dir) -> str:
     a, b = SEED_NUMBERS["train_loss"], SEED_NUMBERS["test_loss"]
     e = SEED_NUMBERS["energy_mse"]
     lines.append(
-        f"| the seed's | - | 1 | {_fmt(a[0])} / {_fmt(a[1])} | {_fmt(b[0])} / {_fmt(b[1])} | "
-        f"{_fmt(e[0])} / {_fmt(e[1])} | - |"
+        f"| the seed's | - | 1 | {fmt(a[0])} / {fmt(a[1])} | {fmt(b[0])} / {fmt(b[1])} | "
+        f"{fmt(e[0])} / {fmt(e[1])} | - |"
     )
     if not len(rows):
         return "\n".join([*lines, "| (no runs) | | | | | | |"])
@@ -209,14 +199,14 @@ def section(results_dir) -> str:
         mlp, hnn, triv = (g[g["model"] == c["model"]] for c in (BASELINE, HNN, TRIVIAL))
 
         def pair(col, mlp=mlp, hnn=hnn):
-            return f"{_fmt(_gm(mlp[col]))} / {_fmt(_gm(hnn[col]))}"
+            return f"{fmt(geometric_mean(mlp[col]))} / {fmt(geometric_mean(hnn[col]))}"
 
         label = g["data_source"].dropna().iloc[0] if "data_source" in g else name
         sha = ", ".join(sorted(set(g["data_sha256"].dropna()))) if "data_sha256" in g else "-"
         lines.append(
             f"| {label} | `{sha or '-'}` | {g['seed'].nunique()} | {pair('derivative_mse_train')}"
             f" | {pair('derivative_mse_test')} | {pair('energy_mse')} | "
-            f"{_fmt(_gm(triv['derivative_mse_test']))} |"
+            f"{fmt(geometric_mean(triv['derivative_mse_test']))} |"
         )
     return "\n".join(lines)
 

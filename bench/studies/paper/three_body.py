@@ -8,19 +8,17 @@ and the budgets: docs/studies/three_body.md.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ...core._experiments import Experiment, RunConfig
-from ...core._query import experiment_rows, pick_profile
-from ...core._store import load_runs
 from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import policy
 from ._rules import CLAIM_TITLES
+from .hnn_seed import fmt, geometric_mean, rollout_any, seed_rows
 from .kit import bad_rows, gated, greater, learned_cell, paired, per_system_discrimination, verdict
 
 SYSTEM = "three_body"
@@ -113,7 +111,7 @@ def claim_14(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     models = r[r["model"] != TRIVIAL["model"]] if len(r) else r
     if not len(models):
         return verdict(14, CLAIM_TITLES[14], [], None, 0, "log energy-MSE ratio MLP / HNN")
-    r = r.assign(rollout_error_any=_rollout_any(r))
+    r = r.assign(rollout_error_any=rollout_any(r))
     e = paired(r, BASELINE, HNN, "energy_mse")
     part = gated(
         greater(
@@ -145,53 +143,21 @@ def _struggle(r: pd.DataFrame) -> str:
     out = []
     for name, cell in (("MLP", BASELINE), ("HNN", HNN), ("trivial", TRIVIAL)):
         g = r[(r["model"] == cell["model"]) & (r["coordinates"] == cell["coordinates"])]
-        text = f"{name} rollout error {_fmt(_gm(g['rollout_error_any']))}"
+        text = f"{name} rollout error {fmt(geometric_mean(g['rollout_error_any']))}"
         if name != "trivial" and "derivative_mse_test" in g:
-            text += f", test loss {_fmt(_gm(g['derivative_mse_test']))}"
+            text += f", test loss {fmt(geometric_mean(g['derivative_mse_test']))}"
         out.append(text)
     return "; ".join(out)
 
 
-def _rollout_any(r: pd.DataFrame) -> pd.Series:
-    """Rollout errors on (q, qdot): momentum runs decoded, velocity runs as they are."""
-    base = pd.to_numeric(r["rollout_error"], errors="coerce")
-    if "rollout_error_velocity" not in r:
-        return base
-    v = pd.to_numeric(r["rollout_error_velocity"], errors="coerce")
-    return base.where(r["coordinates"] != "momentum", v)
-
-
-def _gm(x) -> float:
-    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
-
-
-def _fmt(x: float) -> str:
-    return "-" if not np.isfinite(x) else f"{x:.3g}"
-
-
 # ------------------------------------------------------------------------ table and figure
-def _rows(results_dir) -> tuple[pd.DataFrame, str | None]:
-    runs = load_runs(results_dir)
-    if not len(runs):
-        return runs, None
-    profile = pick_profile(runs)
-    if profile is not None:
-        runs = runs[runs["profile"] == profile].reset_index(drop=True)
-    out = experiment_rows(runs, EXPERIMENT.name, profile)
-    if len(out):
-        out = out.assign(rollout_error_any=_rollout_any(out))
-    return out, profile
-
-
 def _cell(rows: pd.DataFrame, cell: dict) -> pd.DataFrame:
     return rows[(rows["model"] == cell["model"]) & (rows["coordinates"] == cell["coordinates"])]
 
 
 def section(results_dir) -> str:
     """The seed's Table 2 beside ours."""
-    rows, profile = _rows(Path(results_dir))
+    rows, profile = seed_rows(Path(results_dir), (EXPERIMENT,))
     lines = [
         "## HNN seed: three-body (claim 14)",
         "",
@@ -212,13 +178,13 @@ def section(results_dir) -> str:
     mlp, hnn, triv = _cell(rows, BASELINE), _cell(rows, HNN), _cell(rows, TRIVIAL)
 
     def pair(col):
-        return f"{_fmt(_gm(mlp[col]))} / {_fmt(_gm(hnn[col]))}"
+        return f"{fmt(geometric_mean(mlp[col]))} / {fmt(geometric_mean(hnn[col]))}"
 
     def seed(key):
         a, b = SEED_NUMBERS[key]
-        return f"{_fmt(a)} / {_fmt(b)}"
+        return f"{fmt(a)} / {fmt(b)}"
 
-    ro = " / ".join(_fmt(_gm(g["rollout_error_any"])) for g in (mlp, hnn, triv))
+    ro = " / ".join(fmt(geometric_mean(g["rollout_error_any"])) for g in (mlp, hnn, triv))
     lines.append(
         f"| {rows['seed'].nunique()} | {seed('train_loss')} | {pair('derivative_mse_train')} | "
         f"{seed('test_loss')} | {pair('derivative_mse_test')} | {seed('energy_mse')} | "
@@ -230,7 +196,7 @@ def section(results_dir) -> str:
 def figure(results_dir) -> list[Path]:
     """Test loss and energy MSE per model (geometric mean, min-max over seeds), the seed's
     numbers as black marks."""
-    rows, _ = _rows(Path(results_dir))
+    rows, _ = seed_rows(Path(results_dir), (EXPERIMENT,))
     rows = rows[~bad_rows(rows, "energy_mse")] if len(rows) else rows
     if not len(rows):
         return []
