@@ -21,6 +21,7 @@ ten periods of the horizon (VIN, "reproduce": bounded). No number here is a resu
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Iterable
 
 import numpy as np
@@ -236,7 +237,8 @@ def cell_tables(
             seen.add(c.config_hash)
             trivial = models.spec(c.model).trivial
             err = trivial_error if trivial else errors[c.system][c.model]
-            shift = hash(c.model) % 5 if not trivial else 0
+            # a shift per model that is the same in every process (str hash is salted)
+            shift = zlib.crc32(c.model.encode()) % 5 if not trivial else 0
             err *= math.exp(spread * pattern[(i + shift) % len(seeds)])
             row = c.to_dict()
             row.update(
