@@ -486,8 +486,8 @@ def _main(argv) -> int:
         import models
 
         given = [m for item in args.model_module for m in item.split(",") if m.strip()]
-        old = [m for m in os.environ.get(models._registry.MODULES_ENV, "").split(",") if m]
-        os.environ[models._registry.MODULES_ENV] = ",".join(dict.fromkeys([*old, *given]))
+        old = [m for m in os.environ.get(models.MODULES_ENV, "").split(",") if m]
+        os.environ[models.MODULES_ENV] = ",".join(dict.fromkeys([*old, *given]))
         models.load_plugins()
     if args.verb == "list":
         return _cmd_list(args)

@@ -26,7 +26,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from systems._base import MAX_STEPS
+from systems import MAX_STEPS
 
 from . import data_loader
 from .core._experiments import RunConfig, available, expand, profile_defaults

@@ -6,7 +6,8 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 :func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
 :func:`load_plugins` (models from outside the suite: entry-point group ``decon_bench.models``,
 ``$DECON_MODEL_MODULES``),
-:func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve), :func:`n_parameters`,
+:func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve) and
+:func:`velocity_hessian`, the :class:`MLP` every model is built from, :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
 """
 
@@ -23,8 +24,10 @@ from ._integrators import (
     rollout_batch,
 )
 from ._latent import LatentModel, latent_scene
+from ._mlp import MLP
 from ._position_latent import PositionLatentModel
 from ._registry import (
+    MODULES_ENV,
     available,
     coordinates,
     load_plugins,
@@ -33,7 +36,7 @@ from ._registry import (
     register,
     trivial_models,
 )
-from ._scalar import acceleration_from_lagrangian
+from ._scalar import acceleration_from_lagrangian, velocity_hessian
 from ._scene import Scene
 from ._spec import ModelSpec, spec
 from ._symplectic import symplectic_error
@@ -44,9 +47,11 @@ __all__ = [
     "Autoencoder",
     "DESCRIPTIONS",
     "METHODS",
+    "MODULES_ENV",
     "ORDERS",
     "Integrator",
     "LatentModel",
+    "MLP",
     "PositionLatentModel",
     "implicit_tolerance",
     "count_evaluations",
@@ -67,5 +72,6 @@ __all__ = [
     "register",
     "spec",
     "symplectic_error",
+    "velocity_hessian",
     "trivial_models",
 ]

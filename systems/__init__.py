@@ -4,10 +4,11 @@ Ground truth is float64: a process calls :func:`enable_x64` before computing it 
 points do); importing ``systems`` changes no jax setting.
 """
 
-from ._base import AbstractSystem, reference_masses_lengths
+from . import _real_pendulum as real_pendulum
+from ._base import MAX_STEPS, AbstractSystem, reference_masses_lengths
 from ._chain import ChainPendulum
 from ._coordinates import derivatives, to_momentum, to_velocity
-from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset
+from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset, source_fingerprint
 from ._magnet import MagnetPendulum
 from ._mass_spring import MassSpring
 from ._pendulum import Pendulum
@@ -15,7 +16,7 @@ from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset
 from ._precision import enable_x64, require_x64
 from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
-from ._render import read_angle, read_state, render
+from ._render import reach, read_angle, read_state, render
 from ._rigid import Gyroscope, Rotor
 from ._spring import SpringPendulum
 from ._three_body import ThreeBody
@@ -23,6 +24,7 @@ from ._two_body import TwoBody
 
 __all__ = [
     "AbstractSystem",
+    "MAX_STEPS",
     "ChainPendulum",
     "Dataset",
     "Gyroscope",
@@ -46,10 +48,13 @@ __all__ = [
     "make_dataset",
     "make_pixel_dataset",
     "parameters",
+    "real_pendulum",
+    "reach",
     "read_angle",
     "read_state",
     "reference_masses_lengths",
     "render",
+    "source_fingerprint",
     "to_momentum",
     "to_velocity",
 ]

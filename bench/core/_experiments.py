@@ -267,13 +267,14 @@ class RunConfig:
                 what = f"{name} {getattr(self, name)!r}"
                 raise ValueError(f"pixel runs support no {what}; allowed: {default!r}")
         system = _system(self.system, tuple(sorted(self.system_kwargs().items())))
-        systems._render.reach(system)  # the renderable systems (ValueError naming them)
+        systems.reach(system)  # the renderable systems (ValueError naming them)
         self.pixel_dataset_config()
 
     def _check_measured(self) -> None:
-        from systems._real_pendulum import DATASETS
+        from systems import real_pendulum
 
-        check_choice("measured dataset (system of a measured run)", self.system, DATASETS)
+        allowed = real_pendulum.DATASETS
+        check_choice("measured dataset (system of a measured run)", self.system, allowed)
         for name, value in MEASURED_FIELDS:
             if getattr(self, name) != value:
                 what = f"{name} {getattr(self, name)!r}"

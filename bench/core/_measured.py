@@ -1,7 +1,7 @@
 """Runs on a measured trajectory (``RunConfig.observation == "measured"``): the HNN seed's real
 pendulum (its Task 3). Build, train and evaluate.
 
-``system`` names the data (``systems._real_pendulum.DATASETS``: the user's measured file or the
+``system`` names the data (``systems.real_pendulum.DATASETS``: the user's measured file or the
 synthetic stand-in). The states x = (o, v) are taken as the seed takes them, canonical (q, p),
 the targets their forward differences; the seed's split (the first 80% train, the next 20%
 test, in time order). Training is the one training loop on derivative targets; the test loss is
@@ -63,7 +63,7 @@ def build(c: RunConfig):
     import jax
 
     import models
-    from systems import _real_pendulum as R
+    from systems import real_pendulum as R
 
     data = R.load(c.system)
     x, dx = data.x[data.train], data.dx[data.train]
@@ -102,7 +102,7 @@ def evaluate(c: RunConfig, built, model, meta: dict, cache_root):
     import jax.numpy as jnp
 
     import models
-    from systems import _real_pendulum as R
+    from systems import real_pendulum as R
 
     from . import _metrics as M
     from ._evaluate import eval_integrator

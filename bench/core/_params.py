@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from systems._dataset import source_fingerprint
+from systems import source_fingerprint
 
 from ._atomic import atomic_write, write_json
 from ._experiments import RunConfig
@@ -25,7 +25,7 @@ TRAIN_CODE = ("models", "systems", "bench.core")
 
 
 def code_fingerprint() -> str:
-    """:func:`systems._dataset.source_fingerprint` of :data:`TRAIN_CODE`."""
+    """:func:`systems.source_fingerprint` of :data:`TRAIN_CODE`."""
     return source_fingerprint(*TRAIN_CODE)
 
 

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from models._integrators import Integrator, rollout_batch
+from models import Integrator, rollout_batch
 
 LOSSES = ("l2", "l1")
 DTYPES = ("float32", "float64")

@@ -277,7 +277,7 @@ def tradeoff_table(runs: pd.DataFrame, cost: str = "rollout_seconds_per_traj") -
 
 def methods_legend(runs: pd.DataFrame) -> str:
     """One line naming what each evaluation method in ``runs`` is."""
-    from models._integrators import DESCRIPTIONS
+    from models import DESCRIPTIONS
 
     names = sorted(set(runs.get("eval_integrator", pd.Series([], dtype=str)).dropna().astype(str)))
     parts = [f"`{m}` = {DESCRIPTIONS[m]}" for m in names if m in DESCRIPTIONS]

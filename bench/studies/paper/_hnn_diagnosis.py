@@ -56,7 +56,7 @@ def reference_biases(model, key):
     import jax
     import jax.numpy as jnp
 
-    from models._mlp import MLP
+    from models import MLP
 
     keys = iter(jax.random.split(key, 64))
 

@@ -38,7 +38,7 @@ def _eigs(model, zs):
     import jax
     import jax.numpy as jnp
 
-    from models._scalar import velocity_hessian
+    from models import velocity_hessian
 
     dof = zs.shape[-1] // 2
 

@@ -2,7 +2,7 @@
 experiment on Schmidt & Lipson's measured trajectory, its verdict rule, its table beside the
 seed's numbers and a figure.
 
-The measured file cannot be shipped: the user supplies it (``systems._real_pendulum``); without
+The measured file cannot be shipped: the user supplies it (``systems.real_pendulum``); without
 it the experiment runs on a synthetic stand-in of the same format, and the rule gives no signed
 verdict on it. The data card, the seed's protocol and ours: docs/studies/real_pendulum.md.
 """
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from systems import _real_pendulum as R
+from systems import real_pendulum as R
 
 from ...core._experiments import Experiment, RunConfig
 from ...core._query import experiment_rows, pick_profile

@@ -17,7 +17,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
-from models._integrators import Integrator, rollout_batch  # noqa: E402
+from models import Integrator, rollout_batch  # noqa: E402
 
 from ...core._train import Batches, compiled_block, loss_fn, optimizer, train_block  # noqa: E402
 

@@ -202,7 +202,7 @@ def true_model(system, dtype: str = "float64"):
     (the one owner of fixed-step integration) integrates the true field exactly as it
     integrates a learned one."""
     import models
-    from models._base import AbstractContinuousModel
+    from models import AbstractContinuousModel
 
     class TrueDynamics(AbstractContinuousModel):
         system: object

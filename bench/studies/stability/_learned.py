@@ -62,7 +62,7 @@ def _train_small(name: str, size: StabilitySize):
 
 
 def _applies(model, method: str) -> bool:
-    from models._base import AbstractDiscreteModel
+    from models import AbstractDiscreteModel
 
     if isinstance(model, AbstractDiscreteModel):
         return method == "rk4"  # a discrete model has one integrator: itself (label it once)

@@ -1,0 +1,113 @@
+"""The code base's house rules, read statically from the source.
+
+- An underscore-named definition is imported only inside its package, and a top-level
+  package's private modules only inside it: across them, only what an ``__init__`` exports.
+- No source file over :data:`MAX_LINES` lines (tests excepted).
+- The code says what it does, not how it got there: no issue numbers, dates or commit ids.
+"""
+
+import ast
+import pathlib
+import re
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+PACKAGES = ("systems", "models", "bench")
+MAX_LINES = 500
+HISTORY = re.compile(
+    r"\bissues? #?\d+|\bgh-?\d+\b|(?<![\w.])#\d{2,}\b|\b20\d\d-[01]\d-[0-3]\d\b"
+    r"|\bcommit [0-9a-f]{7,40}\b"
+    r"|(?<![\w.])(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}(?![\w.+-])",
+    re.IGNORECASE,
+)
+
+
+def _sources(*roots):
+    for root in roots:
+        yield from sorted((ROOT / root).rglob("*.py"))
+
+
+def _package(path):
+    return path.relative_to(ROOT).parent.parts
+
+
+def _crossings(path):
+    """Imports in ``path`` of another package's underscore-named definitions, or of another
+    top-level package's private modules (inside one top-level package, private modules are
+    shared, as in equinox and diffrax)."""
+    package = _package(path)
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            targets = [(alias.name.split("."), []) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            parts = (node.module or "").split(".") if node.module else []
+            if node.level:
+                parts = list(package[: len(package) - node.level + 1]) + parts
+            targets = [(parts, [alias.name for alias in node.names])]
+        else:
+            continue
+        for parts, names in targets:
+            private = [i for i, part in enumerate(parts) if _private(part)]
+            if private and parts[0] != package[0]:
+                yield f"{path.relative_to(ROOT)}:{node.lineno} imports {'.'.join(parts)}"
+            owner = tuple(parts[: private[0]]) if private else tuple(parts)
+            for name in names:
+                if _private(name) and owner != package:
+                    yield f"{path.relative_to(ROOT)}:{node.lineno} imports {name}"
+
+
+def _private(name):
+    return name.startswith("_") and not name.startswith("__")
+
+
+def test_private_parts_stay_inside_their_package():
+    found = [c for path in _sources(*PACKAGES) for c in _crossings(path)]
+    assert found == []
+
+
+def test_the_crossing_check_catches_a_private_import(tmp_path, monkeypatch):
+    bad = tmp_path / "bench" / "studies" / "x.py"
+    bad.parent.mkdir(parents=True)
+    bad.write_text(
+        "from models._mlp import MLP\nfrom ..core._x import _private\nfrom . import _own\n"
+        "from bench.core._x import Public\n"
+    )
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    found = list(_crossings(bad))
+    assert len(found) == 2 and "models._mlp" in found[0] and "_private" in found[1]
+
+
+@pytest.mark.parametrize("path", list(_sources(*PACKAGES)), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_source_file_is_long(path):
+    assert len(path.read_text().splitlines()) <= MAX_LINES
+
+
+def test_no_history_in_the_code():
+    found = [
+        f"{path.relative_to(ROOT)}:{i}: {match.group(0)}"
+        for path in _sources(*PACKAGES, "tests")
+        if path.name != "test_house.py"
+        for i, line in enumerate(path.read_text().splitlines(), 1)
+        for match in [HISTORY.search(line)]
+        if match
+    ]
+    assert found == []
+
+
+@pytest.mark.parametrize(
+    "line, history",
+    [
+        ("# see issue 37", True),
+        ("# fixed in #123", True),
+        ("measured on 2026-11-26", True),
+        ("as of commit 416c913", True),
+        ("the row came from 20e3414ab", True),
+        ("GYRO = (2.4137838e-3, 1.0906e02)", False),
+        ("sha = 'ffff'", False),
+        ("tol = 1e-13  # ten seeds", False),
+    ],
+)
+def test_the_history_check_reads_lines_as_meant(line, history):
+    assert bool(HISTORY.search(line)) is history
