@@ -48,12 +48,18 @@ def results(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def judged(results):
+def loaded(results):
+    """Both folders judged once, as the report reads them (:func:`load_other`)."""
+    d, _, _ = results
+    return load_other(d), load_other(d / "paper")
+
+
+@pytest.fixture(scope="module")
+def judged(loaded):
     """What the report is written from: this folder's final verdicts (pending where a
     campaign's runs are missing) and, per claim key, its comparison with the paper folder."""
-    d, _, _ = results
-    _, profile, verdicts = load_other(d)
-    rows = comparison_rows(verdicts, profile, [load_other(d / "paper")])
+    (_, profile, verdicts), paper = loaded
+    rows = comparison_rows(verdicts, profile, [paper])
     return verdicts, {r.key: r for r in rows}
 
 
@@ -189,15 +195,14 @@ def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_st
     assert final["6"].pending == (44, 45)
 
 
-def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(results, tmp_path):
+def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(loaded, tmp_path):
     """Here pending (a campaign with only claim 6's runs), the two other folders disagreeing on
     claim 3: the row says it disagrees, why the other two differ (the budget), and that here
     is pending, each once."""
-    d, _, _ = results
     runs, curves = synthetic_tables("paper-core", experiments=("loss",))
     _store(tmp_path / "camp", runs, curves)
     _, profile, verdicts = load_other(tmp_path / "camp")
-    others = [load_other(d), load_other(d / "paper")]
+    others = list(loaded)
     row3 = next(r for r in comparison_rows(verdicts, profile, others) if r.key == "3")
     assert row3.states == ("pending", "judged", "judged") and row3.agree is False
     kinds = [c.kind for c in row3.causes]
@@ -319,7 +324,7 @@ def test_report_names_no_folder_by_its_absolute_path(tmp_path):
     """The report is committed: a compared folder whose provenance differs is named as the
     verdict table names it (relative to ``results/``, or by its name), never by this
     machine's absolute path."""
-    runs, curves = synthetic_tables("smoke", seeds=(0, 1), noise=0.05)
+    runs, curves = synthetic_tables("smoke", seeds=(0, 1), noise=0.05, experiments=("vin",))
     _store(tmp_path / "a", runs.assign(jax_version="0.10.2"), curves)
     _store(tmp_path / "a" / "gpu", runs.assign(jax_version="0.11.2"), curves)
     text = write_report(tmp_path / "a", compare=[tmp_path / "a" / "gpu"]).read_text()

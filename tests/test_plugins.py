@@ -80,6 +80,7 @@ def test_an_installed_plugin_trains_beside_the_builtins_and_is_reported(tmp_path
     assert "throwaway_so" in (res / "REPORT.md").read_text()
 
 
+@pytest.mark.slow  # three subprocesses of the CLI
 def test_model_module_option_loads_a_module_without_an_entry_point(tmp_path):
     site = _install(tmp_path / "site", "loose_plugin", "loose_so", entry_point=False)
     assert "loose_so" not in _bench(["list"], site, tmp_path).stdout

@@ -413,6 +413,7 @@ def _die_on_2(job):
     return job
 
 
+@pytest.mark.slow  # two pools of worker processes, one killed
 def test_a_pool_worker_that_dies_raises_instead_of_hanging():
     """multiprocessing.Pool replaced a dead worker and waited forever for its task (a niced
     campaign would have hung unseen); the sweep's pool raises WorkerDied, one line, and

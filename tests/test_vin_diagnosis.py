@@ -55,6 +55,7 @@ def test_the_auxiliary_weight_reaches_the_loss():
     np.testing.assert_allclose([float(x) for x in parts], [float(ae), float(cc), float(dyn)])
 
 
+@pytest.mark.slow  # a smoke sweep and a training
 def test_diagnosis_reads_stored_protocol_runs_and_trains_the_ablation(tmp_path):
     from bench.core import _runner
 

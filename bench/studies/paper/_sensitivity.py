@@ -50,6 +50,17 @@ def margin_dependence(
     middle (:func:`policy.band_points`) beside the policy's own margin."""
     out = []
     cache = restrict_all(runs, profile)
+    judged = {}  # a claim's verdicts (claim 4 has several) per seed set, quantity and margin
+
+    def evaluate(claim, seeds, q, m):
+        key = (claim, tuple(sorted(seeds)) if seeds is not None else None, q, m)
+        if key not in judged:
+            with policy.override(**{q: m}):
+                judged[key] = evaluate_claims(
+                    runs, curves, profile, [claim], seeds=seeds, restricted=cache
+                )
+        return judged[key]
+
     for v in judgement.final:
         reading = judgement.reading(v.key)
         seeds = judgement.reading_seeds(v.key)
@@ -58,10 +69,7 @@ def margin_dependence(
             for m in policy.band_points(q):
                 if m == policy.POLICY[q].margin:
                     continue
-                with policy.override(**{q: m}):
-                    got = evaluate_claims(
-                        runs, curves, profile, [v.claim], seeds=seeds, restricted=cache
-                    )
+                got = evaluate(v.claim, seeds, q, m)
                 match = [w for w in got if w.key == v.key]
                 pts.append((m, match[0].verdict if match else "no verdict"))
             d = Dependence(v.key, q, tuple(sorted(pts)), reading.verdict)
