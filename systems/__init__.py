@@ -11,6 +11,9 @@ from ._coordinates import derivatives, to_momentum, to_velocity
 from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset, source_fingerprint
 from ._magnet import MagnetPendulum
 from ._mass_spring import MassSpring
+from ._mujoco import TASKS as MUJOCO_TASKS
+from ._mujoco import MujocoTask, collect_episodes, split_episodes
+from ._mujoco import task as mujoco_task
 from ._pendulum import Pendulum
 from ._pixel_dataset import PixelDataset, PixelDatasetConfig, make_pixel_dataset
 from ._precision import enable_x64, require_x64
@@ -30,6 +33,8 @@ __all__ = [
     "Gyroscope",
     "MagnetPendulum",
     "MassSpring",
+    "MUJOCO_TASKS",
+    "MujocoTask",
     "Pendulum",
     "PixelDataset",
     "PixelDatasetConfig",
@@ -41,12 +46,14 @@ __all__ = [
     "SpringPendulum",
     "available",
     "cache_root",
+    "collect_episodes",
     "derivatives",
     "enable_x64",
     "require_x64",
     "make",
     "make_dataset",
     "make_pixel_dataset",
+    "mujoco_task",
     "parameters",
     "real_pendulum",
     "reach",
@@ -55,6 +62,7 @@ __all__ = [
     "reference_masses_lengths",
     "render",
     "source_fingerprint",
+    "split_episodes",
     "to_momentum",
     "to_velocity",
 ]

@@ -1,0 +1,172 @@
+"""The MuJoCo tasks as data sources: raw [q, v] states, deterministic float64 transitions, the
+by-episode split and its content hash. A uniform random policy stands in for the trained SAC
+policy here only: it is not the paper's data (App. C explains why)."""
+
+import dataclasses
+import functools
+import warnings
+
+import mujoco
+import numpy as np
+import pytest
+
+from systems import _mujoco as mj
+
+warnings.filterwarnings("ignore", message=".*settotalmass.*")
+
+
+def random_policy(nu):
+    return lambda z, rng: rng.uniform(-1.0, 1.0, nu)
+
+
+@functools.cache
+def episodes(name, n_steps=400, seed=0):
+    return mj.collect_episodes(name, random_policy(mj.task(name).nu), seed=seed, n_steps=n_steps)
+
+
+@pytest.mark.parametrize("name", list(mj.TASKS))
+def test_observation_is_qpos_qvel_with_table_dims(name):
+    t = mj.task(name)
+    env = mj.make_env(name)
+    env.reset(seed=3)
+    for _ in range(5):
+        env.step(env.action_space.sample())
+    d = env.unwrapped.data
+    z = mj.raw_state(env)
+    assert z.dtype == np.float64 and z.shape == (t.nq + t.nv,)
+    np.testing.assert_array_equal(z, np.concatenate([d.qpos, d.qvel]))
+    assert (t.nq, t.nv, t.nu) == (d.qpos.size, d.qvel.size, d.ctrl.size)
+    assert env.unwrapped.dt == pytest.approx(t.dt, abs=1e-12)
+    # the full observation keeps the x position the standard one drops
+    obs = env.unwrapped._get_obs()
+    np.testing.assert_array_equal(obs[: t.nq], d.qpos)
+    ep = episodes(name)
+    assert ep.z.shape[1:] == (t.nq + t.nv,) and ep.u.shape[1:] == (t.nu,)
+
+
+def test_fig7_tasks_and_timesteps_of_the_reference():
+    fig7 = {t.name: t.dt for t in mj.TASKS.values() if t.in_fig7}
+    assert fig7 == {"HopperFull-v0": 0.008, "SwimmerFull-v0": 0.04, "HalfCheetahFull-v0": 0.05}
+    with pytest.raises(ValueError, match="unknown MuJoCo task"):
+        mj.task("Hopper-v2")
+
+
+@pytest.mark.parametrize("name", ["HopperFull-v0", "SwimmerFull-v0", "HalfCheetahFull-v0"])
+def test_recorded_control_from_recorded_state_reproduces_next_state(name):
+    ep = episodes(name)
+    env = mj.make_env(name)
+    env.reset(seed=123)  # a different history: only (z, u) may matter
+    rows = np.flatnonzero(ep.episode[1:] == ep.episode[:-1])[::5]
+    assert len(rows) > 20
+    for i in rows:
+        z1 = mj.step_from(env, ep.z[i], ep.u[i])
+        # Not bit-exact where constraints act: the solver starts from the previous step's
+        # acceleration (warm start), which a state [q, v] does not carry, and stops at its
+        # tolerance; measured differences are below 1e-12, far under any model error.
+        np.testing.assert_allclose(z1, ep.z[i + 1], rtol=0, atol=1e-10)
+
+
+def test_collection_is_deterministic_given_the_seed():
+    a = mj.collect_episodes("SwimmerFull-v0", random_policy(2), seed=5, n_steps=50)
+    b = mj.collect_episodes("SwimmerFull-v0", random_policy(2), seed=5, n_steps=50)
+    c = mj.collect_episodes("SwimmerFull-v0", random_policy(2), seed=6, n_steps=50)
+    assert mj.content_hash(a.arrays()) == mj.content_hash(b.arrays())
+    assert mj.content_hash(a.arrays()) != mj.content_hash(c.arrays())
+
+
+@pytest.fixture(scope="module")
+def hopper_split():
+    # the random hopper falls within ~20-40 steps: many short episodes
+    ep = episodes("HopperFull-v0", n_steps=1500)
+    split = mj.split_episodes(ep, seed=0, n_train=200, n_test=5, test_len=10, test_fraction=0.2)
+    return ep, split
+
+
+def test_no_episode_in_both_train_and_test(hopper_split):
+    ep, split = hopper_split
+    assert len(np.unique(ep.episode)) >= 20
+    assert not set(split.train_episode) & set(split.test_episode)
+    assert split.train_z.shape == (200, 3, 12) and split.train_u.shape == (200, 3, 3)
+    assert split.test_z.shape == (5, 10, 12) and split.test_u.shape == (5, 10, 3)
+
+
+def test_windows_are_consecutive_steps_of_one_episode(hopper_split):
+    ep, split = hopper_split
+    for part in ("train", "test"):
+        zs, us = getattr(split, f"{part}_z"), getattr(split, f"{part}_u")
+        eps, starts = getattr(split, f"{part}_episode"), getattr(split, f"{part}_start")
+        for z, u, e, s in zip(zs, us, eps, starts, strict=True):
+            rows = np.flatnonzero(ep.episode == e)[s : s + len(z)]
+            assert len(rows) == len(z)
+            np.testing.assert_array_equal(ep.step[rows], s + np.arange(len(z)))
+            np.testing.assert_array_equal(ep.z[rows], z)
+            np.testing.assert_array_equal(ep.u[rows], u)
+
+
+def test_split_asks_no_more_windows_than_exist(hopper_split):
+    ep, _ = hopper_split
+    with pytest.raises(ValueError, match="test: .* available"):
+        mj.split_episodes(ep, seed=0, n_train=10, n_test=5, test_len=500)
+
+
+@pytest.mark.parametrize("name", ["HopperFull-v0", "SwimmerFull-v0"])
+def test_q_advances_with_the_mean_velocity_over_a_transition(name):
+    # RK4 tasks: over one transition of dt, (q1 - q0) / dt is the mean of v over the step; the
+    # trapezoid (v0 + v1) / 2 approximates it with an error of order dt^2 |dv/dt| variations
+    # (the reference's mujoco.py prints the same check as a least-squares fit). Measured
+    # relative residual: 0.02 (Hopper, dt 0.008) to 0.04 (Swimmer, dt 0.04) under random
+    # controls; 0.1 is the bound, while a velocity off by one step (one-sided rule) gives
+    # 0.25-0.30, so a mislabelled or shifted v fails.
+    t = mj.task(name)
+    ep = episodes(name)
+    q, v = ep.z[:, : t.nq], ep.z[:, t.nq :]
+    same = ep.episode[1:] == ep.episode[:-1]
+    fd = ((q[1:] - q[:-1]) / t.dt)[same]
+
+    def rel(vel):
+        return np.linalg.norm(fd - vel[same]) / np.linalg.norm(fd)
+
+    assert rel((v[1:] + v[:-1]) / 2) < 0.1
+    assert rel(v[:-1]) > 0.15 and rel(v[1:]) > 0.15
+
+
+def test_euler_task_advances_q_with_the_new_velocity_each_substep():
+    # HalfCheetah's XML uses MuJoCo's semi-implicit Euler: v' = v + h a, then q' = q + h v'
+    # exactly for its slide and hinge joints; the residual is round-off (|q| h / eps ~ 1e-16).
+    t = mj.task("HalfCheetahFull-v0")
+    assert t.integrator == "Euler"
+    ep = episodes(t.name)
+    env = mj.make_env(t.name)
+    m, d = env.unwrapped.model, env.unwrapped.data
+    assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
+    h = m.opt.timestep
+    for i in range(0, len(ep.z), 25):
+        mj.set_state(env, ep.z[i])
+        d.ctrl[:] = ep.u[i]
+        q0, v0 = d.qpos.copy(), d.qvel.copy()
+        mujoco.mj_step(m, d)
+        np.testing.assert_allclose(d.qpos - q0, h * d.qvel, rtol=0, atol=1e-12)
+        if np.abs(d.qvel - v0).max() > 1e-3:
+            assert np.abs(d.qpos - q0 - h * v0).max() > 1e-9  # the explicit rule would fail
+
+
+def test_content_hash_changes_when_data_change(hopper_split):
+    ep, split = hopper_split
+    h = split.sha256()
+    assert h == mj.content_hash(split.arrays()) and len(h) == 64
+    z = split.train_z.copy()
+    z[3, 1, 4] = np.nextafter(z[3, 1, 4], np.inf)
+    assert dataclasses.replace(split, train_z=z).sha256() != h
+    assert dataclasses.replace(split, test_start=split.test_start + 1).sha256() != h
+    other = mj.split_episodes(ep, seed=1, n_train=200, n_test=5, test_len=10, test_fraction=0.2)
+    assert other.sha256() != h
+
+
+def test_data_card(hopper_split):
+    ep, split = hopper_split
+    card = mj.data_card(
+        split, ep, policy="uniform random (test stand-in)", policy_budget="none", policy_return=None
+    )
+    assert card["task"] == "HopperFull-v0" and card["sha256"] == split.sha256()
+    assert card["sizes"]["train"] == [200, 3, 12] and card["sizes"]["test"] == [5, 10, 12]
+    assert "Hopper-v5" in card["source"] and card["collection"]["transitions"] == 1500
