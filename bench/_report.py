@@ -100,7 +100,32 @@ def _meta(results_dir: Path, runs: pd.DataFrame) -> list[str]:
         parts = [c for c in ("train_seconds", "compile_seconds", "rollout_seconds") if c in runs]
         total = float(np.nansum(runs[parts].to_numpy(float))) if parts else math.nan
         lines.append(f"- sum of per-run {' + '.join(parts)}: {total / 60:.1f} min")
+        lines += compute_lines(runs)
     return lines
+
+
+def compute_lines(runs: pd.DataFrame) -> list[str]:
+    """The compute the stored runs took, per device: each run's wall time (one worker each)
+    and, where the rows record it, the CPU time measured by the run's process."""
+    if "wall_seconds" not in runs or not len(runs):
+        return []
+    devices = (
+        runs["device"].fillna("unknown") if "device" in runs else pd.Series("unknown", runs.index)
+    )
+    out = []
+    for device, rows in runs.groupby(devices, sort=True):
+        wall = float(np.nansum(rows["wall_seconds"].to_numpy(float)))
+        n = f"{len(rows)} run" + ("s" if len(rows) != 1 else "")
+        line = f"- compute on {device}: {n}, {_hours(wall)} of run wall time"
+        if "cpu_seconds" in rows and rows["cpu_seconds"].notna().any():
+            cpu = rows["cpu_seconds"].dropna()
+            line += f", {_hours(float(cpu.sum()))} CPU measured on the {len(cpu)} that record it"
+        out.append(line)
+    return out
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.1f} min"
 
 
 def _status_counts(runs: pd.DataFrame) -> str:

@@ -6,7 +6,8 @@
 ``--check`` exits 1, naming the file, when the README no longer says what the reports say.
 Each row: the claim, the paper's sentence, the final verdict at both budgets, and the measured
 effect behind the paper-core verdict with its 90% interval; then the margin policy (quantity,
-margin, plausible band) and each budget's margin-dependent claims.
+margin, plausible band), each budget's margin-dependent claims and the compute the committed
+runs took (the reports' *compute on* lines; the GPU folder's beside them).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 BUDGETS = {"quick": "results/reference/quick", "paper-core": "results/reference/paper"}
+GPU = "results/reference/paper_gpu"  # the paper profile on a GPU, where one was lent
 BEGIN, END = "<!-- findings:begin -->", "<!-- findings:end -->"
 _HEADER = "| claim | statement | verdict |"
 PROTOCOL_HEADER = "| protocol | ours | the seed's |"  # bench.studies.paper._protocols.HEADER
@@ -163,7 +165,23 @@ def findings(root: Path = ROOT) -> str:
     dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())
     lines += ["", f"Margin-dependent inside the bands: {dependent}."]
     lines += _protocol_lines(reports)
+    lines += ["", compute_sentence(root)]
     return "\n".join(lines)
+
+
+def compute_lines(report: str) -> list[str]:
+    """The report's ``- compute on DEVICE: ...`` lines, without the bullet."""
+    return [x[2:] for x in report.splitlines() if x.startswith("- compute on ")]
+
+
+def compute_sentence(root: Path = ROOT) -> str:
+    """What the committed runs of paper-core (and of the GPU folder, if any) took."""
+    parts = []
+    for label, folder in (("paper-core", BUDGETS["paper-core"]), ("paper on GPU", GPU)):
+        path = root / folder / "REPORT.md"
+        if path.exists():
+            parts += [f"{label}, {x}" for x in compute_lines(path.read_text())]
+    return "Compute of the committed runs: " + ("; ".join(parts) or "not recorded") + "."
 
 
 def _split(text: str) -> tuple[str, str, str]:

@@ -76,3 +76,30 @@ def test_the_seeds_protocols_come_from_each_claims_section():
     assert got[9]["verdict"] == ("not run", "not run")
     lines = F._protocol_lines({"quick": report, "paper-core": "## Claims"})
     assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run |"
+
+
+def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
+    import numpy as np
+    import pandas as pd
+
+    from bench._report import compute_lines
+
+    runs = pd.DataFrame(
+        {
+            "device": ["cpu A", "cpu A", "cpu A", "gpu B"],
+            "wall_seconds": [3600.0, 1800.0, 1800.0, 90.0],
+            "cpu_seconds": [3000.0, np.nan, 2400.0, np.nan],
+        }
+    )
+    lines = compute_lines(runs)
+    assert lines == [
+        "- compute on cpu A: 3 runs, 2.0 h of run wall time, 1.5 h CPU measured on the 2 that "
+        "record it",
+        "- compute on gpu B: 1 run, 1.5 min of run wall time",
+    ]
+    for folder, text in ((findings.BUDGETS["paper-core"], lines[0]), (findings.GPU, lines[1])):
+        (tmp_path / folder).mkdir(parents=True)
+        (tmp_path / folder / "REPORT.md").write_text(f"# report\n\n{text}\n- other: 1\n")
+    sentence = findings.compute_sentence(tmp_path)
+    assert sentence.count("compute on") == 2 and "paper-core, compute on cpu A: 3 runs" in sentence
+    assert "paper on GPU, compute on gpu B: 1 run" in sentence
