@@ -91,10 +91,12 @@ def _relation(d: np.ndarray, m: float, alpha: float) -> str:
 
 
 def _ordering(arr: np.ndarray, labels: list[str], value: float, alpha: float):
-    """(status, kept, reversed, ordered under one loss only, ordered under neither) of every
-    pair of models at the error margin ``value`` (a factor) and level ``alpha``."""
+    """(status, kept, reversed, ordered under one loss only, ordered under neither, pairs) of
+    every pair of models at the error margin ``value`` (a factor) and level ``alpha``;
+    ``pairs`` maps (model i, model j) to (relation under L2, under L1, which of the four)."""
     m = math.log(value)
     kept, reversed_, changed, ties = [], [], [], []
+    pairs = {}
     for i in range(len(labels)):
         for j in range(i + 1, len(labels)):
             r1 = _relation(arr[:, 0, i] - arr[:, 0, j], m, alpha)
@@ -103,19 +105,24 @@ def _ordering(arr: np.ndarray, labels: list[str], value: float, alpha: float):
             ordered = {r for r in (r1, r2) if r in ("<", ">")}
             if ordered == {"<", ">"}:
                 reversed_.append(name)
+                kind = "reversed"
             elif ordered and r1 == r2:
                 kept.append(name)
+                kind = "kept"
             elif ordered:
                 changed.append(name)
+                kind = "one loss"
             else:  # no ordering under either loss: nothing for the loss to change
                 ties.append(name)
+                kind = "neither"
+            pairs[(labels[i], labels[j])] = (r2, r1, kind)
     if reversed_:
         status = "contradicts"
     elif kept and not changed:
         status = "holds"
     else:
         status = "undecided"
-    return status, kept, reversed_, changed, ties
+    return status, kept, reversed_, changed, ties, pairs
 
 
 def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
@@ -179,7 +186,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     dropped = [MODEL_LABELS.get(models[i], models[i]) for i in range(len(models)) if i not in keep]
     labels = [MODEL_LABELS.get(models[i], models[i]) for i in keep]
     sub = arr[:, :, keep]
-    status, kept, reversed_, changed, ties = _ordering(sub, labels, err.value, ALPHA)
+    status, kept, reversed_, changed, ties, pairs = _ordering(sub, labels, err.value, ALPHA)
     note = (
         f"kept: {'; '.join(kept) or '-'}; reversed: {'; '.join(reversed_) or '-'}; "
         f"ordered under one loss only: {'; '.join(changed) or '-'}; "
@@ -195,6 +202,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         math.nan,
         n,
         note if len(keep) >= 2 else f"fewer than two models learned; {note}",
+        extra={"pairs": pairs, "left out": dropped},
         kind="ordering",
         margin=err.label(),
         test="per pair and loss: one-sided t (order), TOST (tie)",
