@@ -20,13 +20,8 @@ import warnings
 from pathlib import Path
 
 from ._compare import OWN_DIR, reference_dir
-from .core._experiments import (
-    PROFILES,
-    RunConfig,
-    check_choice,
-    field_names,
-    profile_defaults,
-)
+from .core._config import RunConfig, check_choice, field_names
+from .core._experiments import PROFILES, profile_defaults
 from .core._studies import commands
 from .studies._options import (
     check_sweep_args,
@@ -223,7 +218,8 @@ def _cmd_run(args) -> int:
 
 def paper_list(given: str | None) -> tuple[str, ...]:
     """``--papers A,B`` as a tuple of :data:`bench.core._experiments.PAPERS` (None: all)."""
-    from .core._experiments import PAPERS, check_choice
+    from .core._config import check_choice
+    from .core._experiments import PAPERS
 
     if given is None:
         return PAPERS

@@ -19,8 +19,8 @@ import numpy as np
 
 import systems
 
+from ._config import RunConfig, check_choice
 from ._errors import one_line, storage_error
-from ._experiments import RunConfig, check_choice
 from ._params import cached_params_meta, params_dir
 
 MODES = ("auto", "on", "off")

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import RunConfig, expand
+from ...core._config import RunConfig
+from ...core._experiments import expand
 from ...core._studies import Study, register_study
 from ._common import SPRING_PAPER
 

@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import Experiment, RunConfig, expand
+from ...core._config import RunConfig
+from ...core._experiments import Experiment, expand
 from ...core._query import (
     option,
     select,
