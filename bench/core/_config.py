@@ -34,8 +34,8 @@ TRAIN_TARGETS = ("rollout", "derivative")
 # what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
 # measured trajectory read from a file, bench.core._measured)
 OBSERVATIONS = ("state", "pixels", "frames", "measured")
-OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._train.optimizer
-LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._train.lr_schedule
+OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
+LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
 # |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)
 # (Pendulum-v0's reset). PIXEL_DEFAULTS: the fields a pixel run leaves at their defaults.
@@ -109,7 +109,7 @@ class RunConfig:
     # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels) or
     # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames)
     observation: str = "state"
-    # the optimisation (bench.core._train.optimizer): "adamw" (the suite's: clipping, AdamW,
+    # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
     # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
     # no clipping); the learning-rate schedule from ``lr``; the weight decay (None: the
     # observation's default, 1e-4 for states and the HNN seed's 1e-5 for pixels)

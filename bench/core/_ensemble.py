@@ -135,7 +135,8 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     import jax
     import jax.numpy as jnp
 
-    from ._train import Batches, Snapshot, TrainResult, optimizer, prepare
+    from ._optim import optimizer
+    from ._train import Batches, Snapshot, TrainResult, prepare
 
     m_count = len(models)
     if not (m_count == len(datasets) == len(configs)):
