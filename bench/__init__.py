@@ -13,16 +13,9 @@ from . import (
     metrics,
     studies,  # registers the built-in studies
 )
+from .core._config import RunConfig
 from .core._ensemble import train_ensemble
-from .core._experiments import (
-    PROFILES,
-    Experiment,
-    RunConfig,
-    available,
-    expand,
-    get,
-    register,
-)
+from .core._experiments import PROFILES, Experiment, available, expand, get, register
 from .core._provenance import (
     PROVENANCE_COLUMNS,
     compare_provenance,

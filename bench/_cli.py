@@ -19,18 +19,13 @@ import sys
 import warnings
 from pathlib import Path
 
+from . import _adhoc
 from ._compare import OWN_DIR, reference_dir
-from .core._experiments import (
-    PROFILES,
-    RunConfig,
-    check_choice,
-    field_names,
-    profile_defaults,
-)
+from .core._config import check_choice
+from .core._experiments import PROFILES
 from .core._studies import commands
 from .studies._options import (
     check_sweep_args,
-    float_arg,
     int_arg,
     run_experiments,
     seed_list,
@@ -68,25 +63,8 @@ def _parser() -> argparse.ArgumentParser:
 
     sub.add_parser("list", help="systems, models, experiments, profiles")
 
-    r = sub.add_parser("run", help="one ad-hoc run: print its metrics and store its row")
-    r.add_argument("--system", required=True)
-    r.add_argument("--k", type=int_arg("k"), default=None)
-    r.add_argument("--friction", type=float_arg("friction"), default=0.0)
-    r.add_argument("--model", default="node")
-    r.add_argument("--seed", type=int_arg("seed"), default=0)
-    r.add_argument("--profile", default="smoke", help=f"one of {', '.join(PROFILES)}")
-    r.add_argument("--width", type=int_arg("width"))
-    r.add_argument("--depth", type=int_arg("depth"))
-    r.add_argument("--steps", type=int_arg("steps"))
-    r.add_argument("--lr", type=float_arg("lr"))
-    r.add_argument("--coordinates")
-    r.add_argument("--integrator", help="train and eval integrator")
-    r.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="FIELD=VALUE",
-        help="any other RunConfig field (JSON value), repeatable",
+    _adhoc.add_arguments(
+        sub.add_parser("run", help="one ad-hoc run: print its metrics and store its row")
     )
 
     s = sub.add_parser("sweep", help="run an experiment's runs not yet stored")
@@ -151,49 +129,6 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _config_from_args(args) -> RunConfig:
-    base, _ = profile_defaults(args.profile)  # ValueError naming the profiles
-    kw = dict(base)
-    kw.update(system=args.system, k=args.k, friction=args.friction, model=args.model)
-    kw["seed"] = args.seed
-    for name in ("width", "depth", "steps", "lr", "coordinates"):
-        if getattr(args, name) is not None:
-            kw[name] = getattr(args, name)
-    if args.integrator is not None:
-        kw["train_integrator"] = kw["eval_integrator"] = args.integrator
-    names = field_names()
-    for item in args.set:
-        if "=" not in item:
-            raise ValueError(f"--set expects FIELD=VALUE; got {item!r}")
-        key, value = item.split("=", 1)
-        check_choice("RunConfig field", key, names)
-        try:
-            kw[key] = json.loads(value)
-        except ValueError:
-            kw[key] = value
-    # ValueError for a bad value, system or dataset shape; the model for the scene and the
-    # integrators it allows are checked by the sweep, before it writes anything
-    return RunConfig(**kw)
-
-
-# The metrics ``run`` prints, in order (error and diverged_step only where set).
-_ROW_KEYS = (
-    "status error diverged_step rollout_error energy_violation mse valid_time floor "
-    "rollout_error_ref energy_pct_max_pe symplectic_error train_seconds compile_seconds "
-    "rollout_seconds nfe n_params config_hash"
-).split()
-
-
-def _print_row(row: dict) -> None:
-    for k in _ROW_KEYS:
-        v = row.get(k)
-        if v is None and k in ("error", "diverged_step"):
-            continue
-        if isinstance(v, float):
-            v = f"{v:.4g}"
-        print(f"{k:>18}: {v}")
-
-
 def _cmd_list(args) -> int:
     import models
     import systems
@@ -207,23 +142,10 @@ def _cmd_list(args) -> int:
     return 0
 
 
-def _cmd_run(args) -> int:
-    from .core._runner import sweep
-
-    cfg = _config_from_args(args)
-    row = sweep([cfg], args.results, experiment="adhoc", profile=args.profile, progress=False)
-    if not row:  # already stored: show the stored row
-        from .core._store import read_rows
-
-        row = [r for r in read_rows(args.results) if r["config_hash"] == cfg.config_hash]
-        print("(already stored; delete its row file to rerun)")
-    _print_row(row[0])
-    return 0 if row[0]["status"] != "failed" else 1
-
-
 def paper_list(given: str | None) -> tuple[str, ...]:
     """``--papers A,B`` as a tuple of :data:`bench.core._experiments.PAPERS` (None: all)."""
-    from .core._experiments import PAPERS, check_choice
+    from .core._config import check_choice
+    from .core._experiments import PAPERS
 
     if given is None:
         return PAPERS
@@ -492,7 +414,7 @@ def _main(argv) -> int:
     if args.verb == "list":
         return _cmd_list(args)
     if args.verb == "run":
-        return _cmd_run(args)
+        return _adhoc.run(args)
     if args.verb == "sweep":
         return _do_sweep(args, _sweep_names(args))
     verbs = {

@@ -176,7 +176,7 @@ def _cell_label(row: pd.Series) -> str:
 
 
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
-    from .core._experiments import RunConfig
+    from .core._config import RunConfig
     from .core._query import cell_key
     from .studies.paper.kit import scored
 

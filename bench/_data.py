@@ -29,7 +29,8 @@ from pathlib import Path
 from systems import MAX_STEPS
 
 from . import data_loader
-from .core._experiments import RunConfig, available, expand, profile_defaults
+from .core._config import RunConfig
+from .core._experiments import available, expand, profile_defaults
 
 DAMPED_PREFIX = "damped_"
 LOADER_NAME = "decon_data.py"
@@ -59,7 +60,7 @@ def select(system: str, profile: str, k=None, seeds=None) -> tuple[dict, list[st
     """(DatasetConfig -> the experiments using it, notes) for ``system`` at ``profile``."""
     import systems
 
-    from .core._experiments import check_choice
+    from .core._config import check_choice
 
     check_choice("system", system, systems.available())
     damped = system.startswith(DAMPED_PREFIX)
@@ -110,7 +111,7 @@ def export(
     """Write the datasets of ``system`` at ``profile`` to ``out``; returns the card."""
     import systems
 
-    from .core._experiments import check_choice
+    from .core._config import check_choice
     from .core._provenance import provenance
 
     check_choice("format", fmt, data_loader.FORMATS)

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .core._experiments import RunConfig, expand
+from .core._config import RunConfig
+from .core._experiments import expand
 from .core._query import cell_key, option, params_of, parse_pairs, variant
 from .studies._text import fmt as _fmt
 from .studies._text import md_escape as _md_escape

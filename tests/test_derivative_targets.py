@@ -11,7 +11,7 @@ import pytest
 
 import models
 import systems
-from bench.core._experiments import RunConfig, _hash
+from bench.core._config import RunConfig, _hash
 from bench.core._runnable import check_runnable
 from bench.core._train import TrainConfig, loss_fn, prepare, train
 

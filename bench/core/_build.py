@@ -10,7 +10,7 @@ import numpy as np
 
 import systems
 
-from ._experiments import RunConfig
+from ._config import RunConfig
 
 
 def build_run(config: RunConfig, cache_root: Path):

@@ -19,8 +19,8 @@ import numpy as np
 
 import systems
 
+from ._config import RunConfig, check_choice
 from ._errors import one_line, storage_error
-from ._experiments import RunConfig, check_choice
 from ._params import cached_params_meta, params_dir
 
 MODES = ("auto", "on", "off")
@@ -135,7 +135,8 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     import jax
     import jax.numpy as jnp
 
-    from ._train import Batches, Snapshot, TrainResult, optimizer, prepare
+    from ._optim import optimizer
+    from ._train import Batches, Snapshot, TrainResult, prepare
 
     m_count = len(models)
     if not (m_count == len(datasets) == len(configs)):

@@ -14,7 +14,7 @@ import systems
 
 from . import _metrics as M
 from ._atomic import write_json
-from ._experiments import RunConfig
+from ._config import RunConfig
 from ._fit import train_config
 from ._params import code_fingerprint
 

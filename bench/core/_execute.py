@@ -19,9 +19,9 @@ from pathlib import Path
 import systems
 
 from ._build import build_run
+from ._config import RunConfig
 from ._errors import storage_error
 from ._evaluate import evaluate_state
-from ._experiments import RunConfig
 from ._fit import train_cached
 from ._record import (
     artifact_dir,

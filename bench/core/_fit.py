@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._experiments import RunConfig
+from ._config import RunConfig
 from ._params import cached_training
 
 TRAIN_BLOCK = 100  # training steps per compiled block; checkpoints fall on block ends

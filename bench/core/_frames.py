@@ -19,7 +19,7 @@ import numpy as np
 
 import systems
 
-from ._experiments import PIXEL_SIZE, RunConfig
+from ._config import PIXEL_SIZE, RunConfig
 from ._params import cached_training, result_meta
 
 BLOCK = 100  # training steps per compiled block

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ._experiments import RunConfig
+from ._config import RunConfig
 from ._params import result_meta
 
 TRIVIAL = "at_rest"  # the trivial predictor of a field: dz/dt = 0, the state held

@@ -16,7 +16,7 @@ import numpy as np
 from systems import source_fingerprint
 
 from ._atomic import atomic_write, write_json
-from ._experiments import RunConfig
+from ._config import RunConfig
 
 # The packages whose source cached parameters and floors depend on (the models, the data's
 # physics, training and metrics). A cache entry records their fingerprint and is discarded when

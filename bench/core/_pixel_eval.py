@@ -10,8 +10,8 @@ import time
 import numpy as np
 
 from . import _metrics as M
+from ._config import RunConfig
 from ._evaluate import eval_integrator
-from ._experiments import RunConfig
 from ._pixels import LATENT_DT, _gather, _jit, _windows, seed_loss
 
 N_FRAMES_KEPT = 8  # decoded frames of the first test trajectory kept in the row (figure)

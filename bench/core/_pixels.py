@@ -14,7 +14,7 @@ import numpy as np
 
 import systems
 
-from ._experiments import PIXEL_SIZE, RunConfig
+from ._config import PIXEL_SIZE, RunConfig
 from ._params import cached_training, result_meta
 
 AE_LOSS, CC_LOSS, DYN_LOSS = 1.0, 1.0, 0.1  # the seed's weights (train.py)

@@ -148,7 +148,7 @@ def load_tables(results_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, str | No
 
 def cell_key(cfg) -> str:
     """Hash of a run's configuration without its seed: the cell it belongs to."""
-    from ._experiments import _hash
+    from ._config import _hash
 
     return _hash({a: b for a, b in cfg.to_dict().items() if a != "seed"})
 
@@ -163,7 +163,8 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
         return runs
     if profile is not None:
         try:
-            from ._experiments import RunConfig, expand, get
+            from ._config import RunConfig
+            from ._experiments import expand, get
 
             exp = get(name)
             if exp.profiles is not None and profile not in exp.profiles:

@@ -14,8 +14,8 @@ import numpy as np
 import systems
 
 from ._atomic import atomic_write, write_json
+from ._config import RunConfig
 from ._errors import one_line
-from ._experiments import RunConfig
 from ._provenance import provenance
 
 # Row fields of the nested tables (curves.parquet, checkpoints.parquet), not in metrics.json.

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import functools
 
-from ._experiments import INTEGRATORS, RunConfig, check_choice
+from ._config import INTEGRATORS, RunConfig, check_choice
 
 
 def check_runnable(cfg: RunConfig) -> RunConfig:

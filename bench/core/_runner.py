@@ -19,11 +19,11 @@ from pathlib import Path
 import systems
 
 from . import _store
+from ._config import RunConfig
 from ._env import bound_compiled_programs, cpu_count
 from ._errors import StorageError, WorkerDied, one_line, storage_error
 from ._evaluate import EVAL_MAX_STEPS, eval_integrator, to_velocity
 from ._execute import execute_run
-from ._experiments import RunConfig
 from ._record import artifact_dir, base_row
 
 __all__ = [
@@ -126,7 +126,7 @@ def sweep(
     run's seconds; the runs then start longest first, so that the workers finish together,
     one run of every cell before the cell's other seeds (:func:`_schedule`).
     """
-    from ._experiments import check_choice
+    from ._config import check_choice
     from ._runnable import check_runnable
 
     if isinstance(experiment, Mapping):

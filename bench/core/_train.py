@@ -3,7 +3,8 @@ time in one compiled ``lax.scan`` (:func:`train`). What is fitted is an *objecti
 :class:`StateObjective`, a dataset's chunks of states through the model's rollout (or, with
 ``target="derivative"``, the true time derivatives; the loss is :func:`loss_fn`); observations of
 another kind bring their own (pixels: ``bench.core._pixels.PixelObjective``). The compiled block
-is cached per configuration, objective and shapes: seeds and repeats compile once.
+is cached per configuration, objective and shapes: seeds and repeats compile once. The update
+rule and its learning-rate schedule: :mod:`bench.core._optim`.
 """
 
 from __future__ import annotations
@@ -21,11 +22,11 @@ import optax
 
 from models import Integrator, rollout_batch
 
+from ._optim import OPTIMIZERS, SCHEDULES, optimizer
+
 LOSSES = ("l2", "l1")
 DTYPES = ("float32", "float64")
 TARGETS = ("rollout", "derivative")  # what the loss compares (:func:`loss_fn`)
-OPTIMIZERS = ("adamw", "adam_l2")  # :func:`optimizer`
-SCHEDULES = ("cosine", "onecycle", "constant")  # :func:`lr_schedule`
 
 
 @dataclass(frozen=True)
@@ -52,8 +53,8 @@ class TrainConfig:
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
     checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
     target: str = "rollout"  # "rollout" or "derivative" (:func:`loss_fn`)
-    optimizer: str = "adamw"  # "adamw" or "adam_l2" (:func:`optimizer`)
-    schedule: str = "cosine"  # "cosine", "onecycle" or "constant" (:func:`lr_schedule`)
+    optimizer: str = "adamw"  # "adamw" or "adam_l2" (bench.core._optim.optimizer)
+    schedule: str = "cosine"  # "cosine", "onecycle" or "constant" (bench.core._optim)
 
     def __post_init__(self):
         for name in ("steps", "batch", "log_every", "steps_per_call"):
@@ -152,50 +153,6 @@ class TrainResult:
     steps_done: int
     flops_per_step: float = float("nan")
     snapshots: tuple = ()
-
-
-ONECYCLE_START, ONECYCLE_DIV = 0.2, 1e4  # the LNN seed notebook's OneCycleLR
-
-
-def lr_schedule(config: TrainConfig, lr=None):
-    """The learning rate at step s of N = ``config.steps``, from ``lr`` (default ``config.lr``):
-
-    - ``"cosine"``: lr (1 - (1 - a) (1 - cos(pi s / N)) / 2), a = ``config.lr_floor``;
-    - ``"onecycle"``: the LNN seed notebook's OneCycleLR, lr / 1e4 + (lr - lr / 1e4)
-      (1 - cos(2 pi u)) / 2 with u = 0.2 + 0.8 s / N: from 0.35 lr up to lr at s = 0.375 N and
-      down to lr / 1e4;
-    - ``"constant"``: lr.
-    """
-    lr = config.lr if lr is None else lr
-    if config.schedule == "constant":
-        return lambda step: lr * jnp.ones_like(step, dtype=jnp.result_type(float))
-    if config.schedule == "onecycle":
-        low, n = lr / ONECYCLE_DIV, config.steps
-
-        def onecycle(step):
-            u = ONECYCLE_START + (1.0 - ONECYCLE_START) * step / n
-            return low + (lr - low) * (1.0 - jnp.cos(2.0 * jnp.pi * u)) / 2.0
-
-        return onecycle
-    return optax.cosine_decay_schedule(lr, config.steps, alpha=config.lr_floor)
-
-
-def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
-    """The update rule, with the learning rate of :func:`lr_schedule`:
-
-    - ``"adamw"`` (the suite's): clip_by_global_norm(clip) -> AdamW(weight_decay, decoupled);
-    - ``"adam_l2"`` (the seeds': PyTorch's ``Adam(weight_decay=w)``, and the LNN notebook's
-      L2 term): Adam on g + w theta, no clipping.
-
-    ``lr`` overrides ``config.lr`` (a traced scalar in an ensemble).
-    """
-    schedule = lr_schedule(config, lr)
-    if config.optimizer == "adam_l2":
-        return optax.chain(optax.add_decayed_weights(config.weight_decay), optax.adam(schedule))
-    return optax.chain(
-        optax.clip_by_global_norm(config.clip),
-        optax.adamw(schedule, weight_decay=config.weight_decay),
-    )
 
 
 def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):

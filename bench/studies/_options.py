@@ -10,7 +10,8 @@ import argparse
 import math
 from pathlib import Path
 
-from ..core._experiments import PROFILES, check_choice
+from ..core._config import check_choice
+from ..core._experiments import PROFILES
 
 __all__ = [
     "check_sweep_args",

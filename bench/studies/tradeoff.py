@@ -16,7 +16,8 @@ import pandas as pd
 
 import models
 
-from ..core._experiments import PROFILES, Experiment, RunConfig, expand
+from ..core._config import RunConfig
+from ..core._experiments import PROFILES, Experiment, expand
 from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study

@@ -6,7 +6,8 @@ import math
 
 import models
 
-from ...core._experiments import Experiment, RunConfig, expand
+from ...core._config import RunConfig
+from ...core._experiments import Experiment, expand
 from ._common import (
     TRIVIAL_MODELS,
 )

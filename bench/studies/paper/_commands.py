@@ -3,7 +3,8 @@ diagnoses of the plain HNN, the double pendulum's LNNs and the pixel VIN."""
 
 from __future__ import annotations
 
-from ...core._experiments import PROFILES, check_choice
+from ...core._config import check_choice
+from ...core._experiments import PROFILES
 from ...core._studies import Command, register_command
 from .._options import (
     check_sweep_args,

@@ -6,7 +6,7 @@ from collections.abc import Mapping
 
 import models
 
-from ...core._experiments import RunConfig
+from ...core._config import RunConfig
 
 PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
 # the parameter-free reference predictors, in the registry's order

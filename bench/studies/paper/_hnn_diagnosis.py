@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import RunConfig, expand
+from ...core._config import RunConfig
+from ...core._experiments import expand
 from ...core._studies import Study, register_study
 from ._common import SPRING_PAPER
 
@@ -118,7 +119,8 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
 
     from ...core._build import build_run
     from ...core._fit import train_config
-    from ...core._train import Batches, compiled_block, optimizer, prepare
+    from ...core._optim import optimizer
+    from ...core._train import Batches, compiled_block, prepare
 
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {', '.join(VARIANTS)}; got {variant!r}")

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import RunConfig, expand, get, profile_defaults
+from ...core._config import RunConfig
+from ...core._experiments import expand, get, profile_defaults
 from .double_pendulum import DOUBLE_PENDULUM_ENERGY
 
 COND_LIMIT = 1e3

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._query import (
     select,
     variant,

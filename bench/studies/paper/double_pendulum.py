@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._studies import Study, register_study
 from ._common import (
     UNIT_DOUBLE_PENDULUM,

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._query import experiment_rows, pick_profile, select
 from ...core._store import load_runs
 from ...core._studies import Study, register_study

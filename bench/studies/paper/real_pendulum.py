@@ -16,7 +16,8 @@ import pandas as pd
 
 from systems import real_pendulum as R
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._query import experiment_rows, pick_profile
 from ...core._store import load_runs
 from ...core._studies import Study, register_study

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import policy

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from ...core._experiments import Experiment, RunConfig
+from ...core._config import RunConfig
+from ...core._experiments import Experiment
 from ...core._query import (
     select,
 )

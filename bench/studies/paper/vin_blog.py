@@ -26,6 +26,7 @@ from ...core._store import load_runs, read_rows
 from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import pixels, policy
+from ._pixel_rule import _pixels
 from ._protocols import HEADER as PROTOCOL_HEADER
 from ._protocols import learned_text
 from ._rules import CLAIM_TITLES
@@ -267,7 +268,7 @@ def _rows(results_dir) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     blog = _blog_rows(experiment_rows(runs, VIN_BLOG.name, profile))
-    ours = pixels._pixels(experiment_rows(runs, pixels.PIXEL_VIN.name, profile), ("vin", "resnet"))
+    ours = _pixels(experiment_rows(runs, pixels.PIXEL_VIN.name, profile), ("vin", "resnet"))
     return blog, ours, profile
 
 

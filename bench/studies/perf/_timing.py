@@ -19,7 +19,8 @@ import numpy as np  # noqa: E402
 
 from models import Integrator, rollout_batch  # noqa: E402
 
-from ...core._train import Batches, compiled_block, loss_fn, optimizer, train_block  # noqa: E402
+from ...core._optim import optimizer  # noqa: E402
+from ...core._train import Batches, compiled_block, loss_fn, train_block  # noqa: E402
 
 # ms per step and per 40 x 100-step rollout of the PyTorch reference (mean of its two runs).
 REFERENCE = {

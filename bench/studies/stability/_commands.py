@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...core._experiments import PROFILES, check_choice
+from ...core._config import check_choice
+from ...core._experiments import PROFILES
 from ...core._studies import Command, register_command
 from .._options import int_arg, usable_results
 

@@ -1,0 +1,449 @@
+"""A run as data: the frozen :class:`RunConfig`, its field vocabularies and its hashes.
+
+A :class:`RunConfig` is checked once, when it is built: every field's value, the system with
+its parameters and the dataset's shape (its ``systems.DatasetConfig``), and a pixel run's
+restrictions; each problem is a one-line ValueError naming what is allowed. What depends on the
+registered models (the model for the scene, the integrators its rollout accepts) is asked of
+the models by :func:`bench.core._runnable.check_runnable` before a sweep runs anything.
+
+A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
+of every field (fields added later, ``eval_checkpoints`` and ``train_target``, count only when
+they differ from their defaults, 0 and "rollout"),
+``train_hash`` the same over every field except the ``eval_*`` ones, so runs
+that differ only in how they are evaluated share one training. Experiment and profile names
+are not part of either hash: experiments that expand to the same run share it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import functools
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from models import METHODS as INTEGRATORS  # the one list of integrator names
+
+COORDINATES = ("velocity", "momentum")
+LOSSES = ("l1", "l2")
+DTYPES = ("float32", "float64")
+TRAIN_TARGETS = ("rollout", "derivative")
+# what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
+# measured trajectory read from a file, bench.core._measured)
+OBSERVATIONS = ("state", "pixels", "frames", "measured")
+OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
+LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
+# A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
+# |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)
+# (Pendulum-v0's reset). PIXEL_DEFAULTS: the fields a pixel run leaves at their defaults.
+PIXEL_SIZE = 28
+PIXEL_MAX_ANGLE = math.pi / 6
+PIXEL_MAX_SPEED = 1.0
+# The VIN seed's pixel task (observation "frames": single frames, each encoded to a position):
+# its starts |q0| in [pi/2, pi - 0.1] with either sign, qdot0 ~ U(-1, 1) (the authors' code,
+# steindoringi/Variational_Integrator_Networks, systems.py), far from rest so that the frames
+# go round most of the circle.
+FRAMES_ANGLES = (math.pi / 2, math.pi - 0.1)
+PIXEL_DEFAULTS = (
+    ("noise", 0.0),
+    ("random_args", False),
+    ("train_target", "rollout"),
+    ("friction", 0.0),
+)
+# A measured run's fixed fields (observation "measured": the states of the file, taken as
+# canonical, and their finite differences as targets)
+MEASURED_FIELDS = (
+    ("noise", 0.0),
+    ("random_args", False),
+    ("train_target", "derivative"),
+    ("coordinates", "momentum"),
+    ("friction", 0.0),
+    ("system_params", ()),
+    ("k", None),
+)
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """One training-and-evaluation run; flat so that every field is a column of the results."""
+
+    system: str
+    k: int | None = None
+    friction: float = 0.0
+    system_params: tuple = ()
+    model: str = "node"
+    dissipation: bool | None = None
+    model_options: tuple = ()
+    width: int = 256
+    depth: int = 2
+    activation: str | None = None  # None: each model's own default (softplus for lnn, else tanh)
+    coordinates: str = "velocity"
+    random_args: bool = False
+    noise: float = 0.0
+    n_generated: int = 1000
+    n_train: int = 800
+    chunk: int = 5
+    dt: float = 0.03
+    duration: float = 10.0  # seconds simulated per trajectory (chunks and test windows in it)
+    n_test: int = 200
+    test_chunks: int = 20
+    steps: int = 8000
+    batch: int = 200
+    lr: float = 5e-3
+    loss: str = "l2"
+    train_integrator: str = "rk4_38"
+    train_substeps: int = 1
+    eval_integrator: str = "rk4_38"
+    eval_substeps: int = 1
+    eval_rtol: float = 1e-6
+    eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._train.checkpoint_steps)
+    dtype: str = "float32"
+    seed: int = 0
+    # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the
+    # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
+    train_target: str = "rollout"
+    # what the models observe: "state" (z itself), "pixels" (rendered frames of the state,
+    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels) or
+    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames)
+    observation: str = "state"
+    # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
+    # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
+    # no clipping); the learning-rate schedule from ``lr``; the weight decay (None: the
+    # observation's default, 1e-4 for states and the HNN seed's 1e-5 for pixels)
+    optimizer: str = "adamw"
+    lr_schedule: str = "cosine"
+    weight_decay: float | None = None
+    # training states (with train_target "derivative"): () the dataset's chunks, or a box
+    # (q_low, q_high, qdot_low, qdot_high) from which fresh states are drawn uniformly for
+    # every batch, each coordinate alike (the LNN seed's notebook; bench.core._box)
+    train_box: tuple = ()
+
+    def __post_init__(self):
+        self._canonicalize()
+        self._check()
+
+    def _canonicalize(self) -> None:
+        """Canonical forms, so that equal runs hash equally however they were written (a list
+        read back from JSON is the tuple it was written from: the JSON, and so the hash, is
+        the same)."""
+        for name in ("system_params", "model_options"):
+            value = getattr(self, name)
+            if isinstance(value, Mapping):
+                value = tuple(value.items())
+            object.__setattr__(self, name, tuple(sorted((str(a), _frozen(b)) for a, b in value)))
+        if self.k is not None:
+            object.__setattr__(self, "k", _as_int(self.k, "k"))
+        for name in ("friction", "noise", "dt", "duration", "lr", "eval_rtol"):
+            object.__setattr__(self, name, _as_float(getattr(self, name), name))
+        for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
+            object.__setattr__(self, name, _as_int(getattr(self, name), name))
+        for name in ("test_chunks", "steps", "batch", "train_substeps", "eval_substeps", "seed"):
+            object.__setattr__(self, name, _as_int(getattr(self, name), name))
+        object.__setattr__(
+            self, "eval_checkpoints", _as_int(self.eval_checkpoints, "eval_checkpoints")
+        )
+        if self.weight_decay is not None:
+            object.__setattr__(self, "weight_decay", _as_float(self.weight_decay, "weight_decay"))
+        box = self.train_box
+        if isinstance(box, str):
+            box = json.loads(box)
+        if not isinstance(box, list | tuple):
+            raise ValueError(f"train_box must be () or 4 numbers; got {self.train_box!r}")
+        object.__setattr__(self, "train_box", tuple(_as_float(b, "train_box") for b in box))
+
+    @classmethod
+    def _candidate(cls, **fields) -> RunConfig:
+        """A combination of an experiment's axes in canonical form, not checked: the product
+        holds combinations that the experiment's ``include`` drops (a spring's initial state on
+        the chain), so :func:`expand` filters candidates and builds only those it keeps."""
+        for key in fields.keys() - _defaults():
+            check_choice("RunConfig field", key, field_names())
+        c = object.__new__(cls)
+        for name, default in _defaults().items():
+            value = fields.get(name, default)
+            if value is dataclasses.MISSING:
+                raise ValueError(f"a run needs its {name}")
+            object.__setattr__(c, name, value)
+        c._canonicalize()
+        return c
+
+    def _check(self) -> None:
+        """The one check of a configuration (from ``__post_init__``): one-line ValueErrors
+        naming what is allowed."""
+        if self.k is not None and self.k < 1:
+            raise ValueError(f"k must be an integer >= 1; got {self.k}")
+        for name in ("friction", "noise"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0; got {v}")
+        for name in ("dt", "duration", "lr", "eval_rtol"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a finite number > 0; got {v}")
+        for name in ("seed", "eval_checkpoints"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be an integer >= 0; got {getattr(self, name)}")
+        for name in ("width", "depth", "n_generated", "n_train", "chunk", "n_test"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1; got {getattr(self, name)}")
+        for name in ("test_chunks", "steps", "batch", "train_substeps", "eval_substeps"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1; got {getattr(self, name)}")
+        if self.n_train > self.n_generated:
+            raise ValueError(
+                f"n_train ({self.n_train}) must be <= n_generated ({self.n_generated})"
+            )
+        check_choice("train_integrator", self.train_integrator, INTEGRATORS)
+        check_choice("eval_integrator", self.eval_integrator, INTEGRATORS)
+        check_choice("coordinates", self.coordinates, COORDINATES)
+        check_choice("loss", self.loss, LOSSES)
+        check_choice("dtype", self.dtype, DTYPES)
+        check_choice("train_target", self.train_target, TRAIN_TARGETS)
+        check_choice("observation", self.observation, OBSERVATIONS)
+        check_choice("optimizer", self.optimizer, OPTIMIZERS)
+        check_choice("lr_schedule", self.lr_schedule, LR_SCHEDULES)
+        wd = self.weight_decay
+        if wd is not None and not (math.isfinite(wd) and wd >= 0):
+            raise ValueError(f"weight_decay must be None or a finite number >= 0; got {wd}")
+        box = self.train_box
+        if box:
+            if len(box) != 4 or not all(math.isfinite(b) for b in box):
+                raise ValueError(
+                    f"train_box must be () or 4 finite numbers (q_low, q_high, qdot_low, "
+                    f"qdot_high); got {box}"
+                )
+            if not (box[0] < box[1] and box[2] < box[3]):
+                raise ValueError(
+                    f"train_box needs q_low < q_high and qdot_low < qdot_high; got {box}"
+                )
+            if self.train_target != "derivative" or self.coordinates != "velocity":
+                raise ValueError(
+                    "train_box needs train_target 'derivative' and coordinates 'velocity' "
+                    f"(states drawn in (q, qdot)); got {self.train_target!r}, {self.coordinates!r}"
+                )
+            if self.noise or self.random_args or self.observation != "state":
+                raise ValueError(
+                    "train_box supports no noise, random_args or pixels; allowed: their defaults"
+                )
+        if self.observation in ("pixels", "frames"):
+            self._check_pixels()
+        elif self.observation == "measured":
+            self._check_measured()
+        else:  # the system, its parameters and the dataset's shape (systems checks them)
+            object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
+
+    def _check_pixels(self) -> None:
+        import systems
+
+        if self.chunk < 3:
+            raise ValueError(
+                f"pixel runs need chunk >= 3 frames (two observations); got chunk={self.chunk}"
+            )
+        for name, default in PIXEL_DEFAULTS:
+            if getattr(self, name) != default:
+                what = f"{name} {getattr(self, name)!r}"
+                raise ValueError(f"pixel runs support no {what}; allowed: {default!r}")
+        system = _system(self.system, tuple(sorted(self.system_kwargs().items())))
+        systems.reach(system)  # the renderable systems (ValueError naming them)
+        self.pixel_dataset_config()
+
+    def _check_measured(self) -> None:
+        from systems import real_pendulum
+
+        allowed = real_pendulum.DATASETS
+        check_choice("measured dataset (system of a measured run)", self.system, allowed)
+        for name, value in MEASURED_FIELDS:
+            if getattr(self, name) != value:
+                what = f"{name} {getattr(self, name)!r}"
+                raise ValueError(f"measured runs support no {what}; allowed: {value!r}")
+
+    def to_dict(self) -> dict:
+        """Every field, JSON-ready (tuples of pairs become lists)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping) -> RunConfig:
+        names = field_names()
+        kw = {a: b for a, b in d.items() if a in names}
+        for name in ("system_params", "model_options"):
+            if name in kw:
+                v = kw[name]
+                if isinstance(v, str):
+                    v = json.loads(v)
+                kw[name] = tuple(tuple(p) for p in v)
+        for f in dataclasses.fields(cls):  # optional fields come back from tables as NaN
+            if f.default is None and f.name in kw and _is_missing(kw[f.name]):
+                kw[f.name] = None
+            # a field added later is empty in the rows written before it: its default
+            elif f.name in _NEW_FIELDS and f.name in kw and _is_missing(kw[f.name]):
+                kw[f.name] = _NEW_FIELDS[f.name]
+        if "dissipation" in kw and kw["dissipation"] is not None:
+            kw["dissipation"] = bool(kw["dissipation"])
+        return cls(**kw)
+
+    def system_kwargs(self) -> dict:
+        """Keyword arguments of ``systems.make`` for this run."""
+        kw = dict(self.system_params)
+        if self.k is not None:
+            kw["k"] = self.k
+        if self.friction:
+            kw["friction"] = self.friction
+        return kw
+
+    def _dataset_fields(self) -> tuple:
+        return (
+            ("system", self.system),
+            ("system_params", tuple(sorted(self.system_kwargs().items()))),
+            ("n_generated", self.n_generated),
+            ("n_train", self.n_train),
+            ("chunk", self.chunk),
+            ("dt", self.dt),
+            ("duration", self.duration),
+            ("n_test", self.n_test),
+            ("test_chunks", self.test_chunks),
+            ("noise", self.noise),
+            ("coordinates", self.coordinates),
+            ("random_args", self.random_args),
+            ("seed", self.seed),
+        )
+
+    def dataset_config(self):
+        """The ``systems.DatasetConfig`` of this run's training and test data (a state run's
+        was built, and so checked, with the run)."""
+        built = self.__dict__.get("_dataset")
+        return built if built is not None else _dataset_config(self._dataset_fields())
+
+    def pixel_dataset_config(self):
+        """A pixel run's ``systems.PixelDatasetConfig``: ``n_train`` training and ``n_test``
+        test trajectories from the :data:`PIXEL_MAX_ANGLE` / :data:`PIXEL_MAX_SPEED` starts
+        (observation "frames": |q0| in :data:`FRAMES_ANGLES`), frames of :data:`PIXEL_SIZE`
+        pixels ``dt`` apart; a training trajectory spans ``duration`` (``round(duration /
+        dt)`` frames), a test trajectory ``chunk * test_chunks`` frames."""
+        import systems
+
+        angles = FRAMES_ANGLES if self.observation == "frames" else (0.0, PIXEL_MAX_ANGLE)
+        return systems.PixelDatasetConfig(
+            system=self.system,
+            system_params=tuple(sorted(self.system_kwargs().items())),
+            size=PIXEL_SIZE,
+            n_train=self.n_train,
+            n_test=self.n_test,
+            train_points=max(self.chunk, round(self.duration / self.dt)),
+            test_points=self.chunk * self.test_chunks,
+            dt=self.dt,
+            max_angle=angles[1],
+            max_speed=PIXEL_MAX_SPEED,
+            seed=self.seed,
+            min_angle=angles[0],
+        )
+
+    def _identity(self) -> dict:
+        """The fields a hash covers: every one, except those of :data:`_NEW_FIELDS` left at
+        their default (fields added later, so that older runs keep their hashes)."""
+        return {a: b for a, b in self.to_dict().items() if _NEW_FIELDS.get(a, _NO) != b}
+
+    @property
+    def config_hash(self) -> str:
+        """sha256 (16 hex digits) of the canonical JSON of every field (see ``_identity``)."""
+        return _hash(self._identity())
+
+    @property
+    def train_hash(self) -> str:
+        """sha256 (16 hex digits) of every field except the ``eval_*`` ones."""
+        return _hash({a: b for a, b in self._identity().items() if not a.startswith("eval_")})
+
+
+_NO = object()
+# Fields added after results were stored, with the default that leaves them out of the hashes.
+_NEW_FIELDS = {
+    "eval_checkpoints": 0,
+    "train_target": "rollout",
+    "duration": 10.0,
+    "observation": "state",
+    "optimizer": "adamw",
+    "lr_schedule": "cosine",
+    "weight_decay": None,
+    "train_box": (),
+}
+
+
+@functools.cache
+def _defaults() -> dict:
+    """RunConfig field -> its default (``dataclasses.MISSING`` for ``system``)."""
+    return {f.name: f.default for f in dataclasses.fields(RunConfig)}
+
+
+@functools.lru_cache(maxsize=4096)
+def _dataset_config(fields: tuple):
+    """``systems.DatasetConfig(**fields)``, built once per distinct dataset in a process."""
+    import systems
+
+    return systems.DatasetConfig(**dict(fields))
+
+
+@functools.lru_cache(maxsize=256)
+def _system(name: str, params: tuple):
+    """``systems.make(name, **params)``, to check a pixel run's system (and ask it whether it
+    renders); jax's float32 warning is moot here, where only the parameters are checked."""
+    import warnings
+
+    import systems
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Explicitly requested dtype", UserWarning)
+        return systems.make(name, **dict(params))
+
+
+def _frozen(v):
+    """Lists (as JSON gives them back) as tuples, so that a configuration is hashable."""
+    return tuple(_frozen(x) for x in v) if isinstance(v, list | tuple) else v
+
+
+def _is_missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+def _as_int(v, name):
+    if isinstance(v, bool):
+        raise ValueError(f"{name} must be an integer; got {v!r}")
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer; got {v!r}") from None
+    if not f.is_integer():
+        raise ValueError(f"{name} must be an integer; got {v!r}")
+    return int(f)
+
+
+def _as_float(v, name):
+    if isinstance(v, bool):
+        raise ValueError(f"{name} must be a number; got {v!r}")
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number; got {v!r}") from None
+
+
+def _hash(d: Mapping) -> str:
+    text = json.dumps(d, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def field_names() -> tuple[str, ...]:
+    """The RunConfig field names (the columns every run row carries)."""
+    return tuple(f.name for f in dataclasses.fields(RunConfig))
+
+
+def check_choice(what: str, value, allowed: Sequence[str]) -> None:
+    """Raise ``ValueError("unknown <what> 'x'; allowed: ... (did you mean 'y'?)")``."""
+    allowed = list(allowed)
+    if value in allowed:
+        return
+    msg = f"unknown {what} {value!r}; allowed: {', '.join(map(str, allowed))}"
+    close = difflib.get_close_matches(str(value), [str(a) for a in allowed], n=1)
+    if close:
+        msg += f" (did you mean {close[0]!r}?)"
+    raise ValueError(msg)
