@@ -1,24 +1,21 @@
 """The optimisation of a training run: the update rule (:func:`optimizer`: the suite's AdamW with
 clipping, or the seeds' Adam with an L2 term) and its learning-rate schedule
-(:func:`lr_schedule`), both read off a :class:`~bench.core._train.TrainConfig`.
+(:func:`lr_schedule`), both read off a training configuration ``config`` (any object with
+the fields of :class:`~bench.core._train.TrainConfig` they name: steps, lr, lr_floor, schedule,
+optimizer, weight_decay, clip).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import jax.numpy as jnp
 import optax
-
-if TYPE_CHECKING:
-    from ._train import TrainConfig
 
 OPTIMIZERS = ("adamw", "adam_l2")  # :func:`optimizer`
 SCHEDULES = ("cosine", "onecycle", "constant")  # :func:`lr_schedule`
 ONECYCLE_START, ONECYCLE_DIV = 0.2, 1e4  # the LNN seed notebook's OneCycleLR
 
 
-def lr_schedule(config: TrainConfig, lr=None):
+def lr_schedule(config, lr=None):
     """The learning rate at step s of N = ``config.steps``, from ``lr`` (default ``config.lr``):
 
     - ``"cosine"``: lr (1 - (1 - a) (1 - cos(pi s / N)) / 2), a = ``config.lr_floor``;
@@ -41,7 +38,7 @@ def lr_schedule(config: TrainConfig, lr=None):
     return optax.cosine_decay_schedule(lr, config.steps, alpha=config.lr_floor)
 
 
-def optimizer(config: TrainConfig, lr=None) -> optax.GradientTransformation:
+def optimizer(config, lr=None) -> optax.GradientTransformation:
     """The update rule, with the learning rate of :func:`lr_schedule`:
 
     - ``"adamw"`` (the suite's): clip_by_global_norm(clip) -> AdamW(weight_decay, decoupled);
