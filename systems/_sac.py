@@ -64,15 +64,33 @@ class Batch(NamedTuple):
     terminated: jax.Array  # (B,) 1.0 where the episode ended in a terminal state
 
 
+class MLP(eqx.Module):
+    """x -> W_n relu(... relu(W_1 x + b_1) ...) + b_n, float32; the activation is fixed in
+    code, so the module holds arrays only and plain ``jax.jit`` takes it (cheap to call)."""
+
+    layers: tuple[eqx.nn.Linear, ...]
+
+    def __init__(self, n_in: int, n_out: int, hidden: int, depth: int, *, key):
+        sizes = [n_in] + [hidden] * depth + [n_out]
+        keys = jax.random.split(key, depth + 1)
+        self.layers = tuple(
+            eqx.nn.Linear(a, b, dtype=jnp.float32, key=k)
+            for a, b, k in zip(sizes[:-1], sizes[1:], keys, strict=True)
+        )
+
+    def __call__(self, x):
+        for layer in self.layers[:-1]:
+            x = jax.nn.relu(layer(x))
+        return self.layers[-1](x)
+
+
 class Actor(eqx.Module):
     """s -> (mu, log sigma) of the Gaussian before the tanh squashing."""
 
-    mlp: eqx.nn.MLP
+    mlp: MLP
 
     def __init__(self, n_obs: int, n_act: int, hidden: int, depth: int, *, key):
-        self.mlp = eqx.nn.MLP(
-            n_obs, 2 * n_act, hidden, depth, activation=jax.nn.relu, dtype=jnp.float32, key=key
-        )
+        self.mlp = MLP(n_obs, 2 * n_act, hidden, depth, key=key)
 
     def __call__(self, obs):
         mean, log_std = jnp.split(self.mlp(obs), 2)
@@ -82,19 +100,17 @@ class Actor(eqx.Module):
 class Critic(eqx.Module):
     """Twin Q functions (s, a) -> (Q_1, Q_2), their weights stacked on a leading axis."""
 
-    mlps: eqx.nn.MLP
+    mlps: MLP
 
     def __init__(self, n_obs: int, n_act: int, hidden: int, depth: int, *, key):
         def make(k):
-            return eqx.nn.MLP(
-                n_obs + n_act, "scalar", hidden, depth, jax.nn.relu, dtype=jnp.float32, key=k
-            )
+            return MLP(n_obs + n_act, 1, hidden, depth, key=k)
 
         self.mlps = eqx.filter_vmap(make)(jax.random.split(key, 2))
 
     def __call__(self, obs, action):
         x = jnp.concatenate([obs, action])
-        return eqx.filter_vmap(lambda m: m(x))(self.mlps)
+        return jax.vmap(lambda m: m(x)[0])(self.mlps)
 
 
 class SACState(eqx.Module):
@@ -114,7 +130,7 @@ def _adam(config: SACConfig):
     return optax.adam(config.lr)
 
 
-@eqx.filter_jit
+@eqx.filter_jit  # n_obs, n_act and config static
 def init_state(n_obs: int, n_act: int, config: SACConfig, *, key) -> SACState:
     k_actor, k_critic, key = jax.random.split(key, 3)
     actor = Actor(n_obs, n_act, config.hidden, config.depth, key=k_actor)
@@ -223,19 +239,22 @@ def update(state: SACState, batch: Batch, config: SACConfig) -> tuple[SACState, 
     return new, info
 
 
-update_step = eqx.filter_jit(update)
+# The agent state is arrays only: plain jax.jit (its C++ dispatch) instead of filter_jit's
+# partitioning on every call, measured ~0.8 ms of Python per call on this pytree.
+update_step = jax.jit(update, static_argnums=2)
 
 
-@eqx.filter_jit
-def sample_action(state: SACState, obs) -> tuple[SACState, jax.Array]:
-    """An exploring action a ~ pi(.|s) for one observation; the key advances."""
-    key, k = jax.random.split(state.key)
-    noise = jax.random.normal(k, (1, state.actor.mlp.out_size // 2), jnp.float32)
-    a, _ = sample(state.actor, obs[None], noise)
-    return eqx.tree_at(lambda s: s.key, state, key), a[0]
+@jax.jit
+def sample_action(actor: Actor, obs, key, step) -> jax.Array:
+    """An exploring action a ~ pi(.|s) for one observation, its noise from
+    fold_in(key, step): a function of the step, so a resumed run draws the same."""
+    noise = jax.random.normal(
+        jax.random.fold_in(key, step), (1, actor.mlp.layers[-1].out_features // 2), jnp.float32
+    )
+    return sample(actor, obs[None], noise)[0][0]
 
 
-@eqx.filter_jit
+@jax.jit
 def greedy_action(actor: Actor, obs) -> jax.Array:
     """The deterministic action tanh(mu(s)) of the evaluations."""
     return jnp.tanh(actor(obs)[0])
@@ -376,7 +395,8 @@ def train_sac(
     eval_seeds = 10_000 * (seed + 1) + np.arange(config.eval_episodes)
     conf = _config_json(name, seed, config)
 
-    state = init_state(n_obs, n_act, config, key=jax.random.PRNGKey(seed))
+    key, act_key = jax.random.split(jax.random.PRNGKey(seed))
+    state = init_state(n_obs, n_act, config, key=key)
     rng = np.random.default_rng(seed)
     rec = mj.Recorder(name, steps, seed=seed, limit=limit)
     replay = {
@@ -419,7 +439,7 @@ def train_sac(
         if i < config.warmup:
             a = rng.uniform(-1.0, 1.0, n_act)
         else:
-            state, a = sample_action(state, jnp.asarray(obs, jnp.float32))
+            a = sample_action(state.actor, jnp.asarray(obs, jnp.float32), act_key, np.uint32(i))
             a = np.asarray(a, np.float64)
         u = np.clip(low + (a + 1.0) * (high - low) / 2, low, high)
         next_obs, r, terminated, _, _ = env.step(u)

@@ -4,6 +4,7 @@ learning check on gymnasium's Pendulum. Tiny networks and a few hundred steps.""
 
 import dataclasses
 import functools
+import json
 import logging
 import os
 import signal
@@ -37,11 +38,13 @@ def hopper_run(seed=0, steps=STEPS):
     return sac.train_policy("HopperFull-v0", steps, seed, config=TINY)
 
 
-def tiny_state(n_obs=3, n_act=2, config=TINY, seed=0):
+# The hopper's sizes (12 observations, 3 controls) and TINY's batch, so that the unit tests and
+# the tiny trainings share one compiled update.
+def tiny_state(n_obs=12, n_act=3, config=TINY, seed=0):
     return sac.init_state(n_obs, n_act, config, key=jax.random.PRNGKey(seed))
 
 
-def fixed_batch(n_obs=3, n_act=2, b=16, seed=1):
+def fixed_batch(n_obs=12, n_act=3, b=TINY.batch, seed=1):
     r = np.random.default_rng(seed)
     return sac.Batch(
         obs=r.normal(size=(b, n_obs)).astype(np.float32),
@@ -98,7 +101,7 @@ def test_critic_target_by_hand_terminated_rows_do_not_bootstrap():
     want = []
     for i in range(len(batch.reward)):
         out = mlp_by_hand(state.actor.mlp, batch.next_obs[i])
-        mean, log_std = out[:2], np.clip(out[2:], sac.LOG_STD_MIN, sac.LOG_STD_MAX)
+        mean, log_std = out[:3], np.clip(out[3:], sac.LOG_STD_MIN, sac.LOG_STD_MAX)
         x = mean + np.exp(log_std) * noise[i]
         a = np.tanh(x)
         logp = (stats.norm.logpdf(x, mean, np.exp(log_std)) + 2 * np.log(np.cosh(x))).sum()
@@ -130,7 +133,7 @@ def test_recorded_truncations_are_not_terminations():
 
 def test_polyak_averaging():
     state = tiny_state()
-    online = sac.Critic(3, 2, 32, 2, key=jax.random.PRNGKey(9))
+    online = sac.Critic(12, 3, 32, 2, key=jax.random.PRNGKey(9))
     mixed = sac.polyak(state.target, online, 0.25)
     for m, t, o in zip(
         *(jax.tree.leaves(eqx.filter(c, eqx.is_array)) for c in (mixed, state.target, online)),
@@ -148,16 +151,16 @@ def test_polyak_averaging():
 
 @pytest.mark.parametrize(("std_bias", "sign"), [(0.0, -1), (-6.0, 1)])
 def test_temperature_moves_toward_the_target_entropy(std_bias, sign):
-    # H* = -2: the initial policy (sigma ~ 1, entropy ~ +1) lies above it and alpha falls; with
-    # log sigma shifted to -6 (entropy ~ -9) it lies below and alpha rises
+    # H* = -3: the initial policy (sigma ~ 1, entropy ~ +2) lies above it and alpha falls; with
+    # log sigma shifted to -6 (entropy ~ -14) it lies below and alpha rises
     state, batch = tiny_state(), fixed_batch()
     last = state.actor.mlp.layers[-1]
-    shift = jnp.concatenate([jnp.zeros(2), jnp.full(2, std_bias)]).astype(last.bias.dtype)
+    shift = jnp.concatenate([jnp.zeros(3), jnp.full(3, std_bias)]).astype(last.bias.dtype)
     state = eqx.tree_at(lambda s: s.actor.mlp.layers[-1].bias, state, last.bias + shift)
     alphas = [1.0]
     for _ in range(5):
         state, info = sac.update_step(state, batch, TINY)
-        assert sign * (float(info["entropy"]) - (-2)) < 0
+        assert sign * (float(info["entropy"]) - (-3)) < 0
         alphas.append(float(np.exp(state.log_alpha)))
     assert np.all(sign * np.diff(alphas) > 0)
 
@@ -212,21 +215,22 @@ def test_resume_after_an_interruption_equals_an_uninterrupted_run(tmp_path):
 
 
 _KILLED_SCRIPT = """
-import sys, dataclasses
+import json, sys
 from systems import _sac as sac
-config = sac.SACConfig(hidden=32, batch=32, warmup=100, eval_every=50, eval_episodes=1,
-                       checkpoint_every=100)
+config = sac.SACConfig(**json.loads(sys.argv[3]))
 sac.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=config)
 """
 
 
 @pytest.mark.slow
 def test_resume_after_kill_9_equals_an_uninterrupted_run(tmp_path):
-    steps = 3000
+    steps, config = 3000, json.dumps(dataclasses.asdict(TINY))
     root = Path(__file__).resolve().parents[1]
     env = {**os.environ, "PYTHONPATH": str(root)}
     proc = subprocess.Popen(
-        [sys.executable, "-c", _KILLED_SCRIPT, str(tmp_path), str(steps)], env=env, cwd=root
+        [sys.executable, "-c", _KILLED_SCRIPT, str(tmp_path), str(steps), config],
+        env=env,
+        cwd=root,
     )
     try:
         deadline = time.monotonic() + 120
@@ -290,9 +294,9 @@ def _pendulum_run(steps, seed, config):
 
 @pytest.mark.slow
 def test_sac_learns_pendulum():
-    # the random policy scores about -1200 to -1500 on Pendulum; SAC reaches about -200 within
-    # a few thousand steps
+    # the untrained policy scores about -1100 on Pendulum, an upright swing about -150; measured
+    # with these settings: -1115 at 1000 steps, -125 from 7000 on (about 50 s on a busy core)
     config = sac.SACConfig(hidden=64, warmup=1000, eval_every=1000, eval_episodes=5)
-    run = _pendulum_run(5000, 0, config)
+    run = _pendulum_run(8000, 0, config)
     assert run.eval_returns[0] < -900
-    assert run.eval_returns[-1] > -400
+    assert run.eval_returns[-1] > -300
