@@ -340,7 +340,12 @@ def save_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
 
 
 def _config_json(name: str, seed: int, config: SACConfig) -> str:
-    return json.dumps({"name": name, "seed": seed, **dataclasses.asdict(config)}, sort_keys=True)
+    # The networks are float32 either way, but under jax's 64-bit mode some constants (log 2 pi,
+    # Adam's bias corrections) are rounded from float64: the last bits, and so the run, differ.
+    x64 = bool(jax.config.jax_enable_x64)
+    return json.dumps(
+        {"name": name, "seed": seed, "jax_x64": x64, **dataclasses.asdict(config)}, sort_keys=True
+    )
 
 
 def _state_arrays(state: SACState) -> dict[str, np.ndarray]:
@@ -382,7 +387,8 @@ def train_sac(
     """Train SAC for ``steps`` env steps, one update per step once ``config.warmup`` uniform
     random steps are in the buffer, recording every transition (``state_fn``'s state before
     the control, the control in the env's range, reward, episode, termination/truncation).
-    The agent observes gymnasium's observation. With ``checkpoint`` (a file), the run resumes
+    The agent observes gymnasium's observation. Reproducible given the seed and jax's 64-bit
+    mode (see ``_config_json``). With ``checkpoint`` (a file), the run resumes
     from it when present and saves it atomically every ``config.checkpoint_every`` steps and
     at the end. ``progress(step, info)`` is called at each evaluation."""
     if steps < 1:
@@ -531,6 +537,7 @@ def data_card(run: SACRun, split: mj.Split) -> dict:
         "final_eval_return": card["policy_return"],
         "eval_episodes": c.eval_episodes,
         "config": dataclasses.asdict(c),
+        "jax_x64": bool(jax.config.jax_enable_x64),
         "versions": {
             "jax": jax.__version__,
             "equinox": equinox.__version__,

@@ -216,6 +216,8 @@ def test_resume_after_an_interruption_equals_an_uninterrupted_run(tmp_path):
 
 _KILLED_SCRIPT = """
 import json, sys
+import jax
+jax.config.update("jax_enable_x64", sys.argv[4] == "True")  # as in the test's process
 from systems import _sac as sac
 config = sac.SACConfig(**json.loads(sys.argv[3]))
 sac.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=config)
@@ -225,10 +227,11 @@ sac.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=confi
 @pytest.mark.slow
 def test_resume_after_kill_9_equals_an_uninterrupted_run(tmp_path):
     steps, config = 3000, json.dumps(dataclasses.asdict(TINY))
+    x64 = str(bool(jax.config.jax_enable_x64))
     root = Path(__file__).resolve().parents[1]
     env = {**os.environ, "PYTHONPATH": str(root)}
     proc = subprocess.Popen(
-        [sys.executable, "-c", _KILLED_SCRIPT, str(tmp_path), str(steps), config],
+        [sys.executable, "-c", _KILLED_SCRIPT, str(tmp_path), str(steps), config, x64],
         env=env,
         cwd=root,
     )
