@@ -413,6 +413,9 @@ def train_sac(
     evals: list[tuple[int, float]] = []
     obs, _ = env.reset(seed=seed)
 
+    if checkpoint is not None:  # a kill during a save leaves its temporary file behind
+        for tmp in Path(checkpoint).parent.glob(f"{Path(checkpoint).stem}*.tmp"):
+            tmp.unlink(missing_ok=True)
     if checkpoint is not None and Path(checkpoint).exists():
         with np.load(checkpoint) as f:
             ck = {k: f[k] for k in f.files}

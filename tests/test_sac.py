@@ -205,6 +205,7 @@ def test_resume_after_an_interruption_equals_an_uninterrupted_run(tmp_path):
     (ck,) = tmp_path.glob("*.npz")
     with np.load(ck) as f:
         assert int(f["rec_counters"][0]) == 200
+    (tmp_path / f"{ck.stem}half-written.tmp").write_bytes(b"PK")  # a save cut by the kill
     resumed = sac.train_policy("HopperFull-v0", STEPS, 0, tmp_path, config=TINY)
     _assert_same_run(resumed, hopper_run())
     assert not list(tmp_path.glob("*.tmp"))
@@ -298,8 +299,9 @@ def _pendulum_run(steps, seed, config):
 @pytest.mark.slow
 def test_sac_learns_pendulum():
     # the untrained policy scores about -1100 on Pendulum, an upright swing about -150; measured
-    # with these settings: -1115 at 1000 steps, -125 from 7000 on (about 50 s on a busy core)
+    # with these settings (64-bit mode as in this suite): -1156 at 1000 steps, -505 at 6000,
+    # -126 at 7000, -99 at 10000 (x32 mode: -308 at 7000, -125 at 8000); ~35 s on a busy core
     config = sac.SACConfig(hidden=64, warmup=1000, eval_every=1000, eval_episodes=5)
-    run = _pendulum_run(8000, 0, config)
+    run = _pendulum_run(10_000, 0, config)
     assert run.eval_returns[0] < -900
-    assert run.eval_returns[-1] > -300
+    assert run.eval_returns[-1] > -300 and run.eval_returns[-3:].max() > -200
