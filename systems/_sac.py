@@ -52,7 +52,9 @@ class SACConfig:
     checkpoint_every: int = 50_000
 
     def __post_init__(self):
-        if self.warmup < 1 or self.batch < 1 or not 0 < self.tau <= 1:
+        counts = (self.hidden, self.depth, self.batch, self.replay_size, self.warmup)
+        counts += (self.eval_every, self.eval_episodes, self.checkpoint_every)
+        if min(counts) < 1 or not 0 < self.tau <= 1 or not 0 < self.gamma <= 1:
             raise ValueError(f"invalid SAC configuration {self}")
 
 

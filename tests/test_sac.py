@@ -174,6 +174,12 @@ def test_critic_loss_decreases_on_a_fixed_batch():
     assert np.mean(losses[-20:]) < 0.3 * np.mean(losses[:5])
 
 
+def test_invalid_configurations_are_refused():
+    for bad in (dict(eval_episodes=0), dict(tau=0.0), dict(warmup=0), dict(gamma=1.5)):
+        with pytest.raises(ValueError, match="invalid SAC configuration"):
+            dataclasses.replace(TINY, **bad)
+
+
 def test_determinism_by_seed():
     a, b, c = hopper_run(), sac.train_policy("HopperFull-v0", STEPS, 0, config=TINY), hopper_run(1)
     ha, hb, hc = (mj.content_hash(r.buffer()) for r in (a, b, c))
