@@ -21,6 +21,9 @@ from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import reach, read_angle, read_state, render
 from ._rigid import Gyroscope, Rotor
+from ._sac import SACConfig, SACRun
+from ._sac import data_card as sac_data_card
+from ._sac import train_policy as train_sac_policy
 from ._spring import SpringPendulum
 from ._three_body import ThreeBody
 from ._two_body import TwoBody
@@ -42,6 +45,8 @@ __all__ = [
     "ThreeBody",
     "DatasetConfig",
     "RelativisticParticle",
+    "SACConfig",
+    "SACRun",
     "Rotor",
     "SpringPendulum",
     "available",
@@ -61,8 +66,10 @@ __all__ = [
     "read_state",
     "reference_masses_lengths",
     "render",
+    "sac_data_card",
     "source_fingerprint",
     "split_episodes",
     "to_momentum",
     "to_velocity",
+    "train_sac_policy",
 ]

@@ -134,6 +134,76 @@ class Episodes:
         return {k: getattr(self, k) for k in ("z", "u", "reward", "episode", "step")}
 
 
+class Recorder:
+    """Writes transitions one at a time into preallocated rows of an :class:`Episodes`, and
+    keeps the episode bookkeeping in one place for every collector (a fixed policy here, the
+    learning SAC agent in ``systems._sac``): an episode ends when it terminates or reaches
+    ``limit`` steps (a truncation); the episode id then advances and the step restarts at 0."""
+
+    FIELDS = ("z", "u", "reward", "episode", "step", "terminated", "truncated")
+
+    def __init__(self, name: str, capacity: int, *, seed: int, limit: int):
+        self.name = name
+        self.seed, self.limit, self.n, self.episode, self.k = seed, limit, 0, 0, 0
+        self.capacity = capacity
+        self.rows: dict[str, np.ndarray] = {}
+
+    def _allocate(self, z: np.ndarray, u: np.ndarray) -> None:
+        c = self.capacity
+        self.rows = {
+            "z": np.zeros((c, z.size)),
+            "u": np.zeros((c, u.size)),
+            "reward": np.zeros(c),
+            "episode": np.zeros(c, np.int64),
+            "step": np.zeros(c, np.int64),
+            "terminated": np.zeros(c, bool),
+            "truncated": np.zeros(c, bool),
+        }
+
+    def add(self, z: np.ndarray, u: np.ndarray, reward: float, terminated: bool) -> bool:
+        """Record (z_t, u_t, r_t); True when this transition ends its episode."""
+        if not self.rows:
+            self._allocate(np.asarray(z), np.asarray(u))
+        if self.n >= self.capacity:
+            raise IndexError(f"recorder full ({self.capacity} rows)")
+        truncated = not terminated and self.k + 1 >= self.limit
+        row = (z, u, float(reward), self.episode, self.k, bool(terminated), truncated)
+        for key, value in zip(self.FIELDS, row, strict=True):
+            self.rows[key][self.n] = value
+        self.n, self.k = self.n + 1, self.k + 1
+        if terminated or truncated:
+            self.episode, self.k = self.episode + 1, 0
+            return True
+        return False
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The filled rows (views) and the counters, as a checkpoint stores them."""
+        out = {key: a[: self.n] for key, a in self.rows.items()}
+        out["counters"] = np.array([self.n, self.episode, self.k], np.int64)
+        return out
+
+    def restore(self, arrays: Mapping[str, np.ndarray]) -> None:
+        """Continue from :meth:`arrays` (the capacity kept, at least the rows stored)."""
+        self.n, self.episode, self.k = (int(c) for c in arrays["counters"])
+        if self.n > self.capacity:
+            raise ValueError(f"{self.n} rows stored, capacity {self.capacity}")
+        if self.n:
+            self._allocate(arrays["z"][0], arrays["u"][0])
+            for key in self.FIELDS:
+                self.rows[key][: self.n] = arrays[key]
+
+    def episodes(self) -> Episodes:
+        r = {key: a[: self.n].copy() for key, a in self.rows.items()}
+        return Episodes(
+            self.name, r["z"], r["u"], r["reward"], r["episode"], r["step"], seed=self.seed
+        )
+
+
+def control_range(env) -> tuple[np.ndarray, np.ndarray]:
+    """The task's control bounds (float64): actions in [-1, 1] map affinely onto them."""
+    return env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
+
+
 def collect_episodes(
     name: str, policy: Policy, *, seed: int, n_steps: int, max_episode_steps: int | None = None
 ) -> Episodes:
@@ -146,31 +216,18 @@ def collect_episodes(
     t = task(name)
     env = make_env(name)
     limit = max_episode_steps or env.spec.max_episode_steps
-    low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
+    rec = Recorder(t.name, n_steps, seed=seed, limit=limit)
+    low, high = control_range(env)
     rng = np.random.default_rng(seed)
-    z_rows, u_rows, r_rows, e_rows, s_rows = [], [], [], [], []
     env.reset(seed=seed)
-    episode, k = 0, 0
     for _ in range(n_steps):
         z = raw_state(env)
         u = np.clip(np.asarray(policy(z, rng), dtype=np.float64).reshape(t.nu), low, high)
         _, r, terminated, _, _ = env.step(u)
-        z_rows.append(z), u_rows.append(u), r_rows.append(float(r))
-        e_rows.append(episode), s_rows.append(k)
-        k += 1
-        if terminated or k >= limit:
+        if rec.add(z, u, r, terminated):
             env.reset()
-            episode, k = episode + 1, 0
     env.close()
-    return Episodes(
-        task=t.name,
-        z=np.stack(z_rows),
-        u=np.stack(u_rows),
-        reward=np.asarray(r_rows),
-        episode=np.asarray(e_rows, dtype=np.int64),
-        step=np.asarray(s_rows, dtype=np.int64),
-        seed=seed,
-    )
+    return rec.episodes()
 
 
 def content_hash(arrays: Mapping[str, np.ndarray]) -> str:
