@@ -26,7 +26,7 @@ def _control_sequence(model, ts, args, controls, integrator, dtype):
     controls = jnp.asarray(controls)
     if controls.shape != expected:
         raise ValueError(f"{what}, got shape {controls.shape}")
-    if integrator.method == "adaptive" and not _discrete(model):
+    if n_u and integrator.method == "adaptive" and not _discrete(model):
         raise ValueError(
             "adaptive cannot hold a piecewise-constant control (its steps cross the interval "
             "boundaries); use a fixed-step method (euler, rk4, rk4_38, euler_so, leapfrog, "
