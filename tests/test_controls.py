@@ -237,3 +237,17 @@ def test_gradients_reach_the_force_network_through_a_controlled_rollout():
     assert all(bool(jnp.all(jnp.isfinite(g))) for g in leaves)
     assert sum(float(jnp.sum(jnp.abs(g))) for g in leaves) > 0
     assert bool(jnp.all(jnp.sum(jnp.abs(du), axis=-1) > 0))  # every u_i moves the states
+
+
+def test_float32_controlled_rollout_keeps_its_dtype_and_traces_once():
+    model = models.make("node_so", CTRL, key=jr.PRNGKey(0), width=8)  # float32
+    traces = []
+
+    @eqx.filter_jit
+    def run(m, u):
+        traces.append(1)
+        return rollout(m, Z0.astype(jnp.float32), TS, ARGS, Integrator("euler_so", 2), controls=u)
+
+    first, second = run(model, U), run(model, 2 * U)  # float64 controls are cast
+    assert first.dtype == jnp.float32 and len(traces) == 1
+    assert not np.allclose(first, second)
