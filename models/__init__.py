@@ -9,6 +9,9 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve) and
 :func:`velocity_hessian`, the :class:`MLP` every model is built from, :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
+
+Controls: a :class:`Scene` with ``n_controls`` > 0 makes each model's ``args`` the
+concatenation (static args, u); ``rollout(..., controls=...)`` holds u_i on interval i.
 """
 
 from ._autoencoder import Autoencoder

@@ -35,9 +35,14 @@ class AbstractModel(eqx.Module):
     scene: eqx.AbstractVar[Scene]
     dtype: eqx.AbstractVar[str]
     # Capability markers, read by ``models.spec``: the energy structure the model is built on
-    # ("hamiltonian", "lagrangian" or None) and whether it is a parameter-free predictor.
+    # ("hamiltonian", "lagrangian" or None) and whether it is a parameter-free predictor;
+    # ``takes_controls``: some part of it reads the control input u of a controlled scene
+    # (the tail of ``args``); ``forced``: a free learned force enters its field, so its learned
+    # energy is not conserved even without damping.
     structure: ClassVar[str | None] = None
     trivial: ClassVar[bool] = False
+    takes_controls: ClassVar[bool] = False
+    forced: ClassVar[bool] = False
 
     def penalty(self, zs, args) -> Array:
         return jnp.zeros((), self.dtype)
@@ -54,7 +59,8 @@ class AbstractContinuousModel(AbstractModel):
 
     @abc.abstractmethod
     def vector_field(self, t, z, args) -> Array:
-        """dz/dt for one state z (2 dof,) and args (n_args,)."""
+        """dz/dt for one state z (2 dof,) and args (n_args,), or (n_args + n_controls,) =
+        (static args, u) in a controlled scene."""
 
     def acceleration(self, q, v, args) -> Array:
         """qddot(q, v); only second-order models define it."""
@@ -85,4 +91,5 @@ class AbstractDiscreteModel(AbstractModel):
 
     @abc.abstractmethod
     def step(self, z, dt, args) -> Array:
-        """z_{n+1} for one state z (2 dof,), time step dt and args (n_args,)."""
+        """z_{n+1} for one state z (2 dof,), time step dt and args (n_args,) ((static args,
+        u) in a controlled scene)."""

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.random as jr
 from jaxtyping import Array
 
 from ._features import Features
+from ._linalg import cho_solve, cholesky
 from ._mass import CholeskyNet
 from ._mlp import MLP
 
@@ -22,7 +24,7 @@ class GeneralHamiltonian(eqx.Module):
     def __init__(
         self, features: Features, width, depth, activation, dtype, *, key, init="orthogonal"
     ):
-        self.features = features
+        self.features = features = features.without_controls()  # H(q, p) never sees u
         self.net = MLP(features.size(True), 1, width, depth, activation, dtype, key=key, init=init)
 
     def __call__(self, q: Array, p: Array, args: Array) -> Array:
@@ -44,7 +46,7 @@ class SeparableHamiltonian(eqx.Module):
         self.inverse_mass = CholeskyNet(
             features, width, depth, activation, dtype, key=k1, jitter=INVERSE_MASS_JITTER
         )
-        self.features = features
+        self.features = features = features.without_controls()  # V(q) never sees u
         self.potential = MLP(features.size(False), 1, width, depth, activation, dtype, key=k2)
 
     def kinetic(self, q: Array, p: Array, args: Array) -> Array:
@@ -56,3 +58,19 @@ class SeparableHamiltonian(eqx.Module):
 
     def __call__(self, q: Array, p: Array, args: Array) -> Array:
         return self.kinetic(q, p, args) + self.potential_energy(q, args)
+
+    def acceleration(self, q: Array, v: Array, args: Array, force=None) -> Array:
+        """qddot of the flow dq/dt = dH/dp = M^-1 p, dp/dt = -dH/dq + force(q, p, qdot),
+        pushed forward to qdot = M^-1(q) p:
+
+            dqdot/dt = M^-1(q) dp/dt + (dM^-1/dt) p,
+
+        with p = M qdot a Cholesky solve with M^-1 and (dM^-1/dt) p one jvp along qdot."""
+        inverse_mass = lambda q_: self.inverse_mass.matrix(q_, args)
+        minv = inverse_mass(q)
+        p = cho_solve(cholesky(minv), v)
+        pdot = -jax.grad(self, argnums=0)(q, p, args)
+        if force is not None:
+            pdot = pdot + force(q, p, v)
+        _, dminv_p = jax.jvp(lambda q_: inverse_mass(q_) @ p, (q,), (v,))
+        return minv @ pdot + dminv_p

@@ -192,14 +192,10 @@ class SeparableHNN(AbstractContinuousModel):
 
     def acceleration(self, q, v, args):
         q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
-        inverse_mass = lambda q_: self.hamiltonian_part.inverse_mass.matrix(q_, args)
-        minv = inverse_mass(q)
-        p = cho_solve(cholesky(minv), v)
-        pdot = -jax.grad(self.hamiltonian_part, argnums=0)(q, p, args)
+        force = None
         if self.dissipation is not None:
-            pdot = pdot + self.dissipation.force(q, v, args)
-        _, dminv_p = jax.jvp(lambda q_: inverse_mass(q_) @ p, (q,), (v,))
-        return minv @ pdot + dminv_p
+            force = lambda q_, p_, v_: self.dissipation.force(q_, v_, args)
+        return self.hamiltonian_part.acceleration(q, v, args, force)
 
     def vector_field(self, t, z, args):
         q, v = split(as_dtype(z, self.dtype))
@@ -254,6 +250,8 @@ class MixtureHNN(AbstractContinuousModel):
     """
 
     structure: ClassVar[str | None] = "hamiltonian"
+    takes_controls: ClassVar[bool] = True  # the free MLP reads u; H does not
+    forced: ClassVar[bool] = True
 
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)

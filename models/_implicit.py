@@ -101,42 +101,64 @@ def _midpoint(k, p):
     return _field_at(model, t, y + half_h * k, args)
 
 
-def _leapfrog_velocity(model, z0, ts, args, integrator):
-    """Leapfrog on z = (q, v) with the model's acceleration; see :func:`rollout`."""
+def _leapfrog_velocity(model, z0, ts, args, integrator, seq=None):
+    """Leapfrog on z = (q, v) with the model's acceleration; see :func:`rollout`. With
+    controls the carried acceleration is re-evaluated with the new u at the start of each
+    interval (one evaluation more per interval)."""
     d = z0.shape[-1] // 2
     dtype = z0.dtype
     explicit = integrator.method == "leapfrog_explicit"
 
-    def accel(q, v):
-        return model.acceleration(q, v, args).astype(dtype)
+    def accel(q, v, a):
+        return model.acceleration(q, v, a).astype(dtype)
 
-    def advance(c, t, h):
+    def advance(c, t, h, args):
         z, a, a_prev, n = c
         q, v = z[:d], z[d:]
         v_half = v + (0.5 * h) * a
         q_new = q + h * v_half
         if explicit:
-            a_new, cost = accel(q_new, v_half), 1
+            a_new, cost = accel(q_new, v_half, args), 1
         else:
             params = (model, q_new, v_half, 0.5 * h, args)
             a_new, cost = _stage(_velocity_kick, _extrapolate(a, a_prev), params, integrator)
         z_new = jnp.concatenate([q_new, v_half + (0.5 * h) * a_new])
         return (z_new, a_new, a, n + cost)
 
-    a0 = accel(z0[:d], z0[d:])
+    if seq is None or not model.scene.n_controls:  # u constant: the carried a stays valid
+        a0, enter, n0 = accel(z0[:d], z0[d:], _first(args, seq)), None, 1
+    else:
+
+        def enter(c, args):
+            z, _, _, n = c
+            a = accel(z[:d], z[d:], args)
+            return (z, a, a, n + 1)
+
+        a0, n0 = jnp.zeros((d,), dtype), 0
     zs, last = _scan_intervals(
-        advance, (z0, a0, a0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+        advance,
+        (z0, a0, a0, jnp.full((), n0, jnp.int32)),
+        ts,
+        integrator.substeps,
+        args,
+        seq,
+        enter,
     )
     return zs, last[-1]
 
 
-def _leapfrog_canonical(model, z0, ts, args, integrator):
+def _first(args, seq):
+    """The args of the first interval."""
+    return args if seq is None else seq[0]
+
+
+def _leapfrog_canonical(model, z0, ts, args, integrator, seq=None):
     """Generalised Stormer-Verlet on the partitioned field F = (f, g) of ``internal_field`` in
     the model's coordinates y = (q, p); see :func:`rollout`."""
     d = z0.shape[-1] // 2
     dtype = z0.dtype
 
-    def advance(c, t, h):
+    def advance(c, t, h, args):
         y, k, k_prev, n = c
         q, p = y[:d], y[d:]
         half = 0.5 * h
@@ -149,27 +171,27 @@ def _leapfrog_canonical(model, z0, ts, args, integrator):
         y_new = jnp.concatenate([q + half * (k1[:d] + k2[:d]), p_half + half * k2[d:]])
         return (y_new, k2, k, n + n1 + n2)
 
-    y0 = model.encode(z0, args).astype(dtype)
-    k0 = _field_at(model, ts[0], y0, args)
+    y0 = model.encode(z0, _first(args, seq)).astype(dtype)
+    k0 = _field_at(model, ts[0], y0, _first(args, seq))
     ys, last = _scan_intervals(
-        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps, args, seq
     )
-    return _decoded(model, z0, ys, args), last[-1]
+    return _decoded(model, z0, ys, args, seq), last[-1]
 
 
-def _implicit_midpoint(model, z0, ts, args, integrator):
+def _implicit_midpoint(model, z0, ts, args, integrator, seq=None):
     """Implicit midpoint in the model's coordinates y; see :func:`rollout`."""
     dtype = z0.dtype
 
-    def advance(c, t, h):
+    def advance(c, t, h, args):
         y, k, k_prev, n = c
         params = (model, t + 0.5 * h, y, 0.5 * h, args)
         k_new, cost = _stage(_midpoint, _extrapolate(k, k_prev), params, integrator)
         return (y + h * k_new, k_new, k, n + cost)
 
-    y0 = model.encode(z0, args).astype(dtype)
-    k0 = _field_at(model, ts[0], y0, args)
+    y0 = model.encode(z0, _first(args, seq)).astype(dtype)
+    k0 = _field_at(model, ts[0], y0, _first(args, seq))
     ys, last = _scan_intervals(
-        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps
+        advance, (y0, k0, k0, jnp.ones((), jnp.int32)), ts, integrator.substeps, args, seq
     )
-    return _decoded(model, z0, ys, args), last[-1]
+    return _decoded(model, z0, ys, args, seq), last[-1]

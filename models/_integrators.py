@@ -22,7 +22,10 @@
 - the implicit stages are solved by ``optimistix`` (fixed-point iteration or Newton) to a
   tolerance tied to the state's dtype, and differentiated by the implicit function theorem
   (``optimistix.ImplicitAdjoint``), so training through them costs no unrolled iterations;
-- discrete models (``step(z, dt, args)``) ignore the method: ``z_{n+1} = step(z_n, h, args)``.
+- ``euler_so`` is the paper's Euler rule for controlled second-order models (order 1);
+- discrete models (``step(z, dt, args)``) ignore the method: ``z_{n+1} = step(z_n, h, args)``;
+- ``controls`` (a controlled scene) hold u_i on interval i (zero-order hold): the model's
+  args on that interval are (static args, u_i); see :func:`rollout`.
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from ._controls import _control_sequence
+from ._euler_so import _euler_so
 from ._implicit import (
     _implicit_midpoint,
     _leapfrog_canonical,
@@ -48,11 +53,13 @@ METHODS = (
     "leapfrog_explicit",
     "implicit_midpoint",
     "adaptive",
+    "euler_so",
 )
 SOLVERS = ("tsit5", "dopri5", "dopri8")
 IMPLICIT_SOLVERS = ("fixed_point", "newton")
 # Methods that need a second-order model (or a canonical scene) and their convergence orders.
 LEAPFROGS = ("leapfrog", "leapfrog_explicit")
+SECOND_ORDER_ONLY = ("leapfrog_explicit", "euler_so")  # need acceleration(q, v, args)
 ORDERS = {
     "euler": 1,
     "rk4": 4,
@@ -60,6 +67,7 @@ ORDERS = {
     "leapfrog": 2,
     "leapfrog_explicit": 2,  # 1 once the acceleration depends on the velocity
     "implicit_midpoint": 2,
+    "euler_so": 1,  # q takes the h^2/2 term, v is explicit Euler
 }
 # What each method is, in a phrase (report tables name methods by these).
 DESCRIPTIONS = {
@@ -71,6 +79,8 @@ DESCRIPTIONS = {
     "leapfrog_explicit": "explicit velocity Verlet (order 1 once the acceleration depends on v)",
     "implicit_midpoint": "implicit midpoint (order 2, symplectic for any H)",
     "adaptive": "diffrax adaptive Runge-Kutta with PID step control",
+    "euler_so": "the paper's Euler rule for second-order models: q + h v + h^2/2 a, v + h a "
+    "(order 1)",
 }
 
 
@@ -80,7 +90,7 @@ class Integrator:
     """How ``rollout`` advances a continuous model.
 
     ``method``: ``euler`` | ``rk4`` | ``rk4_38`` | ``leapfrog`` | ``leapfrog_explicit`` |
-    ``implicit_midpoint`` | ``adaptive``.
+    ``implicit_midpoint`` | ``adaptive`` | ``euler_so``.
     ``substeps``: fixed steps per interval of ``ts`` (fixed-step methods and discrete models).
     ``rtol``, ``atol``, ``solver`` (``tsit5`` | ``dopri5`` | ``dopri8``), ``max_steps``: the
     adaptive solve.
@@ -159,10 +169,11 @@ def _check(model, integrator) -> str:
             f"canonical scene; {type(model).__name__} is first order: use euler, rk4, rk4_38, "
             "implicit_midpoint or adaptive"
         )
-    if kind == "continuous" and integrator.method == "leapfrog_explicit" and not model.second_order:
+    method = integrator.method
+    if kind == "continuous" and method in SECOND_ORDER_ONLY and not model.second_order:
         raise ValueError(
-            "leapfrog_explicit needs a second-order model (acceleration(q, v, args)); "
-            f"{type(model).__name__} is first order: use leapfrog or implicit_midpoint"
+            f"{method} needs a second-order model (acceleration(q, v, args)); "
+            f"{type(model).__name__} is first order: use euler, leapfrog or implicit_midpoint"
         )
     return kind
 
@@ -246,13 +257,30 @@ def _adaptive(model, z0, ts, args, integrator):
 
 
 def rollout(
-    model, z0, ts, args, integrator: Integrator = Integrator(), *, return_stats: bool = False
+    model,
+    z0,
+    ts,
+    args,
+    integrator: Integrator = Integrator(),
+    *,
+    controls=None,
+    return_stats: bool = False,
 ):
     """States of ``model`` started at ``z0`` at the times ``ts``: shape ``(len(ts), 2d)``.
 
     ``zs[0] = z0``. The state keeps ``z0``'s dtype (the trainer casts data to the model's
     dtype first). Fixed-step methods take ``integrator.substeps`` steps of
     ``h = (ts[i+1] - ts[i]) / substeps`` per interval.
+
+    ``controls`` (len(ts) - 1, n_controls), needed exactly when ``model.scene.n_controls`` >
+    0: a zero-order hold, interval i [ts[i], ts[i+1]] is integrated with u_i, i.e. every
+    field evaluation (and encode/decode) on it gets ``args_i = concat(args, u_i)``; the state
+    is continuous across intervals. Every fixed-step method and discrete models support it
+    (``leapfrog`` in (q, v) re-evaluates its carried acceleration with u_i at the start of
+    each interval); ``adaptive`` raises.
+
+    ``euler_so`` (second-order models; the paper's rule for its MuJoCo models, 8 substeps
+    per transition): ``a = a(q, v, u); q_new = q + h v + h^2/2 a; v_new = v + h a``, order 1.
 
     ``leapfrog`` is the generalised Stormer-Verlet method (Hairer, Lubich & Wanner,
     *Geometric Numerical Integration*, VI.3). For a second-order model integrated in
@@ -303,40 +331,46 @@ def rollout(
     stats = None
     method = integrator.method
     count = jnp.zeros((), jnp.int32)
+    seq = _control_sequence(model, ts, args, controls, integrator, dtype)
+    first = args if seq is None else seq[0] if ts.shape[0] > 1 else None
 
-    if kind == "discrete":
+    if seq is not None and ts.shape[0] < 2:
+        zs = z0[None]
+    elif kind == "discrete":
 
-        def advance(c, t, h):
-            return (model.step(c[0], h, args).astype(dtype),)
+        def advance(c, t, h, a):
+            return (model.step(c[0], h, a).astype(dtype),)
 
-        zs, _ = _scan_intervals(advance, (z0,), ts, m)
+        zs, _ = _scan_intervals(advance, (z0,), ts, m, args, seq)
+    elif method == "euler_so":
+        zs = _euler_so(model, z0, ts, args, m, seq)
     elif method == "adaptive":
         if ts.shape[0] < 2:
             zs, stats = z0[None], {"nfe": jnp.asarray(0)}
         else:
             zs, stats = _adaptive(model, z0, ts, args, integrator)
     elif method == "leapfrog_explicit" or (method == "leapfrog" and not _canonical(model)):
-        zs, count = _leapfrog_velocity(model, z0, ts, args, integrator)
+        zs, count = _leapfrog_velocity(model, z0, ts, args, integrator, seq)
     elif method == "leapfrog":
-        zs, count = _leapfrog_canonical(model, z0, ts, args, integrator)
+        zs, count = _leapfrog_canonical(model, z0, ts, args, integrator, seq)
     elif method == "implicit_midpoint":
-        zs, count = _implicit_midpoint(model, z0, ts, args, integrator)
+        zs, count = _implicit_midpoint(model, z0, ts, args, integrator, seq)
     else:
         step = _STEPS[method]
 
-        def f(t, y):
-            return model.internal_field(t, y, args).astype(dtype)
+        def advance(c, t, h, a):
+            return (step(lambda t_, y_: model.internal_field(t_, y_, a).astype(dtype), t, c[0], h),)
 
-        def advance(c, t, h):
-            return (step(f, t, c[0], h),)
-
-        ys, _ = _scan_intervals(advance, (model.encode(z0, args).astype(dtype),), ts, m)
-        zs = _decoded(model, z0, ys, args)
+        ys, _ = _scan_intervals(advance, (model.encode(z0, first).astype(dtype),), ts, m, args, seq)
+        zs = _decoded(model, z0, ys, args, seq)
 
     if not return_stats:
         return zs
     if stats is None:
-        if kind == "continuous" and method in ("leapfrog", "implicit_midpoint"):
+        carried = ("leapfrog", "implicit_midpoint") + (
+            ("leapfrog_explicit",) if seq is not None else ()
+        )
+        if kind == "continuous" and method in carried:
             stats = {"nfe": count}
         else:
             stats = {"nfe": count_evaluations(model, ts, integrator)}
@@ -344,32 +378,53 @@ def rollout(
 
 
 def rollout_batch(
-    model, z0s, ts, args, integrator: Integrator = Integrator(), *, return_stats: bool = False
+    model,
+    z0s,
+    ts,
+    args,
+    integrator: Integrator = Integrator(),
+    *,
+    controls=None,
+    return_stats: bool = False,
 ):
-    """``rollout`` vmapped over initial states ``z0s (N, 2d)`` and per-trajectory ``args``.
+    """``rollout`` vmapped over initial states ``z0s (N, 2d)``, per-trajectory ``args`` and
+    per-trajectory ``controls``.
 
-    ``args`` is ``(N, P)`` (or ``None``); ``ts`` is shared. Returns ``(N, T, 2d)``.
+    ``args`` is ``(N, P)`` (or ``None``); ``controls`` is ``(N, len(ts) - 1, n_controls)`` in a
+    controlled scene (else ``None``); ``ts`` is shared. Returns ``(N, T, 2d)``.
     """
     _check(model, integrator)
     z0s = jnp.asarray(z0s)
     if z0s.ndim != 2:
         raise ValueError(f"z0s must have shape (N, 2d), got {z0s.shape}")
+    n_u = int(getattr(model.scene, "n_controls", 0))
+    if controls is not None or n_u:
+        expected = (z0s.shape[0], jnp.shape(ts)[0] - 1, n_u)
+        shape = None if controls is None else jnp.shape(controls)
+        if shape != expected:
+            raise ValueError(
+                f"controls must have shape (N, len(ts) - 1, n_controls) = {expected}, got "
+                f"{'None' if shape is None else shape}"
+            )
     args_axis = None if args is None else 0
+    controls_axis = None if controls is None else 0
 
-    def one(z0, a):
-        return rollout(model, z0, ts, a, integrator, return_stats=return_stats)
+    def one(z0, a, u):
+        return rollout(model, z0, ts, a, integrator, controls=u, return_stats=return_stats)
 
-    return jax.vmap(one, in_axes=(0, args_axis))(z0s, args)
+    return jax.vmap(one, in_axes=(0, args_axis, controls_axis))(z0s, args, controls)
 
 
 def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
     """Vector-field evaluations per trajectory of a fixed-step rollout over ``ts``.
 
-    Per step: euler 1, rk4 and rk4_38 4, leapfrog_explicit 1 (plus one initial acceleration,
-    reused afterwards), a discrete model 1 ``step``; with ``implicit_iterations = k > 0``
-    leapfrog k (2k in canonical coordinates) and implicit_midpoint k, plus one initial
-    evaluation. For ``adaptive`` and for implicit stages solved to tolerance the count is known
-    only after the solve: use ``rollout(..., return_stats=True)``.
+    Per step: euler and euler_so 1, rk4 and rk4_38 4, leapfrog_explicit 1 (plus one initial
+    acceleration, reused afterwards; a controlled rollout re-evaluates it once per interval,
+    which ``rollout(..., return_stats=True)`` counts), a discrete model 1 ``step``; with
+    ``implicit_iterations = k > 0`` leapfrog k (2k in canonical coordinates) and
+    implicit_midpoint k, plus one initial evaluation. For ``adaptive`` and for implicit stages
+    solved to tolerance the count is known only after the solve: use
+    ``rollout(..., return_stats=True)``.
     """
     kind = _check(model, integrator)
     steps = (len(ts) - 1) * integrator.substeps
@@ -381,7 +436,7 @@ def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
     ):
         raise ValueError(
             f"count_evaluations: the cost of {method} is known after the solve; use "
-            "rollout(..., return_stats=True) (allowed here: euler, rk4, rk4_38, "
+            "rollout(..., return_stats=True) (allowed here: euler, euler_so, rk4, rk4_38, "
             "leapfrog_explicit, or implicit_iterations > 0)"
         )
     first = 1 if steps > 0 else 0
@@ -392,4 +447,4 @@ def count_evaluations(model, ts, integrator: Integrator = Integrator()) -> Any:
         return steps * per * integrator.implicit_iterations + first
     if method == "implicit_midpoint":
         return steps * integrator.implicit_iterations + first
-    return steps * {"euler": 1, "rk4": 4, "rk4_38": 4}[method]
+    return steps * {"euler": 1, "euler_so": 1, "rk4": 4, "rk4_38": 4}[method]

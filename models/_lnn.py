@@ -63,7 +63,7 @@ class LNN(AbstractContinuousModel):
         self.scene, self.dtype, self.solve, self.eps = scene, dtype, solve, float(eps)
         self.kinetic_prior = float(kinetic_prior)
         kl, kd = jr.split(key)
-        self.features = Features(scene)
+        self.features = Features(scene, controls=False)  # L never sees u
         self.net = MLP(
             self.features.size(True), 1, width, depth, activation, dtype, key=kl, init=init
         )

@@ -64,9 +64,11 @@ class CholeskyNet(eqx.Module):
         self.eps = eps
         self.jitter = jitter
         n_raw = self.dof * (self.dof + 1) // 2
-        if state_dependent:
-            self.features = features
-            self.net = MLP(features.size(False), n_raw, width, depth, activation, dtype, key=key)
+        if state_dependent:  # a mass or damping matrix never depends on a control input
+            self.features = features.without_controls()
+            self.net = MLP(
+                self.features.size(False), n_raw, width, depth, activation, dtype, key=key
+            )
             self.raw = None
         else:
             self.features = None

@@ -20,9 +20,10 @@ from ._symplectic import symplectic_error
 
 
 class NeuralODE(AbstractContinuousModel):
-    """dz/dt = MLP(cos q, sin q, qdot, args); with ``weight`` > 0 (node_symreg) the loss gets
+    """dz/dt = MLP(cos q, sin q, qdot, args[, u]); with ``weight`` > 0 (node_symreg) the loss gets
     the soft symplectic penalty weight * mean ||J DF - (J DF)^T||_F^2 over the rollout states."""
 
+    takes_controls: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     weight: float = eqx.field(static=True)
@@ -56,9 +57,12 @@ class NeuralODE(AbstractContinuousModel):
 
 
 class SecondOrderODE(AbstractContinuousModel):
-    """dq/dt = qdot (exactly), dqdot/dt = MLP(cos q, sin q, qdot, args)."""
+    """dq/dt = qdot (exactly), dqdot/dt = a(q, qdot, u) = MLP(cos q, sin q, qdot, args[, u]).
+
+    The paper's controlled NODE+SO (CoupledNODE) is this field integrated with ``euler_so``."""
 
     second_order: ClassVar[bool] = True
+    takes_controls: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     features: Features
@@ -84,11 +88,13 @@ class CanonicalSecondOrderODE(AbstractContinuousModel):
     """NODE+SO in canonical coordinates, the reference's symplectic-regularised model.
 
     On z = (q, p): dq/dt = M^-1(q) p (M^-1 = L L^T + 1e-4 I, the learned inverse mass of
-    ``hnn_so``), dp/dt = MLP(cos q, sin q, p, args). With ``weight`` > 0 the loss gets the soft
-    symplectic penalty weight * mean ||J DF - (J DF)^T||_F^2 (as ``node_symreg``), which is
-    zero for the true dynamics in these coordinates. Needs momentum data (Scene.canonical).
+    ``hnn_so``, which never sees u), dp/dt = MLP(cos q, sin q, p, args[, u]). With ``weight``
+    > 0 the loss gets the soft symplectic penalty weight * mean ||J DF - (J DF)^T||_F^2 (as
+    ``node_symreg``), which is zero for the true dynamics in these coordinates. Needs momentum
+    data (Scene.canonical).
     """
 
+    takes_controls: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     weight: float = eqx.field(static=True)

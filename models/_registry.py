@@ -1,6 +1,6 @@
 """The model registry: every registered model, each assembled from the bias parts of the
 sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``, ``_vin``,
-``_trivial``).
+``_forced``, ``_trivial``).
 
 | name         | biases                                                                   |
 | ------------ | ------------------------------------------------------------------------ |
@@ -15,6 +15,7 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 | vin          | discrete + variational: Verlet step of L = 1/2 v^T M v - U(q)            |
 | vin_implicit | discrete + variational: midpoint DEL step of a general learned L(q, v)   |
 | resnet       | discrete, free: z_{n+1} = z_n + MLP(z_n)                                 |
+| hnn_force    | the paper's controlled HNN: hnn_so field + a free force F(q, p, u) on dp/dt |
 | constant_velocity | trivial, no parameters: q(t) = q0 + t qdot0 (see ``_trivial``)      |
 | at_rest      | trivial, no parameters: q(t) = q0, qdot(t) = 0                           |
 
@@ -25,6 +26,10 @@ in for p and dz/dt = J grad H on (q, qdot). ``hnn`` (its H network), ``node`` an
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
+
+In a controlled scene (``Scene.n_controls`` > 0) only the models with a part that reads u
+(``spec(name).controls``: the free networks of node, node_so, node_symreg, node_so_symreg,
+mixture_hnn, resnet, and hnn_force's force) can be built; see ``models._features``.
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ import equinox as eqx
 import jax
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel
+from ._forced import ForcedHNN
 from ._hnn import HNN, MixtureHNN, SeparableHNN
 from ._lnn import LNN
 from ._mlp import ACTIVATIONS, DTYPES, INITS
@@ -176,6 +182,7 @@ _REGISTRY = {
         ImplicitVIN, ImplicitVIN, {"newton_steps": _positive_int("newton_steps")}, True, _V
     ),
     "resnet": _Entry(ResNet, _plain(ResNet)),
+    "hnn_force": _Entry(ForcedHNN, _plain(ForcedHNN), needs=_V),
     "constant_velocity": _Entry(ConstantVelocity, _trivial(ConstantVelocity)),
     "at_rest": _Entry(AtRest, _trivial(AtRest)),
 }
@@ -382,6 +389,13 @@ def make(
         raise ValueError(f"model {name!r} needs velocity coordinates (Scene.canonical=False)")
     if needs == _P and not scene.canonical:
         raise ValueError(f"model {name!r} needs momentum coordinates (Scene.canonical=True)")
+    cls = _REGISTRY[name].cls
+    if scene.n_controls and not (getattr(cls, "takes_controls", False) or cls.trivial):
+        takers = [n for n, e in _REGISTRY.items() if getattr(e.cls, "takes_controls", False)]
+        raise ValueError(
+            f"model {name!r} has no part that reads a control input (Scene.n_controls="
+            f"{scene.n_controls}); models that do: {', '.join(takers)}"
+        )
     dissipation = (scene.damped if dissipation is None else dissipation) and structured
     return builder(
         scene, width, depth, activation, dtype, key=key, dissipation=dissipation, **options

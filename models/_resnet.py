@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 
 from ._base import AbstractDiscreteModel, as_dtype, split
@@ -11,11 +13,12 @@ from ._scene import Scene
 
 
 class ResNet(AbstractDiscreteModel):
-    """z_{n+1} = z_n + MLP(cos q_n, sin q_n, qdot_n, args): the VIN seed's baseline.
+    """z_{n+1} = z_n + MLP(cos q_n, sin q_n, qdot_n, args[, u]): the VIN seed's baseline.
 
     The step is tied to the time step it was trained at (dt is not an input).
     """
 
+    takes_controls: ClassVar[bool] = True
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     features: Features

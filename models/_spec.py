@@ -23,7 +23,10 @@ class ModelSpec:
     (L(q, qdot)) or None (a free model). ``takes_dissipation``: the model adds a learned
     dissipation term in damped scenes (``make(..., dissipation=...)``). ``coordinates``: the
     scene coordinates it accepts ("velocity", "momentum"). ``options``: the names of its
-    ``make`` options."""
+    ``make`` options. ``controls``: it reads the control input u of a controlled scene
+    (``Scene.n_controls`` > 0; ``make`` refuses such a scene for a model that would ignore u,
+    trivial predictors apart). ``forced``: a free learned force enters its field (the
+    energy of its ``structure`` is not conserved even without damping)."""
 
     name: str
     continuous: bool
@@ -35,6 +38,8 @@ class ModelSpec:
     coordinates: tuple[str, ...]
     default_activation: str
     options: tuple[str, ...]
+    controls: bool = False
+    forced: bool = False
 
     @property
     def hamiltonian(self) -> bool:
@@ -63,4 +68,6 @@ def spec(name: str) -> ModelSpec:
         coordinates=coordinates(name),
         default_activation=entry.activation,
         options=tuple(sorted(entry.options)),
+        controls=bool(getattr(cls, "takes_controls", False)),
+        forced=bool(getattr(cls, "forced", False)),
     )

@@ -39,7 +39,7 @@ class VIN(AbstractDiscreteModel):
 
     def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
         self.scene, self.dtype = scene, dtype
-        self.features = Features(scene)
+        self.features = Features(scene, controls=False)  # L never sees u
         self.potential = MLP(self.features.size(False), 1, width, depth, activation, dtype, key=key)
         self.mass = CholeskyNet(
             self.features,
@@ -106,7 +106,7 @@ class ImplicitVIN(AbstractDiscreteModel):
     ):
         self.scene, self.dtype, self.newton_steps = scene, dtype, int(newton_steps)
         kl, kd = jr.split(key)
-        self.features = Features(scene)
+        self.features = Features(scene, controls=False)  # L never sees u
         self.net = MLP(self.features.size(True), 1, width, depth, activation, dtype, key=kl)
         self.dissipation = (
             Dissipation(self.features, width, depth, activation, dtype, key=kd)

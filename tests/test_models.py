@@ -155,6 +155,7 @@ def test_registry_and_errors():
         "vin",
         "vin_implicit",
         "resnet",
+        "hnn_force",
         "constant_velocity",
         "at_rest",
     ]

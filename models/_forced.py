@@ -1,0 +1,101 @@
+"""The HNN of the paper's controlled (MuJoCo) experiment: a separable Hamiltonian plus a free
+learned force F(q, p, u) on dp/dt (hnn_force)."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+import jax.random as jr
+
+from ._base import AbstractContinuousModel, as_dtype, split
+from ._features import Features
+from ._hamiltonian import SeparableHamiltonian
+from ._linalg import cho_solve, cholesky
+from ._mlp import MLP
+from ._scalar import hamiltonian_field
+from ._scene import Scene
+
+
+class ForcedHNN(AbstractContinuousModel):
+    """A separable HNN with a non-conservative learned force, in z = (q, qdot):
+
+        dq/dt = dH/dp = M^-1(q) p,   dp/dt = -dH/dq + F(q, p, u),
+        H = 1/2 p^T M^-1(q) p + V(q),   M^-1 = L L^T + 1e-4 I,   p = M(q) qdot,
+
+    F = MLP(cos q, sin q, p, args, u). H, M and V never see u (their features leave it out);
+    F enters dp/dt only, so dq/dt = qdot exactly (second order) and
+    dH/dt = qdot . F(q, p, u): H is conserved only where F = 0. ``rollout`` integrates the
+    flow in y = (q, p) (``encode``/``decode``/``internal_field``) like ``hnn_so``.
+
+    The paper's code (ngruver/decon-hnn, ``src/models/dynamics_models.py``, ``MixtureHNN``)
+    has the same field with F = force_net(q, p, u); there the learned Cholesky factor of
+    M^-1 is multiplied by 0, so M = I and p = qdot. Ours keeps the suite's learned M^-1(q) (the
+    ``hnn_so`` Hamiltonian, which can represent M = I): MuJoCo's generalised coordinates have
+    configuration-dependent inertia. Angles enter through (cos q, sin q) as everywhere here.
+    """
+
+    structure: ClassVar[str | None] = "hamiltonian"
+    second_order: ClassVar[bool] = True
+    takes_controls: ClassVar[bool] = True
+    forced: ClassVar[bool] = True
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    hamiltonian_part: SeparableHamiltonian
+    features: Features
+    force: MLP
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key):
+        self.scene, self.dtype = scene, dtype
+        kh, kf = jr.split(key)
+        self.features = Features(scene)  # F's input: (q, p, args, u)
+        self.hamiltonian_part = SeparableHamiltonian(  # leaves u out of M^-1 and V
+            self.features, width, depth, activation, dtype, key=kh
+        )
+        self.force = MLP(
+            self.features.size(True), scene.dof, width, depth, activation, dtype, key=kf
+        )
+
+    def force_term(self, q, p, args):
+        """F(q, p, u): the generalised force added to dp/dt."""
+        return self.force(self.features(q, p, args))
+
+    def momentum(self, q, v, args):
+        """p = M(q) qdot, a Cholesky solve with M^-1(q) (independent of u)."""
+        minv = self.hamiltonian_part.inverse_mass.matrix(q, args)
+        return cho_solve(cholesky(minv), v)
+
+    def hamiltonian(self, z, args):
+        """The learned H at z = (q, qdot) (independent of u)."""
+        q, v = split(as_dtype(z, self.dtype))
+        args = as_dtype(args, self.dtype)
+        return self.hamiltonian_part(q, self.momentum(q, v, args), args)
+
+    def acceleration(self, q, v, args):
+        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
+        force = lambda q_, p_, v_: self.force_term(q_, p_, args)
+        return self.hamiltonian_part.acceleration(q, v, args, force)
+
+    def vector_field(self, t, z, args):
+        q, v = split(as_dtype(z, self.dtype))
+        return jnp.concatenate([v, self.acceleration(q, v, args)])
+
+    def encode(self, z, args):
+        """(q, qdot) -> (q, p = M(q) qdot)."""
+        q, v = split(as_dtype(z, self.dtype))
+        return jnp.concatenate([q, self.momentum(q, v, as_dtype(args, self.dtype))])
+
+    def decode(self, y, args):
+        """(q, p) -> (q, qdot = M^-1(q) p)."""
+        q, p = split(as_dtype(y, self.dtype))
+        minv = self.hamiltonian_part.inverse_mass.matrix(q, as_dtype(args, self.dtype))
+        return jnp.concatenate([q, minv @ p])
+
+    def internal_field(self, t, y, args):
+        """In y = (q, p): dq/dt = dH/dp, dp/dt = -dH/dq + F(q, p, u)."""
+        q, p = split(as_dtype(y, self.dtype))
+        args = as_dtype(args, self.dtype)
+        qdot, pdot = hamiltonian_field(lambda q_, p_: self.hamiltonian_part(q_, p_, args), q, p)
+        return jnp.concatenate([qdot, pdot + self.force_term(q, p, args)])
