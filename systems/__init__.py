@@ -21,9 +21,10 @@ from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import reach, read_angle, read_state, render
 from ._rigid import Gyroscope, Rotor
-from ._sac import SACConfig, SACRun
-from ._sac import data_card as sac_data_card
-from ._sac import train_policy as train_sac_policy
+from ._sac import SACConfig
+from ._sac_run import SACRun
+from ._sac_run import data_card as sac_data_card
+from ._sac_run import train_policy as train_sac_policy
 from ._spring import SpringPendulum
 from ._three_body import ThreeBody
 from ._two_body import TwoBody

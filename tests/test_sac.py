@@ -24,6 +24,7 @@ from scipy import integrate, stats
 
 from systems import _mujoco as mj
 from systems import _sac as sac
+from systems import _sac_run as sac_run
 
 warnings.filterwarnings("ignore", message=".*settotalmass.*")
 
@@ -35,7 +36,7 @@ STEPS = 300
 
 @functools.cache
 def hopper_run(seed=0, steps=STEPS):
-    return sac.train_policy("HopperFull-v0", steps, seed, config=TINY)
+    return sac_run.train_policy("HopperFull-v0", steps, seed, config=TINY)
 
 
 # The hopper's sizes (12 observations, 3 controls) and TINY's batch, so that the unit tests and
@@ -181,7 +182,11 @@ def test_invalid_configurations_are_refused():
 
 
 def test_determinism_by_seed():
-    a, b, c = hopper_run(), sac.train_policy("HopperFull-v0", STEPS, 0, config=TINY), hopper_run(1)
+    a, b, c = (
+        hopper_run(),
+        sac_run.train_policy("HopperFull-v0", STEPS, 0, config=TINY),
+        hopper_run(1),
+    )
     ha, hb, hc = (mj.content_hash(r.buffer()) for r in (a, b, c))
     assert ha == hb != hc
     np.testing.assert_array_equal(a.eval_returns, b.eval_returns)
@@ -207,16 +212,16 @@ def test_resume_after_an_interruption_equals_an_uninterrupted_run(tmp_path):
             raise Killed
 
     with pytest.raises(Killed):
-        sac.train_policy("HopperFull-v0", STEPS, 0, tmp_path, progress=die_at_250, config=TINY)
+        sac_run.train_policy("HopperFull-v0", STEPS, 0, tmp_path, progress=die_at_250, config=TINY)
     (ck,) = tmp_path.glob("*.npz")
     with np.load(ck) as f:
         assert int(f["rec_counters"][0]) == 200
     (tmp_path / f"{ck.stem}half-written.tmp").write_bytes(b"PK")  # a save cut by the kill
-    resumed = sac.train_policy("HopperFull-v0", STEPS, 0, tmp_path, config=TINY)
+    resumed = sac_run.train_policy("HopperFull-v0", STEPS, 0, tmp_path, config=TINY)
     _assert_same_run(resumed, hopper_run())
     assert not list(tmp_path.glob("*.tmp"))
     with pytest.raises(ValueError, match="holds another run"):
-        sac.train_policy(
+        sac_run.train_policy(
             "HopperFull-v0", STEPS, 0, tmp_path, config=dataclasses.replace(TINY, tau=0.01)
         )
 
@@ -225,9 +230,9 @@ _KILLED_SCRIPT = """
 import json, sys
 import jax
 jax.config.update("jax_enable_x64", sys.argv[4] == "True")  # as in the test's process
-from systems import _sac as sac
+from systems import _sac as sac, _sac_run as sac_run
 config = sac.SACConfig(**json.loads(sys.argv[3]))
-sac.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=config)
+sac_run.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=config)
 """
 
 
@@ -253,8 +258,8 @@ def test_resume_after_kill_9_equals_an_uninterrupted_run(tmp_path):
     (ck,) = tmp_path.glob("*.npz")
     with np.load(ck) as f:
         assert 0 < int(f["rec_counters"][0]) < steps
-    resumed = sac.train_policy("HopperFull-v0", steps, 0, tmp_path, config=TINY)
-    _assert_same_run(resumed, sac.train_policy("HopperFull-v0", steps, 0, config=TINY))
+    resumed = sac_run.train_policy("HopperFull-v0", steps, 0, tmp_path, config=TINY)
+    _assert_same_run(resumed, sac_run.train_policy("HopperFull-v0", steps, 0, config=TINY))
 
 
 def test_a_second_run_of_one_configuration_compiles_nothing():
@@ -267,7 +272,7 @@ def test_a_second_run_of_one_configuration_compiles_nothing():
     logger.addHandler(handler)
     try:
         with jax.log_compiles():
-            sac.train_policy("HopperFull-v0", 150, 3, config=TINY)
+            sac_run.train_policy("HopperFull-v0", 150, 3, config=TINY)
     finally:
         logger.removeHandler(handler)
     assert not [m for m in messages if "Compiling" in m]
@@ -283,7 +288,7 @@ def test_buffer_becomes_episodes_a_split_and_a_card():
         ep.u, low + (run.buffer()["action"] + 1) * (high - low) / 2, atol=1e-6
     )
     split = mj.split_episodes(ep, seed=0, n_train=50, n_test=2, test_len=5, test_fraction=0.2)
-    card = sac.data_card(run, split)
+    card = sac_run.data_card(run, split)
     assert card["policy_training"]["steps"] == STEPS
     assert card["policy_training"]["seed"] == 0
     assert card["policy_return"] == run.eval_returns[-1]
@@ -292,7 +297,7 @@ def test_buffer_becomes_episodes_a_split_and_a_card():
 
 
 def _pendulum_run(steps, seed, config):
-    return sac.train_sac(
+    return sac_run.train_sac(
         "Pendulum-v1",
         lambda: gymnasium.make("Pendulum-v1"),
         lambda env: np.asarray(env.unwrapped.state, np.float64).copy(),
