@@ -58,10 +58,20 @@ class Comparison:
         return int(len(self.claims))
 
     @property
+    def n_judged(self) -> int:
+        """Claims with runs in both folders (the others are listed, not compared)."""
+        if not len(self.claims):
+            return 0
+        c = self.claims
+        return int(((c["verdict_a"] != "no runs") & (c["verdict_b"] != "no runs")).sum())
+
+    @property
     def claims_differ(self) -> list[str]:
         if not len(self.claims):
             return []
-        return list(self.claims.loc[~self.claims["same"], "claim"])
+        c = self.claims
+        both = (c["verdict_a"] != "no runs") & (c["verdict_b"] != "no runs")
+        return list(c.loc[both & ~c["same"], "claim"])
 
     @property
     def summary(self) -> str:
@@ -72,7 +82,7 @@ class Comparison:
         ident = int((r["rel_diff"] == 0).sum()) if shared else 0
         med = float(r["rel_diff"].median()) if shared else float("nan")
         moved = self.claims_differ
-        claims = f"{self.n_claims - len(moved)} of {self.n_claims} claim verdicts the same" + (
+        claims = f"{self.n_judged - len(moved)} of {self.n_judged} claim verdicts the same" + (
             f" (differ: {', '.join(moved)})" if moved else ""
         )
         n_spread = int(c["spread"].sum()) if len(c) else 0
@@ -242,11 +252,15 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
 
     ja = judge(ra, ca, pa)
     jb = judge(rb, cb, pb)
-    fa = {v.key: v for v in ja.final}
-    fb = {v.key: v for v in jb.final}
+    # a claim none of whose experiments ran in a folder has no verdict there ("no runs"), not an
+    # inconclusive one: `make bench` runs one paper's claims, the reference every paper's
+    ran_a, ran_b = _claims_with_runs(ra, pa), _claims_with_runs(rb, pb)
+    fa = {v.key: v for v in ja.final if v.claim in ran_a}
+    fb = {v.key: v for v in jb.final if v.claim in ran_b}
     rows = []
     for key in list(dict.fromkeys([*fa, *fb])):
         va, vb = ja.primary.get(key), jb.primary.get(key)
+        va, vb = (va if key in fa else None), (vb if key in fb else None)
         moved = []
         if va is not None and vb is not None:
             pa_parts = {q.name: q.status for q in va.parts}
@@ -268,6 +282,13 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
         )
     cols = ["claim", "verdict_a", "verdict_b", "same", "moved", "final_a", "final_b"]
     return pd.DataFrame(rows, columns=cols)
+
+
+def _claims_with_runs(runs: pd.DataFrame, profile) -> set[int]:
+    """The claims with at least one stored row of their experiments."""
+    from .studies.paper._rules import claim_studies, restrict
+
+    return {s.claim for s in claim_studies() if len(restrict(runs, s, profile))}
 
 
 def compare(a, b) -> Comparison:

@@ -6,6 +6,7 @@ folder without row files (runs.parquet, curves.parquet, bench_meta.json)."""
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
 
@@ -135,3 +136,20 @@ def test_a_one_seed_cell_has_no_spread_and_is_never_flagged(tmp_path, tables):
     b2["rollout_error"] *= 3
     c = compare(_folder(tmp_path / "a2", runs, curves), _folder(tmp_path / "b2", b2, curves))
     assert c.cells["flagged"].any()
+
+
+def test_a_claim_not_run_in_one_folder_is_listed_not_counted(tmp_path, tables):
+    """`make bench` runs one paper's claims; the reference holds every paper's: a claim none of
+    whose experiments ran in a folder reads "no runs" there and is neither same nor differing."""
+    runs, curves = tables
+    vin, vin_curves = synthetic_tables("quick", experiments=["vin"], scenario="contradict")
+    both = _folder(
+        tmp_path / "a",
+        pd.concat([runs, vin], ignore_index=True),
+        pd.concat([curves, vin_curves], ignore_index=True),
+    )
+    c = compare(both, _folder(tmp_path / "b", runs, curves))
+    row = c.claims.set_index("claim").loc["8"]
+    assert row["verdict_a"] != "no runs" and row["verdict_b"] == "no runs"
+    assert "8" not in c.claims_differ and c.n_judged == len(c.claims) - 1
+    assert f"{c.n_judged} of {c.n_judged} claim verdicts the same" in c.summary
