@@ -1,24 +1,10 @@
-"""Runs on a MuJoCo task's transitions under recorded controls (``RunConfig.observation ==
-"controlled"``): the paper's Sec. 5 / Fig. 7 experiment. Build, train and evaluate.
-
-``system`` is a task of ``systems.MUJOCO_TASKS``; ``system_params`` ``(("data", "file"),)``
-reads the task's file (``systems.mujoco_data``: Episodes arrays checked against their card's
-sha256), ``(("data", "stand-in"),)`` collects ``n_generated`` random-control transitions
-(tests only); a file's first ``n_generated`` transitions are used. The split is by episode
-(``systems.split_episodes``, seed :data:`SPLIT_SEED` for every run): ``n_train`` windows of
-``chunk`` states, ``n_test`` test trajectories of ``chunk * test_chunks`` states. The scene:
-z = raw [q, v], no angular flags (the task table has none), ``n_controls`` = the task's.
-Training is the one loop (:class:`ControlledObjective`): rollouts over the windows with their
-own controls held per step, the squared error divided per component by the training states'
-std (the reference's ``z_std``); cosine to :data:`LR_END`. The evaluation: test rollouts with
-their controls; ``test_mse`` / ``train_mse`` are the reference's normalised MSE (t0 included).
-
-Differences from the reference (ngruver/decon-hnn ``mujoco.py``): its MixtureHNN takes one
-Euler step per transition; ours takes ``train_substeps`` (8) like the NODEs. Its networks
-standardise their inputs and outputs with training statistics; ours see raw z and u. It uses
-Adam lr 5e-3 with a coupled L2 term; ours AdamW at ``lr`` (App. C's 2e-4). Its test
-trajectories have 200 states; ours ``chunk * test_chunks`` (201 at the paper's sizes). Rows
-record ``data_source`` and ``data_sha256``; nothing is cached (a file may change).
+"""Runs on a MuJoCo task's transitions under recorded controls (``observation ==
+"controlled"``, the paper's Fig. 7): build (the task's file checked against its card, or the
+random-control stand-in; a split by episode), train (the one loop on 3-step windows, each under
+its own controls, the error divided by the training std per component) and evaluate (test
+rollouts under their controls; the reference's normalised MSE). Unlike the reference, the HNN
+too takes 8 Euler steps per transition (it takes one, a defect not copied). The protocol and
+the other differences: docs/studies/mujoco.md.
 """
 
 from __future__ import annotations

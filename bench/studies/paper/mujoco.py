@@ -59,7 +59,7 @@ _SIZES = {
     "test_chunks": 67,
     "steps": 256 * 200,
 }
-_QUICK = {**_SIZES, "steps": 16 * 200}  # a sixteenth of the epochs
+_QUICK = {**_SIZES, "steps": 4 * 200}  # 4 of the 256 epochs
 _SMOKE = {
     "n_generated": 300,
     "n_train": 16,
