@@ -17,6 +17,7 @@ from . import _mujoco as mj
 
 ENV = "DECON_MUJOCO_DATA"  # a folder holding <task>.npz and <task>.json
 STAND_IN = "stand-in: uniform random controls (systems.collect_episodes), not the paper's data"
+STAND_IN_EPISODE = 100  # the stand-in's time limit in steps: several episodes even in Swimmer
 
 
 def data_dir() -> Path:
@@ -72,10 +73,15 @@ def load_data(name: str, folder: Path | str | None = None) -> tuple[mj.Episodes,
 
 def stand_in(name: str, n_steps: int, seed: int = 0) -> tuple[mj.Episodes, dict]:
     """(Episodes, card) of ``n_steps`` transitions under uniform random controls in [-1, 1]
-    (clipped to the task's range): a stand-in for tests, labelled :data:`STAND_IN`."""
+    (clipped to the task's range), episodes of at most :data:`STAND_IN_EPISODE` steps: a
+    stand-in for tests, labelled :data:`STAND_IN`."""
     t = mj.task(name)
     ep = mj.collect_episodes(
-        t.name, lambda z, rng: rng.uniform(-1.0, 1.0, t.nu), seed=seed, n_steps=n_steps
+        t.name,
+        lambda z, rng: rng.uniform(-1.0, 1.0, t.nu),
+        seed=seed,
+        n_steps=n_steps,
+        max_episode_steps=STAND_IN_EPISODE,
     )
     card = {
         "task": t.name,

@@ -14,6 +14,7 @@ import pytest
 import models
 from bench.core import _controlled as C
 from bench.core._config import RunConfig
+from bench.core._execute import execute_run
 from bench.core._experiments import expand
 from bench.core._runnable import check_runnable
 from bench.core._runner import sweep
@@ -140,6 +141,15 @@ def test_a_first_order_model_cannot_take_the_second_order_rule():
     c = RunConfig(**{**SMOKE, "train_integrator": "euler_so"}, model="node")
     with pytest.raises(ValueError, match="train_integrator 'euler_so' cannot run 'node'"):
         check_runnable(c)
+
+
+@pytest.mark.parametrize("task", X.TASKS)
+def test_every_task_runs_on_its_stand_in(task, tmp_path):
+    t = X.systems.MUJOCO_TASKS[task]
+    c = RunConfig(**{**SMOKE, "system": task, "dt": t.dt}, model=C.TRIVIAL)
+    row = execute_run(check_runnable(c), cache_root=tmp_path)
+    assert row["status"] == "ok", row["error"]
+    assert len(row["curves"]["z_true"][0]) == t.nq + t.nv and row["data_points"] == 300
 
 
 def test_the_scene_is_the_raw_state_with_the_tasks_controls():

@@ -120,8 +120,10 @@ class RunConfig:
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
     train_target: str = "rollout"
     # what the models observe: "state" (z itself), "pixels" (rendered frames of the state,
-    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels) or
-    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames)
+    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels),
+    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames),
+    # "measured" (bench.core._measured) or "controlled" (a MuJoCo task under recorded
+    # controls: bench.core._controlled)
     observation: str = "state"
     # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
     # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
