@@ -4,6 +4,7 @@ Ground truth is float64: a process calls :func:`enable_x64` before computing it 
 points do); importing ``systems`` changes no jax setting.
 """
 
+from . import _mujoco_data as mujoco_data
 from . import _real_pendulum as real_pendulum
 from ._base import MAX_STEPS, AbstractSystem, reference_masses_lengths
 from ._chain import ChainPendulum
@@ -59,6 +60,7 @@ __all__ = [
     "make",
     "make_dataset",
     "make_pixel_dataset",
+    "mujoco_data",
     "mujoco_task",
     "parameters",
     "real_pendulum",

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from bench.core import _schema, _store
+from bench.core._controlled import METRIC_COLUMNS as CONTROLLED_COLUMNS
 from bench.core._execute import execute_run
 from bench.core._experiments import RunConfig
 from bench.core._frames import FRAME_METRICS
@@ -22,9 +23,10 @@ SMOKE = dict(
 # Columns that only some runs carry: a run that fails has no metrics, an ensemble member sets
 # ensemble_size, and the runner adds experiment/profile/ensemble_size when it stores a row.
 OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
-# Pixel, frames and measured runs' own columns: stored by the sweeps of tests/test_pixels.py,
-# tests/test_vin_blog.py and tests/test_real_pendulum.py.
-OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS) | set(METRIC_COLUMNS)
+# Pixel, frames, measured and controlled runs' own columns: stored by the sweeps of
+# tests/test_pixels.py, tests/test_vin_blog.py, tests/test_real_pendulum.py and
+# tests/test_controlled_runs.py.
+OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS) | set(METRIC_COLUMNS) | set(CONTROLLED_COLUMNS)
 
 
 @pytest.fixture(scope="module")

@@ -32,8 +32,9 @@ LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
 # what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
-# measured trajectory read from a file, bench.core._measured)
-OBSERVATIONS = ("state", "pixels", "frames", "measured")
+# measured trajectory read from a file, bench.core._measured; controlled: a MuJoCo task's
+# transitions under recorded controls, bench.core._controlled)
+OBSERVATIONS = ("state", "pixels", "frames", "measured", "controlled")
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
@@ -64,6 +65,19 @@ MEASURED_FIELDS = (
     ("system_params", ()),
     ("k", None),
 )
+# A controlled run's fixed fields (the raw state [q, v] of a MuJoCo task, rollout targets), and
+# its data: system_params (("data", "file"),) for the task's file, (("data", "stand-in"),) for
+# the random-control stand-in of the tests
+CONTROLLED_FIELDS = (
+    ("noise", 0.0),
+    ("random_args", False),
+    ("train_target", "rollout"),
+    ("coordinates", "velocity"),
+    ("friction", 0.0),
+    ("k", None),
+    ("train_box", ()),
+)
+CONTROLLED_DATA = ("file", "stand-in")
 
 
 @dataclass(frozen=True)
@@ -106,8 +120,10 @@ class RunConfig:
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
     train_target: str = "rollout"
     # what the models observe: "state" (z itself), "pixels" (rendered frames of the state,
-    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels) or
-    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames)
+    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels),
+    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames),
+    # "measured" (bench.core._measured) or "controlled" (a MuJoCo task under recorded
+    # controls: bench.core._controlled)
     observation: str = "state"
     # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
     # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
@@ -232,6 +248,8 @@ class RunConfig:
             self._check_pixels()
         elif self.observation == "measured":
             self._check_measured()
+        elif self.observation == "controlled":
+            self._check_controlled()
         else:  # the system, its parameters and the dataset's shape (systems checks them)
             object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
 
@@ -259,6 +277,27 @@ class RunConfig:
             if getattr(self, name) != value:
                 what = f"{name} {getattr(self, name)!r}"
                 raise ValueError(f"measured runs support no {what}; allowed: {value!r}")
+
+    def _check_controlled(self) -> None:
+        import systems
+
+        allowed = list(systems.MUJOCO_TASKS)
+        check_choice("MuJoCo task (system of a controlled run)", self.system, allowed)
+        for name, value in CONTROLLED_FIELDS:
+            if getattr(self, name) != value:
+                what = f"{name} {getattr(self, name)!r}"
+                raise ValueError(f"controlled runs support no {what}; allowed: {value!r}")
+        data = dict(self.system_params)
+        if set(data) != {"data"} or data["data"] not in CONTROLLED_DATA:
+            raise ValueError(
+                f"controlled runs need system_params (('data', d),) with d in {CONTROLLED_DATA}"
+                f"; got {self.system_params!r}"
+            )
+        task_dt = systems.MUJOCO_TASKS[self.system].dt
+        if abs(self.dt - task_dt) > 1e-12:
+            raise ValueError(f"dt of {self.system} is the task's, {task_dt}; got {self.dt}")
+        if self.chunk < 2:
+            raise ValueError(f"controlled runs need chunk >= 2 states; got {self.chunk}")
 
     def to_dict(self) -> dict:
         """Every field, JSON-ready (tuples of pairs become lists)."""

@@ -3,9 +3,9 @@
 ``execute_run(config)`` never raises (a storage error, which stops a sweep, aside): every
 outcome is a row with ``status`` ``ok``, ``diverged`` (training went non-finite at
 ``diverged_step``) or ``failed`` (``error`` holds the message, the traceback is in the run's
-artifact folder). The observation kinds, state, pixels, frames and measured, are variants of
-the build, train and evaluate steps (:class:`Steps`); an ensemble's member is a variant of the
-train step.
+artifact folder). The observation kinds, state, pixels, frames, measured and controlled, are
+variants of the build, train and evaluate steps (:class:`Steps`); an ensemble's member is a
+variant of the train step.
 """
 
 from __future__ import annotations
@@ -120,12 +120,37 @@ def _evaluate_measured(config: RunConfig, built, model, meta: dict, cache_root: 
     return evaluate(config, built, model, meta, cache_root)
 
 
+def _build_controlled(config: RunConfig, cache_root: Path):
+    from ._controlled import build
+
+    return build(config)
+
+
+def _train_controlled(config: RunConfig, built, cache_root: Path, progress: bool):
+    from ._controlled import train
+
+    return train(config, built, cache_root, progress)
+
+
+def _evaluate_controlled(config: RunConfig, built, model, meta: dict, cache_root: Path):
+    from ._controlled import evaluate
+
+    return evaluate(config, built, model, meta, cache_root)
+
+
 STATE = Steps(build=_build_state, train=_train_state, evaluate=evaluate_state)
 PIXELS = Steps(build=_build_pixels, train=_train_pixels, evaluate=_evaluate_pixels)
 FRAMES = Steps(build=_build_frames, train=_train_frames, evaluate=_evaluate_frames)
 MEASURED = Steps(build=_build_measured, train=_train_measured, evaluate=_evaluate_measured)
+CONTROLLED = Steps(build=_build_controlled, train=_train_controlled, evaluate=_evaluate_controlled)
 # RunConfig.observation -> its steps
-OBSERVATIONS = {"state": STATE, "pixels": PIXELS, "frames": FRAMES, "measured": MEASURED}
+OBSERVATIONS = {
+    "state": STATE,
+    "pixels": PIXELS,
+    "frames": FRAMES,
+    "measured": MEASURED,
+    "controlled": CONTROLLED,
+}
 
 
 def ensemble_member(trained: tuple, rolled=None) -> Steps:

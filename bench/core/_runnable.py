@@ -37,6 +37,11 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
 
         check_measured_model(cfg)
         return cfg
+    if cfg.observation == "controlled":  # a MuJoCo task under controls (bench.core._controlled)
+        from ._controlled import check_controlled_model
+
+        check_controlled_model(cfg)
+        return cfg
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)

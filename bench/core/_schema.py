@@ -20,11 +20,16 @@ _CONFIG = {
     "system": (
         "-",
         "registered system (`systems.available()`); a measured run's data: real_pend_h_1 (the "
-        "user's file) or real_pend_synthetic (the stand-in)",
+        "user's file) or real_pend_synthetic (the stand-in); a controlled run's MuJoCo task "
+        "(`systems.MUJOCO_TASKS`)",
     ),
     "k": ("count", "links / bobs of chain_pendulum and spring_pendulum; empty for others"),
     "friction": ("1/s", "drag coefficient of the damped scenes (0: undamped)"),
-    "system_params": ("-", "other system parameters, JSON list of [name, value] pairs"),
+    "system_params": (
+        "-",
+        "other system parameters, JSON list of [name, value] pairs; a controlled run's data: "
+        "[data, file] (the task's file) or [data, stand-in] (random controls, tests only)",
+    ),
     "model": ("-", "registered model (`models.available()`)"),
     "dissipation": (
         "-",
@@ -38,7 +43,11 @@ _CONFIG = {
     "coordinates": ("-", "state coordinates the model sees: velocity (q, qdot) or momentum (q, p)"),
     "random_args": ("-", "system parameters drawn per trajectory and given to the model"),
     "noise": ("1", "std of Gaussian observation noise added to the training states"),
-    "n_generated": ("count", "training trajectories generated (n_train of them used)"),
+    "n_generated": (
+        "count",
+        "training trajectories generated (n_train of them used); a controlled run: transitions "
+        "of the data (collected for the stand-in, the first ones of a task's file)",
+    ),
     "n_train": ("count", "training chunks"),
     "chunk": ("count", "points per training chunk"),
     "dt": ("s (simulated)", "time step between observed points"),
@@ -66,8 +75,9 @@ _CONFIG = {
         "what the models observe: state (z), pixels (28 x 28 frames, two stacked per "
         "observation, an autoencoder and latent dynamics) or frames (the VIN seed's task: single "
         "frames encoded to positions, the dynamics carrying the velocity) or measured (a "
-        "measured trajectory read from a file: the HNN seed's real pendulum); empty in rows from "
-        "before the field: state",
+        "measured trajectory read from a file: the HNN seed's real pendulum) or controlled (a "
+        "MuJoCo task's raw [q, v] under recorded controls: the paper's Fig. 7); empty in rows "
+        "from before the field: state",
     ),
     "train_target": (
         "-",
@@ -249,8 +259,26 @@ _RUN = {
         "measured runs: where the data came from (measured: the file's name, or the synthetic "
         "stand-in)",
     ),
-    "data_sha256": ("-", "measured runs: sha256 of the data's bytes as read"),
-    "data_points": ("count", "measured runs: states in the trajectory (train and test)"),
+    "data_sha256": (
+        "-",
+        "measured runs: sha256 of the data's bytes as read; controlled runs: of the task's "
+        "episode arrays (checked against the file's card)",
+    ),
+    "data_points": (
+        "count",
+        "measured runs: states in the trajectory (train and test); controlled runs: transitions "
+        "the split drew from",
+    ),
+    # controlled runs (observation "controlled", bench.core._controlled); empty for the others
+    "test_mse": (
+        "1",
+        "controlled runs: the reference's normalised MSE, mean over test trajectories, times (t0 "
+        "included) and components of ((prediction - truth) / training std)^2",
+    ),
+    "train_mse": (
+        "1",
+        "controlled runs: the same over every training window, with the final parameters",
+    ),
 }
 
 _PROVENANCE = {

@@ -155,13 +155,16 @@ class TrainResult:
     snapshots: tuple = ()
 
 
-def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):
+def loss_fn(model, z, args, ts, config: TrainConfig, dz=None, *, controls=None, scale=None):
     """The loss on a batch of B chunks z (B, C, 2d) observed at ts (C,), args (B, P)::
 
-        L = mean_{b, c, i} e(rollout(model, z[b, 0], ts, args[b])[c, i] - z[b, c, i])
+        L = mean_{b, c, i} e((rollout(model, z[b, 0], ts, args[b])[c, i] - z[b, c, i]) / s_i)
             + mean_b model.penalty(rollout states of b, args[b])
 
-    with e(x) = x^2 ("l2") or |x| ("l1"). With ``target="derivative"`` (the HNN and LNN seeds'
+    with e(x) = x^2 ("l2") or |x| ("l1") and s = ``scale`` (2d,) (default 1: a controlled run
+    divides by the training states' standard deviation per component). In a controlled scene
+    ``controls`` (B, C - 1, n_controls) are each chunk's own, held over each interval.
+    With ``target="derivative"`` (the HNN and LNN seeds'
     protocol: no rollout) the loss is on the time derivatives instead::
 
         L = mean_{b, c, i} e(F(z[b, c], args[b])_i - dz[b, c, i]) + mean_b penalty(z[b], args[b])
@@ -175,9 +178,9 @@ def loss_fn(model, z, args, ts, config: TrainConfig, dz=None):
         )
         pred, target, states = field(z, args), dz, z
     else:
-        pred = rollout_batch(model, z[:, 0], ts, args, config.integrator)
+        pred = rollout_batch(model, z[:, 0], ts, args, config.integrator, controls=controls)
         target, states = z, pred
-    err = pred - target
+    err = pred - target if scale is None else (pred - target) / scale
     data = jnp.mean(err * err) if config.loss == "l2" else jnp.mean(jnp.abs(err))
     penalty = jnp.mean(jax.vmap(model.penalty)(states, args))
     return data + penalty.astype(data.dtype)

@@ -12,6 +12,7 @@ from . import energy, symplectic, second_order, coordinates, damped, loss
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: F401
 from . import pixels, vin_blog, _hnn_diagnosis  # noqa: F401
 from . import rigid_bodies, three_body, real_pendulum  # noqa: F401
+from . import mujoco  # noqa: F401 - an experiment without a study yet
 from . import _commands, _sections  # noqa: F401 - the paper's verbs and report sections
 
 # isort: on
