@@ -133,6 +133,7 @@ def test_run_with_checkpoints_has_the_final_metrics_of_the_run_without(tmp_path,
     assert "checkpoints" not in _store.rows_frame([row]).columns
 
 
+@pytest.mark.slow  # a training driven to divergence (~15 s)
 def test_a_diverged_run_records_diverged_checkpoints_after_its_divergence(tmp_path, monkeypatch):
     monkeypatch.setattr(_fit, "TRAIN_BLOCK", 2)
     row = _execute.execute_run(_run(eval_checkpoints=3, lr=1e30), cache_root=tmp_path)

@@ -58,6 +58,7 @@ def test_moved_cells_are_flagged_and_changed_verdicts_named(tmp_path, tables):
     assert next(x for x in claims.splitlines() if x.startswith("| 3 |"))  # its row
 
 
+@pytest.mark.slow  # three folders judged (~15 s); the flagging itself is tested above
 def test_a_change_inside_the_seed_spread_is_not_flagged(tmp_path, tables):
     runs, curves = tables
     b = runs.copy()

@@ -46,7 +46,11 @@ def test_node_rollout_holds_u_i_on_interval_i(method):
     assert float(jnp.max(jnp.abs(other[-1] - zs[-1]))) > 1e-6  # u is an input
 
 
-@pytest.mark.parametrize("name", ["node", "hnn_so", "mixture_hnn", "lnn", "resnet"])
+@pytest.mark.parametrize(
+    "name",
+    ["node", "resnet"]  # the implicit methods of the others cost ~15 s each: slow
+    + [pytest.param(n, marks=pytest.mark.slow) for n in ("hnn_so", "mixture_hnn", "lnn")],
+)
 def test_uncontrolled_rollouts_are_unchanged_by_the_controls_path(name):
     scene = Scene(dof=2, angular=(True, False), n_args=1)
     model = _make(name, scene)
@@ -232,7 +236,7 @@ def test_gradients_reach_the_force_network_through_a_controlled_rollout():
         zs = rollout_batch(m, z0s, TS, args, Integrator("euler_so", substeps=2), controls=c)
         return jnp.sum(zs**2)
 
-    grads, du = eqx.filter_grad(loss)(model, controls), jax.grad(lambda c: loss(model, c))(controls)
+    grads, du = eqx.filter_grad(lambda mc: loss(*mc))((model, controls))  # one compilation
     leaves = jax.tree_util.tree_leaves(eqx.filter(grads.force, eqx.is_inexact_array))
     assert all(bool(jnp.all(jnp.isfinite(g))) for g in leaves)
     assert sum(float(jnp.sum(jnp.abs(g))) for g in leaves) > 0

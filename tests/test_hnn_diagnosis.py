@@ -28,6 +28,7 @@ def test_the_cells_are_the_plain_hnn_spring_runs_of_claims_1_and_3():
         D.diagnose("smoke", "/nonexistent", steps=0)
 
 
+@pytest.mark.slow  # a smoke training replayed block by block (~30 s)
 def test_replay_is_the_trainers_run_and_says_how_long_it_equals_the_stored_one(tmp_path):
     cfg = D.cells("smoke")[0]
     cache = tmp_path / "cache"
