@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
 
-from bench.core._experiments import PROFILES, REPLICATION_SEEDS
+from bench.core._experiments import PROFILES, REPLICATION_SEEDS, expand
 from bench.studies.paper import evaluate_claims
 from bench.studies.paper import kit as R
 from bench.studies.paper._replication import (
@@ -302,3 +302,17 @@ def test_a_claim_without_stored_replication_runs_has_no_replication_reading(
     one = runs[rep & (runs["experiment"] == "second_order")].iloc[:1]
     k = judge(pd.concat([runs[~rep], one]), curves, PROFILE, loso=False)
     assert "3" not in k.replication and k.replication_pending["3"][0] == 1
+
+
+def test_a_claims_declared_runs_count_every_study_that_declares_its_experiments():
+    """Claim 7's seed protocol is declared by a study of its own: its runs count toward the
+    claim's stored/declared runs (else a campaign folder reads claim 7 as complete, not pending,
+    with none of the seed protocol's runs stored)."""
+    import pandas as pd
+
+    from bench.studies.paper._replication import stored_counts
+
+    counts = stored_counts(pd.DataFrame({"config_hash": []}), "paper-core")
+    ours = {c.config_hash for c in expand("relativistic", "paper-core")}
+    seeds = {c.config_hash for c in expand("relativistic_seed", "paper-core")}
+    assert seeds and counts[7] == (0, len(ours | seeds))

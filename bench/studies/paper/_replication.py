@@ -103,12 +103,17 @@ def stored_counts(runs: pd.DataFrame, profile: str | None, seeds=None) -> dict[i
     profile."""
     if profile not in PROFILES:
         return {}
+    from ...core._studies import studies
+
     done = set(runs["config_hash"]) if len(runs) and "config_hash" in runs else set()
-    out = {}
-    for study in claim_studies():
-        hashes = {c.config_hash for e in study.experiments for c in expand(e, profile, seeds=seeds)}
-        out[study.claim] = (len(hashes & done), len(hashes))
-    return out
+    judged = {s.claim for s in claim_studies()}
+    declared: dict[int, set] = {}
+    for study in studies():  # a claim's experiments may be declared by several studies
+        if study.claim in judged:
+            declared.setdefault(study.claim, set()).update(
+                c.config_hash for e in study.experiments for c in expand(e, profile, seeds=seeds)
+            )
+    return {n: (len(hashes & done), len(hashes)) for n, hashes in sorted(declared.items())}
 
 
 def _on(runs: pd.DataFrame, seeds) -> pd.DataFrame:
