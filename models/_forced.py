@@ -6,19 +6,16 @@ from __future__ import annotations
 from typing import ClassVar
 
 import equinox as eqx
-import jax.numpy as jnp
 import jax.random as jr
 
-from ._base import AbstractContinuousModel, as_dtype, split
 from ._features import Features
 from ._hamiltonian import SeparableHamiltonian
-from ._linalg import cho_solve, cholesky
+from ._hnn import AbstractSeparableHNN
 from ._mlp import MLP
-from ._scalar import hamiltonian_field
 from ._scene import Scene
 
 
-class ForcedHNN(AbstractContinuousModel):
+class ForcedHNN(AbstractSeparableHNN):
     """A separable HNN with a non-conservative learned force, in z = (q, qdot):
 
         dq/dt = dH/dp = M^-1(q) p,   dp/dt = -dH/dq + F(q, p, u),
@@ -36,8 +33,6 @@ class ForcedHNN(AbstractContinuousModel):
     configuration-dependent inertia. Angles enter through (cos q, sin q) as everywhere here.
     """
 
-    structure: ClassVar[str | None] = "hamiltonian"
-    second_order: ClassVar[bool] = True
     takes_controls: ClassVar[bool] = True
     forced: ClassVar[bool] = True
 
@@ -62,40 +57,8 @@ class ForcedHNN(AbstractContinuousModel):
         """F(q, p, u): the generalised force added to dp/dt."""
         return self.force(self.features(q, p, args))
 
-    def momentum(self, q, v, args):
-        """p = M(q) qdot, a Cholesky solve with M^-1(q) (independent of u)."""
-        minv = self.hamiltonian_part.inverse_mass.matrix(q, args)
-        return cho_solve(cholesky(minv), v)
+    def has_force(self) -> bool:
+        return True
 
-    def hamiltonian(self, z, args):
-        """The learned H at z = (q, qdot) (independent of u)."""
-        q, v = split(as_dtype(z, self.dtype))
-        args = as_dtype(args, self.dtype)
-        return self.hamiltonian_part(q, self.momentum(q, v, args), args)
-
-    def acceleration(self, q, v, args):
-        q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
-        force = lambda q_, p_, v_: self.force_term(q_, p_, args)
-        return self.hamiltonian_part.acceleration(q, v, args, force)
-
-    def vector_field(self, t, z, args):
-        q, v = split(as_dtype(z, self.dtype))
-        return jnp.concatenate([v, self.acceleration(q, v, args)])
-
-    def encode(self, z, args):
-        """(q, qdot) -> (q, p = M(q) qdot)."""
-        q, v = split(as_dtype(z, self.dtype))
-        return jnp.concatenate([q, self.momentum(q, v, as_dtype(args, self.dtype))])
-
-    def decode(self, y, args):
-        """(q, p) -> (q, qdot = M^-1(q) p)."""
-        q, p = split(as_dtype(y, self.dtype))
-        minv = self.hamiltonian_part.inverse_mass.matrix(q, as_dtype(args, self.dtype))
-        return jnp.concatenate([q, minv @ p])
-
-    def internal_field(self, t, y, args):
-        """In y = (q, p): dq/dt = dH/dp, dp/dt = -dH/dq + F(q, p, u)."""
-        q, p = split(as_dtype(y, self.dtype))
-        args = as_dtype(args, self.dtype)
-        qdot, pdot = hamiltonian_field(lambda q_, p_: self.hamiltonian_part(q_, p_, args), q, p)
-        return jnp.concatenate([qdot, pdot + self.force_term(q, p, args)])
+    def generalized_force(self, q, p, v, args):
+        return self.force_term(q, p, args)

@@ -4,6 +4,7 @@ damped comparator (mixture_hnn).
 
 from __future__ import annotations
 
+import abc
 from typing import ClassVar
 
 import equinox as eqx
@@ -145,8 +146,9 @@ class HNN(AbstractContinuousModel):
         return jnp.concatenate([qdot, pdot])
 
 
-class SeparableHNN(AbstractContinuousModel):
-    """The separable HNN in z = (q, qdot): H = 1/2 p^T M^-1(q) p + V(q), p = M(q) qdot.
+class AbstractSeparableHNN(AbstractContinuousModel):
+    """The separable HNN in z = (q, qdot): H = 1/2 p^T M^-1(q) p + V(q), p = M(q) qdot, with
+    an optional generalised force Q (:meth:`generalized_force`) on dp/dt.
 
     dH/dp = M^-1 p = qdot, so the model is second order exactly; the momentum equation
     dp/dt = -dH/dq + Q pushed forward to qdot = M^-1 p gives
@@ -158,30 +160,24 @@ class SeparableHNN(AbstractContinuousModel):
 
     ``rollout`` integrates the same flow in y = (q, p) instead (``encode``/``decode``,
     ``internal_field`` = J grad H + Q): one gradient of H per stage instead of M^-1, grad H
-    and a jvp of M^-1.
+    and a jvp of M^-1. Subclasses say what Q is: none, friction (:class:`SeparableHNN`) or a
+    free learned force of the controls (``hnn_force``).
     """
 
     structure: ClassVar[str | None] = "hamiltonian"
-
     second_order: ClassVar[bool] = True
-    scene: Scene = eqx.field(static=True)
-    dtype: str = eqx.field(static=True)
-    hamiltonian_part: SeparableHamiltonian
-    dissipation: Dissipation | None
+    hamiltonian_part: eqx.AbstractVar[SeparableHamiltonian]
 
-    def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
-        self.scene, self.dtype = scene, dtype
-        kh, kd = jr.split(key)
-        features = Features(scene)
-        self.hamiltonian_part = SeparableHamiltonian(
-            features, width, depth, activation, dtype, key=kh
-        )
-        self.dissipation = (
-            Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None
-        )
+    @abc.abstractmethod
+    def has_force(self) -> bool:
+        """Whether :meth:`generalized_force` adds anything (a static property of the model)."""
+
+    @abc.abstractmethod
+    def generalized_force(self, q, p, v, args):
+        """Q(q, p, qdot, args) on dp/dt (called only where :meth:`has_force`)."""
 
     def momentum(self, q, v, args):
-        """p = M(q) qdot = (M^-1(q))^-1 qdot."""
+        """p = M(q) qdot = (M^-1(q))^-1 qdot (independent of controls)."""
         minv = self.hamiltonian_part.inverse_mass.matrix(q, args)
         return cho_solve(cholesky(minv), v)
 
@@ -193,8 +189,8 @@ class SeparableHNN(AbstractContinuousModel):
     def acceleration(self, q, v, args):
         q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
         force = None
-        if self.dissipation is not None:
-            force = lambda q_, p_, v_: self.dissipation.force(q_, v_, args)
+        if self.has_force():
+            force = lambda q_, p_, v_: self.generalized_force(q_, p_, v_, args)
         return self.hamiltonian_part.acceleration(q, v, args, force)
 
     def vector_field(self, t, z, args):
@@ -213,14 +209,41 @@ class SeparableHNN(AbstractContinuousModel):
         return jnp.concatenate([q, minv @ p])
 
     def internal_field(self, t, y, args):
-        """In y = (q, p): dq/dt = dH/dp = M^-1 p, dp/dt = -dH/dq + Q(q, dH/dp): one gradient
+        """In y = (q, p): dq/dt = dH/dp = M^-1 p, dp/dt = -dH/dq + Q(q, p, dH/dp): one gradient
         of H, so the inverse-mass network runs once forward and once backward per stage."""
         q, p = split(as_dtype(y, self.dtype))
         args = as_dtype(args, self.dtype)
         qdot, pdot = hamiltonian_field(lambda q_, p_: self.hamiltonian_part(q_, p_, args), q, p)
-        if self.dissipation is not None:
-            pdot = pdot + self.dissipation.force(q, qdot, args)
+        if self.has_force():
+            pdot = pdot + self.generalized_force(q, p, qdot, args)
         return jnp.concatenate([qdot, pdot])
+
+
+class SeparableHNN(AbstractSeparableHNN):
+    """The separable HNN (hnn_so), with friction Q = -D(q) qdot when ``dissipation``
+    (:class:`AbstractSeparableHNN` for the field)."""
+
+    scene: Scene = eqx.field(static=True)
+    dtype: str = eqx.field(static=True)
+    hamiltonian_part: SeparableHamiltonian
+    dissipation: Dissipation | None
+
+    def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
+        self.scene, self.dtype = scene, dtype
+        kh, kd = jr.split(key)
+        features = Features(scene)
+        self.hamiltonian_part = SeparableHamiltonian(
+            features, width, depth, activation, dtype, key=kh
+        )
+        self.dissipation = (
+            Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None
+        )
+
+    def has_force(self) -> bool:
+        return self.dissipation is not None
+
+    def generalized_force(self, q, p, v, args):
+        return self.dissipation.force(q, v, args)
 
 
 class MixtureHNN(AbstractContinuousModel):
