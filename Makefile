@@ -20,7 +20,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean \
+.PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean mujoco-data \
 	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report
 
 install: $(STAMP)
@@ -101,6 +101,14 @@ replicate: $(STAMP)
 
 stability: $(STAMP)
 	$(PY) -m bench --results $(RESULTS) stability --profile $(PROFILE) --workers $(WORKERS)
+
+# The MuJoCo tasks' data (Fig. 7): a SAC policy trained MUJOCO_STEPS env steps per task on
+# this CPU, its whole recorded buffer saved to data/mujoco (resumable: checkpoints in the cache).
+MUJOCO_TASKS ?= HopperFull-v0 SwimmerFull-v0 HalfCheetahFull-v0
+MUJOCO_STEPS ?= 200000
+mujoco-data: $(STAMP)
+	@for t in $(MUJOCO_TASKS); do \
+		$(PY) -m bench data mujoco $$t --steps $(MUJOCO_STEPS) || exit 1; done
 
 perf: $(STAMP)
 	$(PY) -m bench --results $(RESULTS) perf

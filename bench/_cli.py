@@ -106,6 +106,15 @@ def _parser() -> argparse.ArgumentParser:
     de.add_argument("--force", action="store_true", help="write into a non-empty folder")
     dv = dsub.add_parser("verify", help="check an exported folder against its card")
     dv.add_argument("folder")
+    dm = dsub.add_parser(
+        "mujoco",
+        help="train the SAC policy on a MuJoCo task (resumable) and save its recorded episodes "
+        "with a card (systems.mujoco_data)",
+    )
+    dm.add_argument("task", help="a task of Fig. 7, e.g. HopperFull-v0")
+    dm.add_argument("--steps", type=int_arg("steps"), default=200_000, help="env steps")
+    dm.add_argument("--seed", type=int_arg("seed"), default=0, help="the collection seed")
+    dm.add_argument("--out", default=None, help="the folder (default: systems.mujoco_data's)")
 
     b = sub.add_parser(
         "bench",
@@ -298,6 +307,31 @@ def _cmd_bench(args) -> int:
     return _cmd_compare(args)
 
 
+def _data_mujoco(args) -> int:
+    import json
+    import time
+
+    import systems
+
+    systems.mujoco_task(args.task)  # a one-line error naming the tasks
+    t0 = time.perf_counter()
+
+    def progress(n, info):
+        shown = ", ".join(f"{k} {v:.4g}" for k, v in info.items())
+        print(f"{args.task}: {n}/{args.steps} steps, {shown}", file=sys.stderr, flush=True)
+
+    path = systems.mujoco_data.collect(
+        args.task, args.steps, seed=args.seed, folder=args.out, progress=progress
+    )
+    card = json.loads(path.with_suffix(".json").read_text())
+    size = path.stat().st_size / 1e6
+    print(
+        f"{path}: {card['collection']['transitions']} transitions, {size:.1f} MB, policy "
+        f"return {card['policy_return']:.1f}, {time.perf_counter() - t0:.0f} s"
+    )
+    return 0
+
+
 def _cmd_data(args) -> int:
     """``data export``: write the datasets and print the folder; ``data verify``: one line per
     array that differs from the card, exit code 1 if any."""
@@ -305,6 +339,8 @@ def _cmd_data(args) -> int:
 
     if args.data_verb == "verify":
         return data_loader.main(["verify", args.folder])
+    if args.data_verb == "mujoco":
+        return _data_mujoco(args)
     check_choice("profile", args.profile, list(PROFILES))
     seeds = None
     if args.seeds is not None:

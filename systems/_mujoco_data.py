@@ -1,7 +1,11 @@
-"""The MuJoCo tasks' datasets on disk: one file per task, ``<folder>/<task>.npz`` (the arrays
-of :class:`Episodes`: z, u, reward, episode, step, and the collection seed), with its data card
-``<task>.json`` beside it, whose ``episodes_sha256`` (:func:`content_hash` of the arrays) is
-checked on every load. The folder: ``$DECON_MUJOCO_DATA``, else ``<cache>/data/mujoco``. The
+"""The MuJoCo tasks' datasets on disk. A task's file ``<folder>/<task>.npz`` holds what a
+replay needs, compressed: each episode's first state ``z0`` (float64), its length, every
+control ``u`` (float64) and the collection seed; the states and rewards are recomputed by
+stepping the simulator (deterministic for a given MuJoCo build), a few times smaller than
+storing them. Its data card ``<task>.json`` beside it holds ``file_sha256`` (the file's arrays)
+and ``episodes_sha256`` (:func:`content_hash` of the replayed z, u, reward, episode, step): a
+load checks both, and keeps the replay in the cache (``<cache>/data/mujoco``) under its hash.
+The folder: ``$DECON_MUJOCO_DATA``, else the repository's ``data/mujoco`` (committed). The
 stand-in (uniform random controls, for tests) is collected, never read from a file.
 """
 
@@ -16,15 +20,16 @@ import numpy as np
 from . import _mujoco as mj
 
 ENV = "DECON_MUJOCO_DATA"  # a folder holding <task>.npz and <task>.json
+COMMITTED = Path(__file__).resolve().parents[1] / "data" / "mujoco"
 STAND_IN = "stand-in: uniform random controls (systems.collect_episodes), not the paper's data"
 STAND_IN_EPISODE = 100  # the stand-in's time limit in steps: several episodes even in Swimmer
+FILE_FIELDS = ("z0", "length", "u", "seed")
 
 
 def data_dir() -> Path:
-    """The folder of the task files: ``$DECON_MUJOCO_DATA``, else ``<cache>/data/mujoco``."""
-    from ._dataset import cache_root
-
-    return Path(os.environ.get(ENV) or cache_root() / "data" / "mujoco")
+    """The folder of the task files: ``$DECON_MUJOCO_DATA``, else the repository's
+    ``data/mujoco``."""
+    return Path(os.environ.get(ENV) or COMMITTED)
 
 
 def data_path(name: str, folder: Path | str | None = None) -> Path:
@@ -32,25 +37,91 @@ def data_path(name: str, folder: Path | str | None = None) -> Path:
     return Path(folder or data_dir()) / f"{mj.task(name).name}.npz"
 
 
-def save_data(episodes: mj.Episodes, card: dict, folder: Path | str | None = None) -> Path:
-    """Write a task's file and its card (``card["episodes_sha256"]`` set to the arrays' hash);
-    returns the path of the npz. Both are written to temporary names, then renamed."""
-    path = data_path(episodes.task, folder)
+def compact(episodes: mj.Episodes) -> dict[str, np.ndarray]:
+    """The arrays a replay needs: each episode's first state and length, the controls, the
+    seed. ValueError unless the episodes are numbered 0, 1, ... and each starts at step 0."""
+    e = episodes.episode
+    starts = np.flatnonzero(np.r_[True, e[1:] != e[:-1]])
+    length = np.diff(np.r_[starts, len(e)])
+    if not (
+        np.array_equal(e[starts], np.arange(len(starts))) and np.all(episodes.step[starts] == 0)
+    ):
+        raise ValueError(f"{episodes.task}: episodes must be numbered 0, 1, ... from step 0")
+    return {
+        "z0": episodes.z[starts],
+        "length": length.astype(np.int64),
+        "u": episodes.u,
+        "seed": np.int64(episodes.seed),
+    }
+
+
+def replay(name: str, arrays) -> mj.Episodes:
+    """The :class:`Episodes` of a file's arrays: each episode started from its ``z0`` (the
+    simulator otherwise reset, as after ``env.reset``), then stepped under its controls,
+    recording the raw state before each control and the task's reward."""
+    t = mj.task(name)
+    env = mj.make_env(t.name)
+    env.reset(seed=0)
+    z0, length, u = arrays["z0"], np.asarray(arrays["length"]), np.asarray(arrays["u"])
+    n = int(length.sum())
+    if n != len(u):
+        raise ValueError(f"{t.name}: episode lengths sum to {n}, {len(u)} controls")
+    z, reward = np.zeros((n, t.nq + t.nv)), np.zeros(n)
+    episode, step = np.repeat(np.arange(len(length)), length), np.zeros(n, np.int64)
+    i, sim = 0, env.unwrapped
+    for zs, m in zip(z0, length, strict=True):
+        mj.set_state(env, zs)
+        for k in range(int(m)):
+            z[i], step[i] = mj.raw_state(env), k
+            reward[i] = sim.step(u[i])[1]
+            i += 1
+    env.close()
+    return mj.Episodes(t.name, z, u.astype(np.float64), reward, episode, step, int(arrays["seed"]))
+
+
+def _write_atomic(path: Path, arrays: dict, card: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    arrays = episodes.arrays()
-    card = {**card, "task": episodes.task, "episodes_sha256": mj.content_hash(arrays)}
     tmp = path.with_name(f".{path.stem}.tmp.npz")
-    np.savez(tmp, seed=np.int64(episodes.seed), **arrays)
+    np.savez_compressed(tmp, **arrays)
     tmp_card = path.with_name(f".{path.stem}.tmp.json")
-    tmp_card.write_text(json.dumps(card, indent=1, sort_keys=True, default=str))
+    tmp_card.write_text(json.dumps(card, indent=1, sort_keys=True, default=str) + "\n")
     os.replace(tmp, path)
     os.replace(tmp_card, path.with_suffix(".json"))
+
+
+def save_data(episodes: mj.Episodes, card: dict, folder: Path | str | None = None) -> Path:
+    """Write a task's file and its card (``file_sha256``, ``episodes_sha256`` and the MuJoCo
+    version set); returns the path of the npz. The file is replayed first: a ValueError, and
+    nothing written, unless the replay gives the episodes bit for bit."""
+    import mujoco
+
+    arrays = compact(episodes)
+    sha = mj.content_hash(episodes.arrays())
+    got = mj.content_hash(replay(episodes.task, arrays).arrays())
+    if got != sha:
+        raise ValueError(f"{episodes.task}: the replay of the controls does not give the episodes")
+    path = data_path(episodes.task, folder)
+    card = {
+        **card,
+        "task": episodes.task,
+        "file_sha256": mj.content_hash(arrays),
+        "episodes_sha256": sha,
+        "replay_mujoco": mujoco.__version__,
+    }
+    _write_atomic(path, arrays, card)
     return path
 
 
+def _cached(name: str, sha: str) -> Path:
+    from ._dataset import cache_root
+
+    return cache_root() / "data" / "mujoco" / f"{mj.task(name).name}-{sha[:16]}.npz"
+
+
 def load_data(name: str, folder: Path | str | None = None) -> tuple[mj.Episodes, dict]:
-    """(Episodes, card) of a task's file; a one-line ValueError when the file or its card is
-    missing, or when the arrays' sha256 differs from the card's."""
+    """(Episodes, card) of a task's file, replayed (or read from the cache's replay); a
+    one-line ValueError when the file or its card is missing, or when the file's or the
+    replay's sha256 differs from the card's."""
     path = data_path(name, folder)
     card_path = path.with_suffix(".json")
     if not path.exists() or not card_path.exists():
@@ -60,15 +131,61 @@ def load_data(name: str, folder: Path | str | None = None) -> tuple[mj.Episodes,
         )
     card = json.loads(card_path.read_text())
     with np.load(path) as f:
-        arrays = {k: f[k] for k in ("z", "u", "reward", "episode", "step")}
-        seed = int(f["seed"]) if "seed" in f else 0
-    sha = mj.content_hash(arrays)
-    if sha != card.get("episodes_sha256"):
+        stored = {k: f[k] for k in FILE_FIELDS}
+    sha = mj.content_hash(stored)
+    if sha != card.get("file_sha256"):
         raise ValueError(
             f"{path}: the arrays' sha256 {sha[:16]} differs from the card's "
-            f"{str(card.get('episodes_sha256'))[:16]}"
+            f"{str(card.get('file_sha256'))[:16]}"
         )
-    return mj.Episodes(mj.task(name).name, seed=seed, **arrays), card
+    want = str(card.get("episodes_sha256"))
+    cached = _cached(name, want)
+    if cached.exists():
+        with np.load(cached) as f:
+            arrays = {k: f[k] for k in ("z", "u", "reward", "episode", "step")}
+            seed = int(f["seed"])
+        if mj.content_hash(arrays) == want:
+            return mj.Episodes(mj.task(name).name, seed=seed, **arrays), card
+    ep = replay(name, stored)
+    sha = mj.content_hash(ep.arrays())
+    if sha != want:
+        import mujoco
+
+        raise ValueError(
+            f"{path}: its replay under MuJoCo {mujoco.__version__} has sha256 {sha[:16]}, the "
+            f"card's (MuJoCo {card.get('replay_mujoco')}) {want[:16]}: another simulator build"
+        )
+    cached.parent.mkdir(parents=True, exist_ok=True)
+    tmp = cached.with_name(f".{cached.stem}.tmp.npz")
+    np.savez(tmp, seed=np.int64(ep.seed), **ep.arrays())
+    os.replace(tmp, cached)
+    return ep, card
+
+
+def collect(
+    name: str,
+    steps: int,
+    *,
+    seed: int = 0,
+    checkpoint_dir: Path | str | None = None,
+    folder: Path | str | None = None,
+    progress=None,
+) -> Path:
+    """Train the SAC agent ``steps`` environment steps on a task (resuming from
+    ``checkpoint_dir``, ``<cache>/mujoco`` by default), then save its whole recorded buffer as
+    the task's file with a card: the policy, its budget, its evaluation returns along the way,
+    the split's sizes. Returns the path of the npz."""
+    from ._dataset import cache_root
+    from ._sac_run import data_card, train_policy
+
+    ck = Path(checkpoint_dir) if checkpoint_dir is not None else cache_root() / "mujoco"
+    run = train_policy(name, steps, seed, ck, progress=progress)
+    ep = run.episodes()
+    card = data_card(run, mj.split_episodes(ep, seed=seed))
+    card["policy_training"]["eval_returns"] = [
+        [int(s), float(r)] for s, r in zip(run.eval_steps, run.eval_returns, strict=True)
+    ]
+    return save_data(ep, card, folder)
 
 
 def stand_in(name: str, n_steps: int, seed: int = 0) -> tuple[mj.Episodes, dict]:

@@ -102,6 +102,7 @@ def test_train_and_test_episodes_are_disjoint_and_windows_are_their_rows(built):
 
 def test_a_task_file_is_read_and_checked_against_its_card(monkeypatch, tmp_path):
     monkeypatch.setenv(D.ENV, str(tmp_path))
+    monkeypatch.setenv("DECON_CACHE", str(tmp_path / "cache"))
     ep, card = D.stand_in(TASK, 300)
     assert not [c for c in expand("mujoco", "quick")]  # no file: no runs
     path = D.save_data(ep, {"policy": "test", "policy_budget": "none"})
@@ -112,7 +113,7 @@ def test_a_task_file_is_read_and_checked_against_its_card(monkeypatch, tmp_path)
     assert len(got.episode) == 250  # the first n_generated transitions
     np.testing.assert_array_equal(got.z, ep.z[:250])
     bad = json.loads(path.with_suffix(".json").read_text())
-    bad["episodes_sha256"] = "0" * 64
+    bad["file_sha256"] = "0" * 64
     path.with_suffix(".json").write_text(json.dumps(bad))
     with pytest.raises(ValueError, match="differs from the card's") as e:
         C.load_episodes(c)

@@ -170,3 +170,83 @@ def test_data_card(hopper_split):
     assert card["task"] == "HopperFull-v0" and card["sha256"] == split.sha256()
     assert card["sizes"]["train"] == [200, 3, 12] and card["sizes"]["test"] == [5, 10, 12]
     assert "Hopper-v5" in card["source"] and card["collection"]["transitions"] == 1500
+
+
+# --- the task files: controls and first states, replayed bit for bit ----------------------
+
+
+@pytest.fixture
+def data_folder(monkeypatch, tmp_path):
+    from systems import mujoco_data as D
+
+    monkeypatch.setenv(D.ENV, str(tmp_path / "data"))
+    monkeypatch.setenv("DECON_CACHE", str(tmp_path / "cache"))
+    return tmp_path
+
+
+@pytest.mark.parametrize("name", [n for n, t in mj.TASKS.items() if t.in_fig7])
+def test_a_task_file_replays_to_its_episodes_bit_for_bit(name, data_folder):
+    from systems import mujoco_data as D
+
+    ep = episodes(name, 300)
+    path = D.save_data(ep, {"policy": "uniform random (test)"})
+    with np.load(path) as f:
+        assert set(f.files) == set(D.FILE_FIELDS) and "z" not in f.files  # states not stored
+    got, card = D.load_data(name)
+    for k, a in ep.arrays().items():
+        np.testing.assert_array_equal(getattr(got, k), a, err_msg=k)
+        assert getattr(got, k).dtype == a.dtype
+    assert card["episodes_sha256"] == mj.content_hash(ep.arrays()) and got.seed == ep.seed
+    assert card["replay_mujoco"] == mujoco.__version__
+
+
+def test_a_second_load_reads_the_cached_replay(data_folder, monkeypatch):
+    from systems import mujoco_data as D
+
+    ep = episodes("HalfCheetahFull-v0", 300)
+    D.save_data(ep, {})
+    D.load_data("HalfCheetahFull-v0")
+
+    def no_replay(*a, **k):
+        raise AssertionError("replayed again")
+
+    monkeypatch.setattr(D, "replay", no_replay)
+    got, _ = D.load_data("HalfCheetahFull-v0")
+    np.testing.assert_array_equal(got.z, ep.z)
+
+
+def test_states_the_controls_do_not_give_are_not_saved(data_folder):
+    from systems import mujoco_data as D
+
+    ep = episodes("HopperFull-v0", 300)
+    z = ep.z.copy()
+    z[40, 7] += 1e-12  # one velocity, one ulp-sized change, mid-episode
+    with pytest.raises(ValueError, match="replay of the controls does not give the episodes"):
+        D.save_data(dataclasses.replace(ep, z=z), {})
+    assert not D.data_path("HopperFull-v0").exists()
+
+
+def test_episodes_not_numbered_from_step_0_are_refused():
+    from systems import mujoco_data as D
+
+    ep = episodes("HopperFull-v0", 300)
+    later = {k: v[5:] for k, v in ep.arrays().items()}  # the first episode's start cut off
+    with pytest.raises(ValueError, match="numbered 0, 1, ... from step 0"):
+        D.compact(dataclasses.replace(ep, **later))
+
+
+@pytest.mark.parametrize("field", ["file_sha256", "episodes_sha256"])
+def test_a_file_or_replay_unlike_its_card_is_one_line(field, data_folder):
+    import json
+
+    from systems import mujoco_data as D
+
+    path = D.save_data(episodes("SwimmerFull-v0", 300), {})
+    card = json.loads(path.with_suffix(".json").read_text())
+    card[field] = "0" * 64
+    path.with_suffix(".json").write_text(json.dumps(card))
+    with pytest.raises(ValueError, match="sha256") as e:
+        D.load_data("SwimmerFull-v0")
+    assert "\n" not in str(e.value)
+    with pytest.raises(ValueError, match="no data for HopperFull-v0"):
+        D.load_data("HopperFull-v0")
