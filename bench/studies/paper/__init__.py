@@ -1,4 +1,4 @@
-"""The experiments of the paper (Gruver et al. 2022, Figs. 2-6 and 8) and of the HNN/LNN/VIN seeds.
+"""The experiments of the paper (Gruver et al. 2022, Figs. 2-9) and of the HNN/LNN/VIN seeds.
 
 One module per figure: its :class:`~bench.core.Experiment`, its claim's verdict rule and its
 figure, registered together as a :class:`~bench.core.Study` at import. Rules are built from
@@ -11,8 +11,7 @@ the budgets: docs/studies/paper.md.
 from . import energy, symplectic, second_order, coordinates, damped, loss
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: F401
 from . import pixels, vin_blog, _hnn_diagnosis  # noqa: F401
-from . import rigid_bodies, three_body, real_pendulum  # noqa: F401
-from . import mujoco  # noqa: F401 - an experiment without a study yet
+from . import rigid_bodies, three_body, real_pendulum, mujoco  # noqa: F401
 from . import _commands, _sections  # noqa: F401 - the paper's verbs and report sections
 
 # isort: on

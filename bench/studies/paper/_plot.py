@@ -27,6 +27,7 @@ COLORS = {
     "node": "#1f77b4",
     "node_so": "#2ca02c",
     "hnn": "#d62728",
+    "hnn_force": "#d62728",  # the HNN of the MuJoCo tasks (Fig. 7)
     "hnn_so": "#ff7f0e",
     "hnn_so_diss": "#9467bd",
     "node_symreg": "#17becf",

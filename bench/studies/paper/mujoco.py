@@ -1,25 +1,49 @@
-"""The paper's MuJoCo experiment (Sec. 5, Fig. 7, App. C): claim 16's runs. NODE, NODE+SO and
-the HNN with a learned force (``hnn_force``) fitted to the transitions of Fig. 7's three tasks
-under their recorded controls, beside the constant-velocity predictor.
+"""The paper's MuJoCo experiment (Sec. 5, Fig. 7, App. C): claim 16's runs, its verdict rule,
+its figure and its report section. NODE, NODE+SO and the HNN with a learned force
+(``hnn_force``) fitted to the transitions of Fig. 7's three tasks under their recorded controls,
+beside the constant-velocity predictor.
 
-The experiment only: no verdict rule, figure or report section yet, so it is registered as an
-experiment (``python -m bench sweep mujoco``), not as a study. Its runs read each task's file
-(``systems.mujoco_data``) and exist only where the file is there; the smoke profile runs on the
-random-control stand-in instead (a pipeline check). Facts and differences:
-docs/studies/mujoco.md.
+Its runs read each task's file (``systems.mujoco_data``) and exist only where the file is there;
+the smoke profile runs on the random-control stand-in instead (a pipeline check: the rule gives
+no signed verdict on it). The rule and the section are in ``_mujoco_rule`` and
+``_mujoco_section``. Facts and differences: docs/studies/mujoco.md.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import systems
 from systems import mujoco_data
 
 from ...core._config import RunConfig
-from ...core._experiments import Experiment, register
+from ...core._experiments import Experiment
+from ...core._studies import Study, register_study
+from .._figure import save_figure, subplots
+from ._mujoco_rule import CLAIM, LABELS, MODELS, NAME, NOT_JUDGED, TASKS, claim_16
+from ._mujoco_section import TITLE, rows_of, section, shown, summary
+from ._plot import _bars, _trivial_lines
 from ._rules import CLAIM_TITLES
 
-CLAIM = 16
-TASKS = tuple(t.name for t in systems.MUJOCO_TASKS.values() if t.in_fig7)
+__all__ = [
+    "CELLS",
+    "EXPERIMENT",
+    "EXPERIMENTS",
+    "FILE",
+    "NOT_JUDGED",
+    "QUICK_STEPS",
+    "QUICK_TASK",
+    "STAND_IN",
+    "STEM",
+    "STUDY",
+    "TASKS",
+    "TITLE",
+    "TRANSITIONS",
+    "claim_16",
+    "figure",
+    "section",
+]
+
 DTS = tuple(sorted({systems.MUJOCO_TASKS[t].dt for t in TASKS}))
 # (model, integrator): the reference's NODE and MixtureHNN with Euler, its CoupledNODE with the
 # averaged-velocity Euler rule (euler_so), 8 steps per transition; and the trivial predictor
@@ -50,16 +74,22 @@ _PAPER = {
     "eval_checkpoints": 0,
     "dtype": "float32",
 }
+# The committed task files' size: every transition of a SAC run of 200K env steps per task
+# (the paper's buffer had 850K); a run reads the file's first n_generated transitions.
+TRANSITIONS = 200_000
 # the paper's sizes: 40K windows, 256 epochs (200 steps each), 200 test trajectories of 201
-# states from the first 850K transitions (the reference's last saved buffer)
+# states
 _SIZES = {
-    "n_generated": 850_000,
+    "n_generated": TRANSITIONS,
     "n_train": 40_000,
     "n_test": 200,
     "test_chunks": 67,
     "steps": 256 * 200,
 }
-_QUICK = {**_SIZES, "steps": 4 * 200}  # 4 of the 256 epochs
+# quick (within make bench's 30 minutes): the cheapest simulator's task only, a few epochs
+QUICK_TASK = "HalfCheetahFull-v0"
+QUICK_STEPS = 4 * 200  # 4 of the 256 epochs
+_QUICK = {**_SIZES, "steps": QUICK_STEPS, "system": (QUICK_TASK,), "seeds": (0, 1, 2, 3, 4)}
 _SMOKE = {
     "n_generated": 300,
     "n_train": 16,
@@ -86,32 +116,73 @@ def _include(c: RunConfig) -> bool:
     )
 
 
-EXPERIMENT = register(
-    Experiment(
-        name="mujoco",
-        title="MuJoCo transitions under controls (Fig. 7): NODE, NODE+SO, HNN with a force",
-        axes={
-            "model": tuple(m for m, _ in CELLS),
-            "system": TASKS,
-            "dt": DTS,
-            "train_integrator": ("euler", "euler_so"),
-            "eval_integrator": ("euler", "euler_so"),
-            "system_params": (FILE,),
-        },
-        fixed=_PAPER,
-        profile_overrides={
-            "smoke": _SMOKE,
-            "quick": _QUICK,
-            "paper": _SIZES,
-            "paper-core": {"seeds": (0, 1, 2, 3, 4)},
-        },
-        include=_include,
-        claim=CLAIM,
-    ),
-    replace=True,
+EXPERIMENT = Experiment(
+    name=NAME,
+    title="MuJoCo transitions under controls (Fig. 7): NODE, NODE+SO, HNN with a force",
+    axes={
+        "model": tuple(m for m, _ in CELLS),
+        "system": TASKS,
+        "dt": DTS,
+        "train_integrator": ("euler", "euler_so"),
+        "eval_integrator": ("euler", "euler_so"),
+        "system_params": (FILE,),
+    },
+    fixed=_PAPER,
+    profile_overrides={
+        "smoke": _SMOKE,
+        "quick": _QUICK,
+        "paper": _SIZES,
+        "paper-core": {"seeds": (0, 1, 2, 3, 4)},
+    },
+    include=_include,
+    claim=CLAIM,
 )
 EXPERIMENTS = (EXPERIMENT,)
-CLAIM_TITLES[CLAIM] = (
-    "MuJoCo: NODE+SO beats NODE and HNN; the HNN underperforms NODE, fitting the training data "
-    "poorly"
+STEM = "fig7_mujoco"
+
+
+def figure(results_dir) -> list[Path]:
+    """Fig. 7: per task, NODE, NODE+SO and the HNN's test MSE (left) and train MSE (right), the
+    constant-velocity predictor's geometric mean as a dashed line; log scale; bars the mean
+    over seeds, error bars the standard error over seeds (std with ddof 1 over sqrt n; the
+    paper's caption says standard error, its plotting code draws the standard deviation). The
+    task files' runs where there are any, else the stand-in's, so titled."""
+    rows, _ = rows_of(results_dir)
+    data, kind = shown(rows)
+    if not len(data):
+        return []
+    tasks = [t for t in TASKS if (data["system"] == t).any()]
+    trained = [m for m in MODELS[:3] if (data["model"] == m).any()]
+    trivial = data[data["model"] == "constant_velocity"]
+    fig, axes = subplots(1, 2, figsize=(4.0 + 1.6 * len(tasks), 3.4))
+    for ax, metric, ylabel in (
+        (axes[0], "test_mse", "test MSE (normalised)"),
+        (axes[1], "train_mse", "train MSE (normalised)"),
+    ):
+        _trivial_lines(ax, trivial, metric, tasks)
+        _bars(ax, summary(data, metric), tasks, trained, "system", "model", LABELS.get)
+        ax.set_xticklabels([t.replace("Full-v0", "") for t in tasks])
+        ax.set_ylabel(ylabel)
+    handles, labels = axes[0].get_legend_handles_labels()
+    for ax in axes:
+        ax.get_legend().remove()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    fig.subplots_adjust(wspace=0.35, bottom=0.22)
+    what = "task files" if kind == "file" else "RANDOM-CONTROL STAND-IN (pipeline check)"
+    fig.suptitle(f"MuJoCo transitions (Fig. 7): {what}; mean ± s.e. over seeds", fontsize=9)
+    return save_figure(fig, Path(results_dir) / "figures", STEM)
+
+
+STUDY = register_study(
+    Study(
+        name=NAME,
+        experiments=EXPERIMENTS,
+        claim=CLAIM,
+        title=CLAIM_TITLES[CLAIM],
+        rule=claim_16,
+        stem=STEM,
+        results_figure=figure,
+        section=section,
+        section_title=TITLE,
+    )
 )

@@ -1,0 +1,251 @@
+"""The MuJoCo study (claim 16, Fig. 7): its profiles, its verdict rule on synthetic tables built
+to pass, to fail and to stay undecided (models that did not learn, a test set that does not
+discriminate, the stand-in alone), its report section and figure, and the smoke profile end
+to end on the random-control stand-in."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import systems
+from bench.core import _store
+from bench.core._experiments import RunConfig, expand
+from bench.studies.paper import mujoco as X
+from bench.studies.paper import policy
+from systems import mujoco_data as D
+
+SEEDS = (0, 1, 2, 3, 4)
+SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # per-seed log offsets, mean 0
+INTEGRATOR = dict(X.CELLS)
+# test MSE, train MSE and rollout error per model: NODE+SO 5x below NODE, the HNN 4x above
+# NODE in test MSE and 6x in train MSE, the constant-velocity predictor 100x above NODE
+REPRODUCE = {
+    "node": (0.1, 0.05, 0.2),
+    "node_so": (0.02, 0.01, 0.1),
+    "hnn_force": (0.4, 0.3, 0.4),
+    "constant_velocity": (10.0, 5.0, 0.9),
+}
+# NODE+SO no better than NODE, the HNN best on test and training data
+CONTRADICT = {
+    "node": (0.1, 0.05, 0.2),
+    "node_so": (0.3, 0.2, 0.3),
+    "hnn_force": (0.01, 0.005, 0.05),
+    "constant_velocity": (10.0, 5.0, 0.9),
+}
+
+
+def _tables(
+    values=REPRODUCE, tasks=(X.QUICK_TASK,), data=X.FILE, spread=0.1, frames=False, change=None
+):
+    """Rows of the mujoco experiment on seeds 0-4 in the store's format (with ``frames``:
+    (runs, curves)): each model's (test MSE, train MSE, rollout error) from ``values``, per
+    seed times exp(spread * SPREAD) on NODE+SO and the HNN (so the paired log ratios vary);
+    ``change`` ({(task, model): values}) overrides cells."""
+    c0 = expand(X.EXPERIMENT, "smoke")[0].to_dict()
+    rows = []
+    for task in tasks:
+        dt = systems.MUJOCO_TASKS[task].dt
+        for model, integ in INTEGRATOR.items():
+            test, train, err = (change or {}).get((task, model), values[model])
+            for s in SEEDS:
+                jitter = math.exp(spread * SPREAD[s]) if model in ("node_so", "hnn_force") else 1
+                c = RunConfig(**{**c0, "system": task, "dt": dt, "model": model, "seed": s,
+                                 "train_integrator": integ, "eval_integrator": integ,
+                                 "system_params": data})  # fmt: skip
+                stand = data == X.STAND_IN
+                row = c.to_dict()
+                row.update(
+                    config_hash=c.config_hash,
+                    train_hash=c.train_hash,
+                    experiment=X.EXPERIMENT.name,
+                    profile="smoke",
+                    status="ok",
+                    test_mse=test * jitter,
+                    train_mse=train * jitter,
+                    rollout_error=err * jitter,
+                    energy_violation=math.nan,
+                    data_source=f"{D.STAND_IN}, 300 steps" if stand else f"file {task}.npz: 200K",
+                    data_sha256=("cd" if stand else "ab") * 32,
+                    data_points=300 if stand else X.TRANSITIONS,
+                    curves={"t": [0.0, dt], "rel_error": [0.0, 0.1]},
+                )
+                rows.append(_store.jsonable(row))
+    runs = _store.rows_frame(rows)
+    return (runs, _store.curves_frame(rows)) if frames else runs
+
+
+def _statuses(v) -> dict[str, str]:
+    return {p.name: p.status for p in v.parts}
+
+
+# ----------------------------------------------------------------------------- profiles
+def test_quick_runs_one_task_and_every_profile_reads_the_files_size(monkeypatch, tmp_path):
+    monkeypatch.setenv(D.ENV, str(tmp_path))
+    assert not expand(X.EXPERIMENT, "quick")  # no files: no runs
+    for task in X.TASKS:  # the include rule asks only whether a task's file is there
+        D.data_path(task).touch()
+    quick = expand(X.EXPERIMENT, "quick")
+    assert {c.system for c in quick} == {X.QUICK_TASK} and len(quick) == 4 * 5
+    assert {c.seed for c in quick} == set(SEEDS) and {c.steps for c in quick} == {X.QUICK_STEPS}
+    core = expand(X.EXPERIMENT, "paper-core")
+    assert {c.system for c in core} == set(X.TASKS) and {c.seed for c in core} == set(SEEDS)
+    for c in (*quick, *core, *expand(X.EXPERIMENT, "paper")):
+        assert c.n_generated == X.TRANSITIONS == 200_000
+    assert {c.system_params for c in expand(X.EXPERIMENT, "smoke")} == {X.STAND_IN}
+
+
+def test_the_study_is_registered_with_its_rule_figure_and_section():
+    from bench.studies.paper import CLAIM_TITLES, claim_studies
+
+    study = next(s for s in claim_studies() if s.claim == 16)
+    assert study is X.STUDY and study.rule is X.claim_16 and study.experiments == X.EXPERIMENTS
+    assert study.results_figure is X.figure and study.section is X.section
+    assert study.title == CLAIM_TITLES[16]
+
+
+# --------------------------------------------------------------------------- the rule
+def test_the_paper_s_ordering_is_reproduced_on_every_task():
+    v = X.claim_16(_tables(tasks=X.TASKS))
+    assert v.verdict == "reproduced" and v.key == "16", v.detail
+    assert len(v.parts) == 4 * 3 and all(p.status == "holds" for p in v.parts), v.detail
+    assert v.effect == pytest.approx(math.log(5.0), abs=1e-9)  # pooled (a): the headline
+    assert v.n_seeds == 5 and v.discriminating is True and v.n_failed == 0
+    assert "orders every test comparison as test_mse does" in v.detail
+    assert "file HalfCheetahFull-v0.npz: 200K" in v.detail
+
+
+def test_the_opposite_ordering_is_not_reproduced():
+    v = X.claim_16(_tables(CONTRADICT))
+    assert v.verdict == "not reproduced", v.detail
+    assert set(_statuses(v).values()) == {"contradicts"}, v.detail
+
+
+def test_one_task_where_the_hnn_beats_node_is_partly_reproduced():
+    hopper = "HopperFull-v0"
+    v = X.claim_16(_tables(tasks=X.TASKS, change={(hopper, "hnn_force"): (0.02, 0.3, 0.05)}))
+    s = _statuses(v)
+    assert v.verdict == "partly reproduced", v.detail
+    assert s[f"{hopper}: (b) log(test MSE HNN / NODE)"] == "contradicts"
+    assert s[f"{X.QUICK_TASK}: (b) log(test MSE HNN / NODE)"] == "holds"
+
+
+def test_a_gain_on_the_margin_is_undecided():
+    margin = policy.margin("error", squared=True).value  # 1.5625: a ratio of MSEs
+    at = (0.1 / margin, 0.05 / margin, 0.15)
+    v = X.claim_16(_tables(spread=1.0, change={(X.QUICK_TASK, "node_so"): at}))
+    assert _statuses(v)[f"{X.QUICK_TASK}: (a) log(test MSE NODE / NODE+SO)"] == "undecided"
+    assert v.verdict == "inconclusive", v.detail
+
+
+def test_a_model_that_did_not_learn_leaves_the_parts_it_wins_untested():
+    # NODE only 2.5x below the constant-velocity predictor: under the gate (2x squared), so
+    # the parts where NODE is the better model, (b) and (c) against NODE, are not tested
+    v = X.claim_16(_tables(change={(X.QUICK_TASK, "node"): (4.0, 3.0, 0.8)}))
+    s = _statuses(v)
+    assert s[f"{X.QUICK_TASK}: (c) log(train MSE HNN / NODE+SO)"] == "holds", v.detail
+    against_node = [p for p in v.parts if p.name.rstrip(")").endswith("/ NODE")]
+    assert len(against_node) == 2 and all(p.status == "not tested" for p in against_node)
+    assert all("NODE on HalfCheetahFull-v0 did not learn" in p.note for p in against_node)
+    assert s[f"{X.QUICK_TASK}: (a) log(test MSE NODE / NODE+SO)"] == "not tested"
+    assert v.verdict == "inconclusive", v.detail
+
+
+def test_an_hnn_that_did_not_learn_is_the_claims_finding_not_a_gap():
+    # the HNN 2.5x below the trivial predictor (under the learning gate): (b) and (c) still
+    # judged, since the models said to be better learned
+    v = X.claim_16(_tables(change={(X.QUICK_TASK, "hnn_force"): (4.0, 3.0, 0.8)}))
+    assert v.verdict == "reproduced", v.detail
+
+
+def test_a_test_set_the_trivial_predictor_wins_is_not_discriminating():
+    v = X.claim_16(_tables(change={(X.QUICK_TASK, "constant_velocity"): (1e-3, 1e-3, 0.01)}))
+    assert v.verdict == "inconclusive" and v.discriminating is False, v.detail
+    assert v.detail.startswith("NOT DISCRIMINATING")
+
+
+def test_too_few_seeds_is_inconclusive():
+    runs = _tables()
+    v = X.claim_16(runs[runs["seed"] < 3])
+    assert v.verdict == "inconclusive" and v.n_seeds == 3, v.detail
+
+
+def test_failed_runs_score_the_worst_value_and_are_counted():
+    runs = _tables()
+    hnn = runs["model"] == "hnn_force"
+    runs.loc[hnn, "status"] = "diverged"
+    runs.loc[hnn, "test_mse"] = math.nan
+    v = X.claim_16(runs)
+    assert v.n_failed == 5 and "5 failed/diverged runs" in v.detail
+    # scored at the task's worst value (>= 1): a diverged HNN loses to NODE, not skipped
+    assert _statuses(v)[f"{X.QUICK_TASK}: (b) log(test MSE HNN / NODE)"] == "holds"
+
+
+def test_a_rollout_error_that_orders_the_other_way_is_named():
+    v = X.claim_16(_tables(change={(X.QUICK_TASK, "node_so"): (0.02, 0.01, 0.5)}))
+    assert v.verdict == "reproduced", v.detail  # the verdict reads the paper's metric
+    assert "rollout_error disagrees with test_mse" in v.detail
+    assert "(a) NODE / NODE+SO" in v.detail
+
+
+def test_the_stand_in_alone_gives_no_signed_verdict():
+    v = X.claim_16(_tables(data=X.STAND_IN))
+    assert v.verdict == "inconclusive" and v.variant == X.NOT_JUDGED, v.detail
+    assert v.key == "16 (not judged: stand-in data)"
+    assert [p.status for p in v.parts] == ["undecided"]
+    assert "pipeline check on the random-control stand-in" in v.detail and "holds" in v.detail
+    # one key whether the stand-in ran or nothing did
+    empty = X.claim_16(_tables().iloc[0:0])
+    assert empty.key == v.key and "no runs on the task files" in empty.detail
+
+
+def test_the_task_files_are_judged_and_the_stand_in_left_out():
+    import pandas as pd
+
+    runs = pd.concat([_tables(), _tables(CONTRADICT, data=X.STAND_IN)], ignore_index=True)
+    v = X.claim_16(runs)
+    assert v.verdict == "reproduced" and v.key == "16", v.detail
+    assert "20 stand-in rows left out" in v.detail
+
+
+# ------------------------------------------------------------------ section and figure
+@pytest.mark.parametrize("data", [X.FILE, X.STAND_IN], ids=["file", "stand-in"])
+def test_the_section_and_figure_show_fig_7_s_numbers(tmp_path, data):
+    runs, curves = _tables(tasks=X.TASKS, data=data, spread=0.0, frames=True)
+    runs.to_parquet(tmp_path / "runs.parquet", index=False)
+    curves.to_parquet(tmp_path / "curves.parquet", index=False)
+    text = X.section(tmp_path)
+    assert text.startswith(f"## {X.TITLE}")
+    assert "| HalfCheetahFull-v0 | NODE+SO | 5 | 0.02 ± 0 | 0.01 ± 0 | 0.1 |" in text
+    assert "| HopperFull-v0 | constant velocity | 5 | 10 ± 0 | 5 ± 0 |" in text
+    assert "What differs from the paper:" in text and "850K" in text
+    if data == X.FILE:
+        assert "Verdict: **reproduced**." in text and "STAND-IN" not in text
+        assert "file HopperFull-v0.npz: 200K; 200000 transitions read" in text
+    else:
+        assert "RANDOM-CONTROL STAND-IN" in text and "No signed verdict" in text
+    paths = X.figure(tmp_path)
+    assert {p.suffix for p in paths} == {".png", ".pdf"} and all(p.stat().st_size for p in paths)
+    assert paths[0].name == f"{X.STEM}.png"
+
+
+def test_no_runs_give_a_section_without_a_table_and_no_figure(tmp_path):
+    assert X.section(tmp_path).endswith("(no runs)") and X.figure(tmp_path) == []
+
+
+# --------------------------------------------------------------------------- end to end
+@pytest.mark.slow
+def test_the_smoke_profile_runs_and_reports_on_the_stand_in(tmp_path):
+    from bench.core._runner import sweep
+    from bench.core._store import load_runs
+
+    sweep(expand(X.EXPERIMENT, "smoke"), tmp_path / "res", experiment=X.EXPERIMENT.name,
+          profile="smoke", progress=False, cache_root=tmp_path / "cache")  # fmt: skip
+    runs = load_runs(tmp_path / "res")
+    assert (runs["status"] == "ok").all(), runs[["model", "error"]]
+    v = X.claim_16(runs)
+    assert v.variant == X.NOT_JUDGED and "pipeline check" in v.detail, v.detail
+    assert "RANDOM-CONTROL STAND-IN" in X.section(tmp_path / "res")
+    assert len(X.figure(tmp_path / "res")) == 2
