@@ -43,7 +43,7 @@ def rows_frame(rows: Sequence[dict]) -> pd.DataFrame:
         for col in df.columns:  # JSON null -> NaN, "inf" -> inf, where a column is numeric
             if df[col].dtype == object and df[col].map(_numeric_or_null).all():
                 df[col] = pd.to_numeric(df[col], errors="coerce").astype(float)
-    return df.reset_index(drop=True)
+    return df.reset_index(drop=True).copy()  # the copy consolidates the columns set above
 
 
 def curves_frame(rows: Iterable[dict]) -> pd.DataFrame:

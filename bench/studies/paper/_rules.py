@@ -64,7 +64,7 @@ def _plain_columns(df: pd.DataFrame) -> pd.DataFrame:
     """Arrow-backed string columns as plain objects: the rules slice a table thousands of
     times, and taking rows of Arrow strings costs several times more."""
     cols = {c: object for c in df.columns if pd.api.types.is_string_dtype(df[c].dtype)}
-    return df.astype(cols) if cols else df
+    return df.astype(cols).copy() if cols else df  # the copy consolidates the columns
 
 
 def runs_at(study, profile: str | None) -> bool:
