@@ -313,7 +313,13 @@ def _data_mujoco(args) -> int:
 
     import systems
 
-    systems.mujoco_task(args.task)  # a one-line error naming the tasks
+    task = systems.mujoco_task(args.task)  # a one-line error naming the tasks
+    path = systems.mujoco_data.data_path(task.name, args.out)
+    if path.with_suffix(".json").exists():
+        done = json.loads(path.with_suffix(".json").read_text()).get("policy_training", {})
+        if (done.get("steps"), done.get("seed")) == (args.steps, args.seed):
+            print(f"{path}: collected already ({args.steps} steps, seed {args.seed})")
+            return 0
     t0 = time.perf_counter()
 
     def progress(n, info):

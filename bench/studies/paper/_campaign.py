@@ -27,7 +27,7 @@ TRAIN_EVAL_COLUMNS = (
 )
 
 # The order in which a campaign settles the claims (docs/studies/campaign.md).
-CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12, 13, 14, 15)
+CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12, 13, 14, 15, 16)
 
 
 def campaign_experiments(profile: str = "paper-core", order=CAMPAIGN_CLAIMS) -> list[str]:
