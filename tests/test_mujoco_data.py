@@ -250,3 +250,38 @@ def test_a_file_or_replay_unlike_its_card_is_one_line(field, data_folder):
     assert "\n" not in str(e.value)
     with pytest.raises(ValueError, match="no data for HopperFull-v0"):
         D.load_data("HopperFull-v0")
+
+
+# --- the committed task files ---------------------------------------------------------------
+
+
+def _committed():
+    from systems import mujoco_data as D
+
+    return sorted(D.COMMITTED.glob("*.npz"))
+
+
+@pytest.mark.parametrize("path", _committed(), ids=lambda p: p.stem)
+def test_a_committed_file_matches_its_card_and_the_experiments_size(path):
+    import json
+
+    from bench.studies.paper import mujoco as X
+    from systems import mujoco_data as D
+
+    card = json.loads(path.with_suffix(".json").read_text())
+    with np.load(path) as f:
+        arrays = {k: f[k] for k in D.FILE_FIELDS}
+    assert mj.content_hash(arrays) == card["file_sha256"]
+    assert int(arrays["length"].sum()) == card["collection"]["transitions"] == X.TRANSITIONS
+    assert card["task"] == path.stem and card["replay_mujoco"] == mujoco.__version__
+    assert card["policy_training"]["steps"] == X.TRANSITIONS  # the whole buffer of the run
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", _committed(), ids=lambda p: p.stem)
+def test_a_committed_file_replays_to_its_cards_episodes(path, monkeypatch, tmp_path):
+    from systems import mujoco_data as D
+
+    monkeypatch.setenv("DECON_CACHE", str(tmp_path))  # no cached replay: replay it here
+    ep, card = D.load_data(path.stem, path.parent)
+    assert mj.content_hash(ep.arrays()) == card["episodes_sha256"]
