@@ -169,6 +169,13 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
     ("derivative", "hnn", 128, 16): (1.7, 4.8),
     ("derivative", "lnn", 500, 16): (30.8, 60.0),
     ("derivative", "hnn", 500, 16): (15.5, 45.0),
+    # Claim 16's MuJoCo runs (controlled, width 128, batch 200, 3-step windows, 8 Euler steps
+    # per transition): the CPU time of 200- and 600-step runs on HopperFull-v0's file, one
+    # process under load, n_test 50 (the NODEs' difference at noise level: NODE+SO's for both)
+    ("controlled", "node", 128, 200): (6.6, 5.0),
+    ("controlled", "node_so", 128, 200): (6.6, 5.0),
+    ("controlled", "hnn_force", 128, 200): (48.5, 25.0),
+    ("controlled", "constant_velocity", 128, 200): (0.0, 1.0),
     # Claim 2 at paper-core (chain-2, width 256, batch 200): the campaign's stored rows,
     # (cpu_seconds - 12 s of evaluation) / 8000 steps; the penalty's Jacobian, and
     # its gradient, cost more than the quick-to-paper scaling assumed (550 s a run), and at
