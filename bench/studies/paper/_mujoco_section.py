@@ -44,9 +44,8 @@ DIFFERENCES = (
     "The HNN (hnn_force) takes 8 Euler steps per transition as every model does (the "
     "reference's MixtureHNN takes one) and learns its mass matrix M(q) (the reference's has M "
     "= I).",
-    "Error bars: standard error over 5 seeds (the caption says standard error over 4 seeds; "
-    "the plotting code draws the standard deviation). The quick profile runs one task "
-    "(HalfCheetahFull-v0) for a few of the 256 epochs.",
+    "Error bars: standard error over the seeds (the caption says standard error over 4 "
+    "seeds; the plotting code draws the standard deviation).",
 )
 
 
