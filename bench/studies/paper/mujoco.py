@@ -155,6 +155,8 @@ def figure(results_dir) -> list[Path]:
     over seeds, error bars the standard error over seeds (std with ddof 1 over sqrt n; the
     paper's caption says standard error, its plotting code draws the standard deviation). The
     task files' runs where there are any, else the stand-in's, so titled."""
+    from matplotlib.ticker import NullFormatter
+
     rows, _ = rows_of(results_dir)
     data, kind = shown(rows)
     if not len(data):
@@ -171,11 +173,12 @@ def figure(results_dir) -> list[Path]:
         _bars(ax, summary(data, metric), tasks, trained, "system", "model", LABELS.get)
         ax.set_xticklabels([t.replace("Full-v0", "") for t in tasks])
         ax.set_ylabel(ylabel)
+        ax.yaxis.set_minor_formatter(NullFormatter())  # decades only: no clash with the label
     handles, labels = axes[0].get_legend_handles_labels()
     for ax in axes:
         ax.get_legend().remove()
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
-    fig.subplots_adjust(wspace=0.35, bottom=0.22)
+    fig.subplots_adjust(wspace=0.45, bottom=0.22)
     what = "task files" if kind == "file" else "RANDOM-CONTROL STAND-IN (pipeline check)"
     fig.suptitle(f"MuJoCo transitions (Fig. 7): {what}; mean ± s.e. over seeds", fontsize=9)
     return save_figure(fig, Path(results_dir) / "figures", STEM)
