@@ -196,9 +196,9 @@ def test_the_stand_in_alone_gives_no_signed_verdict():
     assert v.key == "16 (not judged: stand-in data)"
     assert [p.status for p in v.parts] == ["undecided"]
     assert "pipeline check on the random-control stand-in" in v.detail and "holds" in v.detail
-    # one key whether the stand-in ran or nothing did
+    # no runs at all: the claim's own key (the runs are not made yet), not the stand-in's
     empty = X.claim_16(_tables().iloc[0:0])
-    assert empty.key == v.key and "no runs on the task files" in empty.detail
+    assert empty.key == "16" and "no runs on the task files" in empty.detail
 
 
 def test_the_task_files_are_judged_and_the_stand_in_left_out():

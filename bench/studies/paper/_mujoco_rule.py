@@ -227,8 +227,9 @@ def claim_16(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     paper's (Fig. 7, its code's ``test_mse`` and ``train_mse``: the squared error divided by
     the training std per component, averaged over components, times and trajectories); where
     the suite's ``rollout_error`` orders a test comparison the other way, the detail says so.
-    Without rows on the task files the verdict is "inconclusive" with :data:`NOT_JUDGED` (one
-    key whether or not the stand-in ran), the stand-in's reading shown as a pipeline check."""
+    With the stand-in's rows only the verdict is "inconclusive" with :data:`NOT_JUDGED`, the
+    stand-in's reading shown as a pipeline check; with no rows, "inconclusive" under the
+    claim's own key (runs not made yet)."""
     r = controlled(runs)
     kind = data_kind(r) if len(r) else pd.Series(dtype=object)
     files, stand = r[kind == "file"], r[kind == "stand-in"]
@@ -238,12 +239,11 @@ def claim_16(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
             return _with(v, f"{len(stand)} stand-in rows left out")
         return v
     what = "(a)-(c) on the task files"
-    if not len(stand):
+    if not len(stand):  # not run yet: the claim's own key, as for any claim without runs
         note = "no runs on the task files (systems.mujoco_data: $DECON_MUJOCO_DATA)"
         return verdict(
-            CLAIM, CLAIM_TITLES[CLAIM], [undecided(what, NOT_JUDGED)], None, 0, EFFECT, note,
-            variant=NOT_JUDGED,
-        )  # fmt: skip
+            CLAIM, CLAIM_TITLES[CLAIM], [undecided(what, "no runs")], None, 0, EFFECT, note
+        )
     check = judge(stand)
     return verdict(
         CLAIM,
