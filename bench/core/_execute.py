@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -102,47 +103,26 @@ def _evaluate_frames(config: RunConfig, built, model, meta: dict, cache_root: Pa
     return {**metrics, "curves": curves}, {}
 
 
-def _build_measured(config: RunConfig, cache_root: Path):
-    from ._measured import build
+def _module_steps(module: str) -> Steps:
+    """The steps of a kind whose module (imported at the first run, it pulls in its own
+    libraries) defines ``build(config)``, ``train(config, built, cache_root, progress)`` and
+    ``evaluate(config, built, model, meta, cache_root)``."""
 
-    return build(config)
+    def load():
+        return importlib.import_module(f".{module}", __package__)
 
-
-def _train_measured(config: RunConfig, built, cache_root: Path, progress: bool):
-    from ._measured import train
-
-    return train(config, built, cache_root, progress)
-
-
-def _evaluate_measured(config: RunConfig, built, model, meta: dict, cache_root: Path):
-    from ._measured import evaluate
-
-    return evaluate(config, built, model, meta, cache_root)
-
-
-def _build_controlled(config: RunConfig, cache_root: Path):
-    from ._controlled import build
-
-    return build(config)
-
-
-def _train_controlled(config: RunConfig, built, cache_root: Path, progress: bool):
-    from ._controlled import train
-
-    return train(config, built, cache_root, progress)
-
-
-def _evaluate_controlled(config: RunConfig, built, model, meta: dict, cache_root: Path):
-    from ._controlled import evaluate
-
-    return evaluate(config, built, model, meta, cache_root)
+    return Steps(
+        build=lambda config, cache_root: load().build(config),
+        train=lambda *a: load().train(*a),
+        evaluate=lambda *a: load().evaluate(*a),
+    )
 
 
 STATE = Steps(build=_build_state, train=_train_state, evaluate=evaluate_state)
 PIXELS = Steps(build=_build_pixels, train=_train_pixels, evaluate=_evaluate_pixels)
 FRAMES = Steps(build=_build_frames, train=_train_frames, evaluate=_evaluate_frames)
-MEASURED = Steps(build=_build_measured, train=_train_measured, evaluate=_evaluate_measured)
-CONTROLLED = Steps(build=_build_controlled, train=_train_controlled, evaluate=_evaluate_controlled)
+MEASURED = _module_steps("_measured")
+CONTROLLED = _module_steps("_controlled")
 # RunConfig.observation -> its steps
 OBSERVATIONS = {
     "state": STATE,

@@ -17,20 +17,11 @@ from ._pixel_experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_M
 from ._pixel_rule import readings, seed_protocol
 from ._protocols import HEADER as PROTOCOL_HEADER
 from ._protocols import learned_text
+from .hnn_seed import fmt, geometric_mean
 from .kit import bad_rows
 
 
-def _gm(x) -> float:
-    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
-
-
-def _f(x) -> str:
-    return "-" if not np.isfinite(x) else f"{x:.3g}"
-
-
-def _span(lo: float, hi: float, fmt=_f) -> str:
+def _span(lo: float, hi: float, fmt=fmt) -> str:
     """``lo - hi``, or one number where they print alike."""
     a, b = fmt(lo), fmt(hi)
     return a if a == b else f"{a} - {b}"
@@ -83,12 +74,12 @@ def section(results_dir) -> str:
             g = t[(t["model"] == model) & (protocol == is_seed) & ~bad_rows(t, "pixel_mse")]
             if not len(g):
                 continue
-            cells = [_gm(g[c]) if c in g else math.nan for c in _TABLE_COLUMNS]
+            cells = [geometric_mean(g[c]) if c in g else math.nan for c in _TABLE_COLUMNS]
             lines.append(
                 f"| {LABELS[model]} | {name} | {g['seed'].nunique()} | "
-                + " | ".join(_f(x) for x in cells)
-                + f" | {_f(seed_numbers.get(model, math.nan))} | "
-                f"{_f(_gm(g.get('latent_energy_drift')))} |"
+                + " | ".join(fmt(x) for x in cells)
+                + f" | {fmt(seed_numbers.get(model, math.nan))} | "
+                f"{fmt(geometric_mean(g.get('latent_energy_drift')))} |"
             )
     diag = _vin_diagnosis_frame(Path(results_dir), profile)
     return "\n".join(
@@ -277,7 +268,7 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
         abl_text = "-"
         if abl is not None and len(abl):
             a = abl.iloc[0]
-            abl_text = f"{_f(float(a['recon_mse']))}, {a['_gain']:.3g}x"
+            abl_text = f"{fmt(float(a['recon_mse']))}, {a['_gain']:.3g}x"
         lines.append(
             f"| {s} | {', '.join(ok) or 'none'} | {', '.join(bad) or '-'} | "
             f"{_span(rec.min(), rec.max())} | {abl_text} |"
@@ -291,7 +282,7 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
             )
             note += (
                 f"; they reconstruct at {_span(rec.min(), rec.max())}, {ratio}x the median "
-                f"of the runs that learn ({_f(learned_recon)})"
+                f"of the runs that learn ({fmt(learned_recon)})"
             )
         note += "."
         if abl is not None and len(abl):
@@ -300,7 +291,7 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
                 note += (
                     f" Trained without the auxiliary latent loss (the VIN diagnosis: the same "
                     f"frames and autoencoder initialisation) it reconstructs at "
-                    f"{_f(float(a['recon_mse']))} and learns ({a['_gain']:.3g}x below holding "
+                    f"{fmt(float(a['recon_mse']))} and learns ({a['_gain']:.3g}x below holding "
                     "the first frame): the seed's frames and autoencoder initialisation can be "
                     "learned, so its runs' failure is not the autoencoder's alone; it comes with "
                     "the protocol's loss, which every run of the table shares."
@@ -308,7 +299,7 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
             else:
                 note += (
                     f" Trained without the auxiliary latent loss (the VIN diagnosis) it "
-                    f"reconstructs at {_f(float(a['recon_mse']))} and does not learn either "
+                    f"reconstructs at {fmt(float(a['recon_mse']))} and does not learn either "
                     f"({a['_gain']:.3g}x)."
                 )
         notes.append(note)

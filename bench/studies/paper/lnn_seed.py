@@ -25,6 +25,8 @@ from .._figure import save_figure, subplots
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
 from ._rules import CLAIM_TITLES
+from .hnn_seed import fmt as _f
+from .hnn_seed import geometric_mean as _gm
 from .kit import (
     Protocol,
     at_most,
@@ -353,16 +355,6 @@ def _protocols(results_dir: Path) -> list[str]:
         "(ours: 10 s from the suite's starts; the notebook's: 100 s from rest)"
     )
     return protocol_table(ours, seeds, differs)
-
-
-def _gm(x) -> float:
-    x = pd.to_numeric(pd.Series(x), errors="coerce").to_numpy(float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.mean(np.log(x)))) if len(x) else math.nan
-
-
-def _f(x) -> str:
-    return "-" if not np.isfinite(x) else f"{x:.3g}"
 
 
 def section(results_dir) -> str:

@@ -34,8 +34,9 @@ from ._pixel_experiments import (
     _rows,
 )
 from ._pixel_rule import claim_11, reading, reading_ours, readings, seed_protocol
-from ._pixel_section import _gm, section
+from ._pixel_section import section
 from ._rules import CLAIM_TITLES
+from .hnn_seed import geometric_mean
 
 
 def figure(results_dir) -> list[Path]:
@@ -82,7 +83,7 @@ def figure(results_dir) -> list[Path]:
     for m, i in order.items():
         if m in first:
             ax.plot([], [], color=f"C{i}", label=LABELS[m])
-    static = [_gm([r["pixel_mse_static"]]) for r in rows]
+    static = [geometric_mean([r["pixel_mse_static"]]) for r in rows]
     ax.axhline(np.nanmean(static), color="k", ls=":", lw=1, label="hold first frame")
     # ticks and their label on the right, clear of the frames on the left
     ax.yaxis.tick_right()
