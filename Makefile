@@ -126,8 +126,9 @@ report: $(STAMP)
 # other sessions: the autogroup itself is niced too, or the campaign takes half the machine.
 # The child nices its own autogroup after setsid (from outside, a race could nice the caller's).
 # `env kill`: the shell's builtin kill (dash) does not signal a process group.
-# Two phases: the selection's own seeds (0-4), then its replication seeds (5-9), so that each
-# paper-core verdict is judged again on a disjoint seed set (the replication rule) once all are stored.
+# Three phases, so that each paper-core verdict is judged again on a disjoint seed set (the
+# replication rule): the replication seeds (5-9) of the claims whose verdict on the selection's
+# own seeds (0-4) is signed, then the own seeds of the rest, then the rest's replication seeds.
 CAMPAIGN_DIR ?= results/reference/paper
 CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
@@ -141,7 +142,8 @@ paper-core: $(STAMP)
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
 	else rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) \
 		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
-		nice -n 19 "$$@" && exec nice -n 19 "$$@" --replication' sh \
+		nice -n 19 "$$@" --replication --signed && nice -n 19 "$$@" && \
+		exec nice -n 19 "$$@" --replication' sh \
 		$(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
 		--profile paper-core --workers $(CAMPAIGN_WORKERS) > $(CAMPAIGN_LOG) 2>&1 & \
 		echo $$! > $(CAMPAIGN_PID); \

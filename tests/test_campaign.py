@@ -279,6 +279,14 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     key = C.priority("paper-core", seeds, order)
     ordered = sorted((c for _, c in rep), key=key, reverse=True)
     assert all(c.config_hash in first for c in ordered[: len(first)])
+    # make paper-core's first phase: the replication runs of the signed claims alone
+    signed = C.signed_claims(tmp_path)
+    assert signed == {4, 2, 7}
+    only = C.campaign_runs("paper-core", seeds, order, signed)
+    assert {E.get(n).claim for n, _ in only} == {4, 2, 7}
+    assert {c.config_hash for _, c in only} < {c.config_hash for _, c in rep}
+    phase = C.plan("paper-core", tmp_path, seeds=seeds, order=order, claims=signed)
+    assert set(phase["claim"][:-1]) == {4, 2, 7} and phase.iloc[-1]["runs"] == len(only)
 
 
 def test_plan_reads_a_stored_run_of_every_claim(tmp_path):

@@ -165,13 +165,16 @@ def test_imports_change_no_process_setting(tmp_path):
     assert not list(tmp_path.iterdir()), "a dataset was cached without 64-bit mode"
 
 
-def test_estimate_of_a_campaign_prints_both_phases(capsys, tmp_path):
-    """paper-core's status: its own seeds, then the replication seeds' phase."""
+def test_estimate_of_a_campaign_prints_its_three_phases(capsys, tmp_path):
+    """paper-core's status: the replication seeds of the signed verdicts (none in an empty
+    folder), its own seeds, then the replication seeds of the other claims."""
     assert main(["--results", str(tmp_path), "estimate", "--profile", "paper-core"]) == 0
     lines = capsys.readouterr().out.splitlines()
     titles = [x for x in lines if x.startswith("paper-core")]  # one plan per phase
     seeds = REPLICATION_SEEDS["paper"]
-    assert len(titles) == 2 and all(str(s) in titles[1] for s in seeds), titles
+    assert len(titles) == 3, titles
+    assert titles[0].endswith("signed verdicts (none): no runs")
+    assert all(str(s) in titles[2] for s in seeds) and "replication" not in titles[1]
     assert sum(x.split()[:1] == ["total"] for x in lines) == 2
 
 

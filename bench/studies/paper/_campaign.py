@@ -30,10 +30,19 @@ TRAIN_EVAL_COLUMNS = (
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12, 13, 14, 15, 16)
 
 
-def campaign_experiments(profile: str = "paper-core", order=CAMPAIGN_CLAIMS) -> list[str]:
+def campaign_experiments(
+    profile: str = "paper-core", order=CAMPAIGN_CLAIMS, claims=None
+) -> list[str]:
     """The registered experiments with a claim and runs under ``profile``, in claim order
-    (``order``: :data:`CAMPAIGN_CLAIMS`, or a replication phase's :func:`replication_order`)."""
-    names = [n for n in available() if get(n).claim is not None and expand(n, profile)]
+    (``order``: :data:`CAMPAIGN_CLAIMS`, or a replication phase's :func:`replication_order`);
+    only those of ``claims`` where given."""
+    names = [
+        n
+        for n in available()
+        if get(n).claim is not None
+        and (claims is None or get(n).claim in claims)
+        and expand(n, profile)
+    ]
     order = tuple(order)
 
     def rank(n):
@@ -43,32 +52,40 @@ def campaign_experiments(profile: str = "paper-core", order=CAMPAIGN_CLAIMS) -> 
     return sorted(names, key=rank)
 
 
-def replication_order(results_dir, profile: str = "paper-core") -> tuple[int, ...]:
+def replication_order(results_dir, profile: str = "paper-core", signed=None) -> tuple[int, ...]:
     """The claims in the order a replication phase settles them: first those whose verdict on
     the profile's own seeds is signed (reproduced, partly reproduced or not reproduced), then
     the rest (inconclusive or pending), each group in :data:`CAMPAIGN_CLAIMS` order. An
     inconclusive verdict stays inconclusive whatever its replication says (a verdict that does
     not replicate is *inconclusive (does not replicate)*), so its replication runs cannot change
     a verdict and wait until the others are stored; they are still run. Runs shared between
-    claims go with the first claim that reads them, as in the first phase."""
-    from ...core._query import load_tables
-    from ._replication import judge
-    from .kit import NOT_REPRODUCED, PARTLY, REPRODUCED
-
-    signed: set[int] = set()
-    if results_dir is not None and holds_runs(Path(results_dir)):
-        runs, curves, _ = load_tables(Path(results_dir))
-        j = judge(runs, curves, profile, loso=False)
-        signed = {
-            v.claim
-            for v in j.primary.values()
-            if v.pending is None and v.verdict in (REPRODUCED, PARTLY, NOT_REPRODUCED)
-        }
+    claims go with the first claim that reads them, as in the first phase. ``signed``: the
+    claims of :func:`signed_claims`, where already known."""
+    if signed is None:
+        signed = signed_claims(results_dir, profile)
     first = tuple(c for c in CAMPAIGN_CLAIMS if c in signed)
     rest = tuple(c for c in CAMPAIGN_CLAIMS if c not in signed)
     seeds = replication_seeds(profile) or None
     return cheapest_first(first, results_dir, profile, seeds) + cheapest_first(
         rest, results_dir, profile, seeds
+    )
+
+
+def signed_claims(results_dir, profile: str = "paper-core") -> frozenset:
+    """The claims whose verdict on the profile's own seeds is stored in full and signed
+    (reproduced, partly reproduced or not reproduced): the campaign replicates them first."""
+    from ...core._query import load_tables
+    from ._replication import judge
+    from .kit import NOT_REPRODUCED, PARTLY, REPRODUCED
+
+    if results_dir is None or not holds_runs(Path(results_dir)):
+        return frozenset()
+    runs, curves, _ = load_tables(Path(results_dir))
+    j = judge(runs, curves, profile, loso=False)
+    return frozenset(
+        v.claim
+        for v in j.primary.values()
+        if v.pending is None and v.verdict in (REPRODUCED, PARTLY, NOT_REPRODUCED)
     )
 
 
@@ -86,13 +103,13 @@ def cheapest_first(claims, results_dir, profile: str = "paper-core", seeds=None)
 
 
 def campaign_runs(
-    profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS
+    profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS, claims=None
 ) -> list[tuple[str, object]]:
     """``(experiment, RunConfig)`` of every unique run of the campaign, in the order they start:
     by claim (``order``), then longest first (the estimate); on ``seeds`` instead of the
-    profile's (its replication seeds)."""
+    profile's (its replication seeds); only ``claims``' where given."""
     out, seen = [], set()
-    for name in campaign_experiments(profile, order):
+    for name in campaign_experiments(profile, order, claims):
         cfgs = [c for c in expand(name, profile, seeds=seeds) if c.config_hash not in seen]
         seen.update(c.config_hash for c in cfgs)
         cfgs.sort(key=run_seconds, reverse=True)
@@ -100,11 +117,11 @@ def campaign_runs(
     return out
 
 
-def priority(profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS):
+def priority(profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS, claims=None):
     """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
     first): earlier claims first (``order``), longest runs first within a claim."""
     rank = {}
-    for i, name in enumerate(campaign_experiments(profile, order)):
+    for i, name in enumerate(campaign_experiments(profile, order, claims)):
         for c in expand(name, profile, seeds=seeds):
             rank.setdefault(c.config_hash, i)
 
@@ -121,6 +138,7 @@ def plan(
     seeds=None,
     prior=None,
     order=CAMPAIGN_CLAIMS,
+    claims=None,
 ) -> pd.DataFrame:
     """One row per claim of the campaign: ``claim, experiments, runs`` (every run its verdict
     reads), ``stored`` (of those), ``new_runs`` (those no earlier claim brings),
@@ -135,8 +153,9 @@ def plan(
     campaign's where the claim has no such run) and ``cpu_hours_left_calibrated`` /
     ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``. On
     ``seeds`` instead of the profile's: the campaign's replication phase, whose claims without
-    a measured run take their calibration from ``prior`` (the plan of the profile's seeds)."""
-    runs = campaign_runs(profile, seeds, order)
+    a measured run take their calibration from ``prior`` (the plan of the profile's seeds).
+    Only ``claims``' experiments where given (a phase of the campaign)."""
+    runs = campaign_runs(profile, seeds, order, claims)
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
@@ -158,7 +177,7 @@ def plan(
     # (only those datasets: a run with its own data, the pixel tasks', need not have a
     # DatasetConfig that describes it)
     paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done and data_seconds(c)}
-    for name in campaign_experiments(profile, order):
+    for name in campaign_experiments(profile, order, claims):
         cells = expand(name, profile, seeds=seeds)  # every run the claim reads, shared too
         mine = [c for n, c in runs if n == name]  # the runs it brings first
         left = [c for c in mine if c.config_hash not in done]
@@ -255,10 +274,11 @@ def _ratio(measured: float, estimated: float, default: float = 1.0) -> float:
     return measured / estimated if estimated > 0 else default
 
 
-def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None) -> str:
+def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None, which=None) -> str:
     """The plan as a fixed-width text table (``python -m bench estimate``); ``seeds``: the
-    replication phase's, named in the title."""
-    which = f"{profile}, replication seeds {', '.join(map(str, seeds))}" if seeds else profile
+    replication phase's, and ``which``: the claims it holds, named in the title."""
+    title = f"{profile}, replication seeds {', '.join(map(str, seeds))}" if seeds else profile
+    which = f"{title}, {which}" if which else title
     if not len(df):
         return f"{which}: no runs"
     order = "campaign order, signed verdicts first" if seeds else "campaign order"

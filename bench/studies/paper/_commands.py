@@ -23,24 +23,60 @@ def _estimate_arguments(p):
 
 def _estimate(args) -> int:
     from ...core._experiments import SELECTIONS, replication_seeds
-    from ._campaign import CAMPAIGN_CLAIMS, cheapest_first, format_plan, plan, replication_order
+    from ._campaign import (
+        CAMPAIGN_CLAIMS,
+        cheapest_first,
+        format_plan,
+        plan,
+        replication_order,
+        signed_claims,
+    )
 
     check_choice("profile", args.profile, list(PROFILES))
     if args.workers < 1:
         raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
     first = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
-    df = plan(args.profile, args.results, workers=args.workers, order=first)
+    own = plan(args.profile, args.results, workers=args.workers, order=first)
     print(f"results: {args.results}")
-    print(format_plan(df, args.profile, args.workers))
     seeds = replication_seeds(args.profile)
-    if args.profile in SELECTIONS and seeds:  # a campaign's second phase (make paper-core)
-        order = replication_order(args.results, args.profile)
-        rep = plan(
-            args.profile, args.results, workers=args.workers, seeds=seeds, prior=df, order=order
+    if not (args.profile in SELECTIONS and seeds):
+        print(format_plan(own, args.profile, args.workers))
+        return 0
+    # make paper-core's three phases: the replication seeds of the signed verdicts, the
+    # profile's own seeds, the replication seeds of the rest
+    signed = signed_claims(args.results, args.profile)
+    order = replication_order(args.results, args.profile, signed)
+    rest = frozenset(CAMPAIGN_CLAIMS) - signed
+    for i, (title, df) in enumerate(
+        (
+            (f"signed verdicts ({_claims(signed)})", _rep(args, seeds, own, order, signed)),
+            (None, own),
+            (f"the other claims ({_claims(rest)})", _rep(args, seeds, own, order, rest)),
         )
-        print()
-        print(format_plan(rep, args.profile, args.workers, seeds=seeds))
+    ):
+        print(f"{chr(10) if i else ''}phase {i + 1} of 3")
+        print(
+            format_plan(df, args.profile, args.workers, seeds=seeds if title else None, which=title)
+        )
     return 0
+
+
+def _claims(claims) -> str:
+    return ", ".join(map(str, sorted(claims))) or "none"
+
+
+def _rep(args, seeds, prior, order, claims):
+    from ._campaign import plan
+
+    return plan(
+        args.profile,
+        args.results,
+        workers=args.workers,
+        seeds=seeds,
+        prior=prior,
+        order=order,
+        claims=claims,
+    )
 
 
 def _lnn_arguments(p):
@@ -98,6 +134,12 @@ def _campaign_arguments(p):
         help="on the profile's replication seeds instead of its own "
         "(quick, paper, paper-core: 5-9)",
     )
+    p.add_argument(
+        "--signed",
+        action="store_true",
+        help="only the claims whose verdict on the profile's own seeds is stored and signed "
+        "(make paper-core replicates them first)",
+    )
 
 
 def _campaign(args) -> int:
@@ -108,27 +150,35 @@ def _campaign(args) -> int:
         cheapest_first,
         priority,
         replication_order,
+        signed_claims,
     )
 
     check_sweep_args(args)
     if not campaign_experiments(args.profile):
         raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
-    seeds, order = None, CAMPAIGN_CLAIMS
+    seeds, order, claims = None, CAMPAIGN_CLAIMS, None
     if args.replication:
         seeds = replication_seeds(args.profile) or None
         if seeds is None:
             allowed = [p for p in PROFILES if replication_seeds(p)]
             check_choice("profile with replication seeds", args.profile, allowed)
     usable_results(args)
+    if args.signed:
+        claims = signed_claims(args.results, args.profile)
     if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
-        order = replication_order(args.results, args.profile)
+        order = replication_order(args.results, args.profile, claims)
     else:  # the cheapest claims first: the most verdicts per hour
         order = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
-    names = campaign_experiments(args.profile, order)
+    names = campaign_experiments(args.profile, order, claims)
+    if not names:
+        print(f"campaign {args.profile}: no claim with a signed verdict to replicate yet")
+        return 0
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
-    print(f"campaign {args.profile}{which} -> {args.results}: {', '.join(names)}", flush=True)
+    only = f" (signed verdicts: claims {_claims(claims)})" if claims is not None else ""
+    print(f"campaign {args.profile}{which}{only} -> {args.results}: {', '.join(names)}", flush=True)
     # claim by claim, longest runs first within a claim
-    res = run_experiments(args, names, order=priority(args.profile, seeds, order), seeds=seeds)
+    key = priority(args.profile, seeds, order, claims)
+    res = run_experiments(args, names, order=key, seeds=seeds)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0
