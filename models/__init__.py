@@ -1,6 +1,6 @@
 """Registry of learned-dynamics models assembled from inductive biases.
 
-Public names: :class:`Scene`, :func:`available`, :func:`make`, the abstract model classes,
+Public names: :class:`Scene` (with its optional :class:`Standardisation`), :func:`available`, :func:`make`, the abstract model classes,
 :func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
 parameter-free reference predictors), :func:`coordinates` (what a model accepts),
 :func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
@@ -40,7 +40,7 @@ from ._registry import (
     trivial_models,
 )
 from ._scalar import acceleration_from_lagrangian, velocity_hessian
-from ._scene import Scene
+from ._scene import Scene, Standardisation
 from ._spec import ModelSpec, spec
 from ._symplectic import symplectic_error
 from ._trivial import AbstractTrivialModel
@@ -65,6 +65,7 @@ __all__ = [
     "AbstractTrivialModel",
     "ModelSpec",
     "Scene",
+    "Standardisation",
     "acceleration_from_lagrangian",
     "available",
     "latent_scene",

@@ -20,7 +20,8 @@ from ._symplectic import symplectic_error
 
 
 class NeuralODE(AbstractContinuousModel):
-    """dz/dt = MLP(cos q, sin q, qdot, args[, u]); with ``weight`` > 0 (node_symreg) the loss gets
+    """dz/dt = MLP(cos q, sin q, qdot, args[, u]) (with the scene's standardisation: its
+    rate statistics' loc + scale * MLP(...)); with ``weight`` > 0 (node_symreg) the loss gets
     the soft symplectic penalty weight * mean ||J DF - (J DF)^T||_F^2 over the rollout states."""
 
     takes_controls: ClassVar[bool] = True
@@ -48,7 +49,9 @@ class NeuralODE(AbstractContinuousModel):
 
     def vector_field(self, t, z, args):
         q, v = split(as_dtype(z, self.dtype))
-        return self.net(self.features(q, v, as_dtype(args, self.dtype)))
+        y = self.net(self.features(q, v, as_dtype(args, self.dtype)))
+        st = self.scene.standardisation
+        return y if st is None else st.rate(y, self.dtype)
 
     def penalty(self, zs, args):
         if self.weight == 0.0:
@@ -57,7 +60,8 @@ class NeuralODE(AbstractContinuousModel):
 
 
 class SecondOrderODE(AbstractContinuousModel):
-    """dq/dt = qdot (exactly), dqdot/dt = a(q, qdot, u) = MLP(cos q, sin q, qdot, args[, u]).
+    """dq/dt = qdot (exactly), dqdot/dt = a(q, qdot, u) = MLP(cos q, sin q, qdot, args[, u])
+    (with the scene's standardisation: the dv/dt statistics' loc + scale * MLP(...)).
 
     The paper's controlled NODE+SO (CoupledNODE) is this field integrated with ``euler_so``."""
 
@@ -77,7 +81,9 @@ class SecondOrderODE(AbstractContinuousModel):
 
     def acceleration(self, q, v, args):
         q, v, args = (as_dtype(x, self.dtype) for x in (q, v, args))
-        return self.net(self.features(q, v, args))
+        a = self.net(self.features(q, v, args))
+        st = self.scene.standardisation
+        return a if st is None else st.rate(a, self.dtype, slice(self.scene.dof, None))
 
     def vector_field(self, t, z, args):
         q, v = split(as_dtype(z, self.dtype))

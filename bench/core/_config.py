@@ -136,6 +136,9 @@ class RunConfig:
     # (q_low, q_high, qdot_low, qdot_high) from which fresh states are drawn uniformly for
     # every batch, each coordinate alike (the LNN seed's notebook; bench.core._box)
     train_box: tuple = ()
+    # controlled runs: the networks' inputs and rate outputs standardised with the training
+    # windows' statistics (models.Standardisation; the paper's MuJoCo code), or raw
+    standardise: bool = False
 
     def __post_init__(self):
         self._canonicalize()
@@ -169,6 +172,9 @@ class RunConfig:
         if not isinstance(box, list | tuple):
             raise ValueError(f"train_box must be () or 4 numbers; got {self.train_box!r}")
         object.__setattr__(self, "train_box", tuple(_as_float(b, "train_box") for b in box))
+        if self.standardise not in (True, False):  # numpy's bools and 0/1 alike
+            raise ValueError(f"standardise must be True or False; got {self.standardise!r}")
+        object.__setattr__(self, "standardise", bool(self.standardise))
 
     @classmethod
     def _candidate(cls, **fields) -> RunConfig:
@@ -244,6 +250,11 @@ class RunConfig:
                 raise ValueError(
                     "train_box supports no noise, random_args or pixels; allowed: their defaults"
                 )
+        if self.standardise and self.observation != "controlled":
+            raise ValueError(
+                "standardise is supported by controlled runs only (the paper's MuJoCo "
+                f"protocol); got observation {self.observation!r}; allowed: False"
+            )
         if self.observation in ("pixels", "frames"):
             self._check_pixels()
         elif self.observation == "measured":
@@ -406,6 +417,7 @@ _NEW_FIELDS = {
     "lr_schedule": "cosine",
     "weight_decay": None,
     "train_box": (),
+    "standardise": False,
 }
 
 

@@ -24,25 +24,28 @@ TRIVIAL = "constant_velocity"  # q0 + t v0: zero acceleration, the controls igno
 METRIC_COLUMNS = ("data_source", "data_sha256", "data_points", "test_mse", "train_mse")
 
 
-def scene(task_name: str):
-    """The models' scene of a task: dof = nq, no angular flags, n_controls = nu."""
+def scene(task_name: str, standardisation=None):
+    """The models' scene of a task: dof = nq, no angular flags, n_controls = nu, and the
+    training data's ``standardisation`` (``models.Standardisation``) or None."""
     import models
     import systems
 
     t = systems.mujoco_task(task_name)
     if t.nq != t.nv:
         raise ValueError(f"{t.name}: nq {t.nq} != nv {t.nv}; z = [q, v] needs equal sizes")
-    return models.Scene(dof=t.nq, angular=(False,) * t.nq, n_controls=t.nu)
+    return models.Scene(
+        dof=t.nq, angular=(False,) * t.nq, n_controls=t.nu, standardisation=standardisation
+    )
 
 
-def _model(c: RunConfig, width: int, depth: int):
+def _model(c: RunConfig, width: int, depth: int, standardisation=None):
     import jax
 
     import models
 
     return models.make(
         c.model,
-        scene(c.system),
+        scene(c.system, standardisation),
         key=jax.random.PRNGKey(c.seed),
         width=width,
         depth=depth,
@@ -146,7 +149,13 @@ def build(c: RunConfig) -> Built:
         u_train=split.train_u,
         scale=std,
     )
-    return Built(split, windows, source, sha, len(ep.episode), _model(c, c.width, c.depth))
+    st = None
+    if c.standardise:  # the training windows' statistics, controls included (the reference's)
+        import models
+
+        st = models.Standardisation.from_windows(z, split.train_u, c.dt)
+    model = _model(c, c.width, c.depth, st)
+    return Built(split, windows, source, sha, len(ep.episode), model)
 
 
 @dataclasses.dataclass(frozen=True)

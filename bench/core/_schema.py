@@ -103,6 +103,11 @@ _CONFIG = {
         "JSON [q_low, q_high, qdot_low, qdot_high]: training on fresh uniform states of this "
         "box (derivative targets); [] or empty: the dataset's training chunks",
     ),
+    "standardise": (
+        "-",
+        "controlled runs: networks' inputs and rate outputs standardised with the training "
+        "windows' statistics (the paper's MuJoCo code); empty before the field: False",
+    ),
 }
 
 _RUN = {

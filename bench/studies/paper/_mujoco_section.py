@@ -39,8 +39,10 @@ DIFFERENCES = (
     "Split: a random 10% of the episodes for test; training windows and test trajectories drawn "
     "uniformly from every valid start (the reference cuts 20-step chunks); one split per task.",
     "Training: AdamW at App. C's lr 2e-4 with a per-step cosine to 1e-6 (the reference: Adam "
-    "at a hard-coded 5e-3, coupled L2, a per-epoch cosine); raw z and u as inputs (the "
-    "reference standardises inputs and outputs).",
+    "at a hard-coded 5e-3, coupled L2, a per-epoch cosine). Inputs and rate outputs are "
+    "standardised with the training windows' statistics, as the reference's; its MixtureHNN "
+    "feeds the standardised state to H and ours does the same for (q, p), p scaled by the "
+    "velocity's statistics.",
     "The HNN (hnn_force) takes 8 Euler steps per transition as every model does (the "
     "reference's MixtureHNN takes one) and learns its mass matrix M(q) (the reference's has M "
     "= I).",

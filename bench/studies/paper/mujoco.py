@@ -56,9 +56,11 @@ CELLS = (
 FILE, STAND_IN = (("data", "file"),), (("data", "stand-in"),)
 
 # App. C and the reference's mujoco.py: 2 x 128 tanh MLPs, Adam (here AdamW) with weight decay
-# 1e-4, batch 200, cosine from 2e-4 to 1e-6, 3-step windows, 8 integrator steps per transition
+# 1e-4, batch 200, cosine from 2e-4 to 1e-6, 3-step windows, 8 integrator steps per transition,
+# the networks' inputs and rate outputs standardised with the training windows' statistics
 _PAPER = {
     "observation": "controlled",
+    "standardise": True,
     "width": 128,
     "depth": 2,
     "activation": "tanh",
