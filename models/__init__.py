@@ -1,6 +1,7 @@
 """Registry of learned-dynamics models assembled from inductive biases.
 
-Public names: :class:`Scene` (with its optional :class:`Standardisation`), :func:`available`, :func:`make`, the abstract model classes,
+Public names: :class:`Scene` (with its optional :class:`Standardisation`), :func:`available`,
+:func:`make`, the abstract model classes,
 :func:`symplectic_error`, :func:`trivial_models` and :class:`AbstractTrivialModel` (the
 parameter-free reference predictors), :func:`coordinates` (what a model accepts),
 :func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
