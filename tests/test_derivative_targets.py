@@ -124,6 +124,7 @@ def test_the_new_field_leaves_existing_hashes_alone():
         "lr_schedule",
         "weight_decay",
         "train_box",
+        "standardise",
     )
     old = _hash({a: b for a, b in c.to_dict().items() if a not in new})
     assert c.config_hash == old
