@@ -21,7 +21,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
 .PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean mujoco-data \
-	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report
+	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report paper-gpu
 
 install: $(STAMP)
 
@@ -171,6 +171,29 @@ paper-core-drain:
 paper-core-stop:
 	@$(campaign_alive) && env kill -s CONT -- -$(campaign_pid) && env kill -s TERM -- -$(campaign_pid) && \
 		echo "paper-core: stopped (make paper-core resumes)" || echo "paper-core: not running"
+
+# The paper profile's cells that the CPU campaign leaves out, on a GPU machine (the device tool):
+# claim 4's and Fig. 2's k = 1-4 with the cells they share (claims 1, 3), claim 2's weight grid,
+# then L1/L2, the damped and relativistic extras; seeds 0-9; ensembles on (auto on an
+# accelerator). No install: GPU_PY must hold jax, equinox, diffrax, optax, optimistix, pandas,
+# pyarrow, scipy and matplotlib (the device image's python3 does). Resumable (runs are
+# content-addressed); each experiment stops at GPU_SECONDS from the start, its stored rows kept.
+# On the device: make paper-gpu && tar czf $OUT/rows.tgz -C results/reference/paper_gpu .rows
+# Here: tar xzf rows.tgz -C results/reference/paper_gpu, then figures and report (its README).
+GPU_PY ?= python3
+GPU_DIR ?= results/reference/paper_gpu
+GPU_PROFILE ?= paper
+GPU_SEEDS ?= 0,1,2,3,4,5,6,7,8,9
+GPU_EXPERIMENTS ?= coordinates energy second_order symplectic loss damped relativistic
+GPU_SECONDS ?= 540
+paper-gpu:
+	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); for e in $(GPU_EXPERIMENTS); do \
+		left=$$(( end - $$(date +%s) )); \
+		if [ $$left -le 20 ]; then echo "paper-gpu: $(GPU_SECONDS) s spent; $$e and after not started"; break; fi; \
+		echo "paper-gpu: $$e ($$left s left)"; \
+		timeout $$left $(GPU_PY) -m bench --results $(GPU_DIR) sweep $$e --profile $(GPU_PROFILE) \
+			--seeds $(GPU_SEEDS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
+	done
 
 # Tables, figures and report of the campaign's stored rows (before committing them).
 paper-core-report: $(STAMP)
