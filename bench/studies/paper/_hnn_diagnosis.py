@@ -19,6 +19,7 @@ from ...core._config import RunConfig
 from ...core._experiments import expand
 from ...core._studies import Study, register_study
 from ._common import SPRING_PAPER
+from .hnn_seed import fmt as _f
 
 FILE = "hnn_diagnosis.csv"
 PROBE_STEPS = {"smoke": 4, "quick": 300, "paper": 500, "paper-core": 500}
@@ -241,10 +242,6 @@ def stalled(block_loss, first_loss) -> np.ndarray:
     :data:`STALL_RATIO` x its first step's (NaN: False)."""
     ratio = np.asarray(block_loss, dtype=float) / np.asarray(first_loss, dtype=float)
     return ratio > STALL_RATIO
-
-
-def _f(x) -> str:
-    return "-" if x is None or not np.isfinite(x) else f"{x:.3g}"
 
 
 def stalled_counts(df: pd.DataFrame) -> dict[str, tuple[int, int]]:

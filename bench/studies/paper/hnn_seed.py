@@ -243,8 +243,8 @@ def seed_rows(results_dir, experiments=EXPERIMENTS) -> tuple[pd.DataFrame, str |
 
 
 def fmt(x: float) -> str:
-    """Three significant digits, "-" for a missing value."""
-    return "-" if not np.isfinite(x) else f"{x:.3g}"
+    """Three significant digits, "-" for a missing value (None or not finite)."""
+    return "-" if x is None or not np.isfinite(x) else f"{x:.3g}"
 
 
 def geometric_mean(x) -> float:
