@@ -1208,7 +1208,7 @@ def test_claim_7_verdict_is_the_seeds_protocol_where_the_readings_differ(tables)
     assert (final.key, ours.key) == ("7", "7 (rollout loss)")
     assert final.verdict == R.PARTLY and ours.verdict == R.REPRODUCED
     assert _status(final, "(d)") == "contradicts" and _status(ours, "(d)") == "holds"
-    assert "rollout-loss reading, 7 (rollout loss): reproduced" in final.detail
+    assert final.other_readings == (("7 (rollout loss)", "reproduced"),)
     # and the other way round: the rollout-trained LNN fails, the seed's holds
     lnn, cv = _rel(runs, "lnn"), _rel(runs, "constant_velocity")
     final, ours = C.CLAIMS[7](_rel_set(runs, lnn, cv, 1 / 1.2), curves)
@@ -1222,7 +1222,7 @@ def test_claim_7_protocols_do_not_mix(tables):
     # without the seed's runs the claim is inconclusive and says why; ours is unchanged
     final, ours = C.CLAIMS[7](runs[~seed_rows], curves)
     assert final.verdict == R.INCONCLUSIVE and final.n_seeds == 0
-    assert "no runs of the seed's protocol" in final.detail
+    assert final.other_readings == (("7 (rollout loss)", "reproduced"),)
     assert ours.verdict == R.REPRODUCED
     # without ours, the seed's reading stands alone
     final, ours = C.CLAIMS[7](runs[seed_rows | ~particle], curves)

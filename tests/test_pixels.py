@@ -420,9 +420,9 @@ def test_claim_11_takes_the_seeds_protocol_where_it_has_runs():
     ours_yes, ours_no = _tables(energy_ratio=100.0), _tables(energy_ratio=1.0)
     seed_yes, seed_no = _seed(seed_energy_ratio=100.0), _seed(seed_energy_ratio=1.0)
     v = P.claim_11(pd.concat([ours_yes, seed_no], ignore_index=True))
-    assert v.verdict == "not reproduced" and "(ours: reproduced)" in v.detail, v.detail
+    assert v.verdict == "not reproduced" and v.other_readings == (("ours", "reproduced"),)
     v = P.claim_11(pd.concat([ours_no, seed_yes], ignore_index=True))
-    assert v.verdict == "reproduced" and "(ours: not reproduced)" in v.detail, v.detail
+    assert v.verdict == "reproduced" and v.other_readings == (("ours", "not reproduced"),)
     # without the seed's runs, ours; the readings apart
     assert P.claim_11(ours_no).verdict == "not reproduced"
     both = P.readings(pd.concat([ours_no, seed_yes], ignore_index=True))

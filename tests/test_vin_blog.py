@@ -366,7 +366,7 @@ def test_the_claim_takes_the_seeds_protocol_and_names_ours():
     both = _tables(vin=0.3, baseline=0.01, forecast_ratio=0.3, ours=3.0)
     v = V.claim_12(both)
     assert v.verdict == "not reproduced"
-    assert "ours, the HNN seed's latent: reproduced" in v.detail
+    assert v.other_readings == (("ours, the HNN seed's latent", "reproduced"),)
     # without runs of the seed's protocol the claim is ours alone
     ours_only = both[both["observation"] == "pixels"]
     assert V.claim_12(ours_only).verdict == "reproduced"

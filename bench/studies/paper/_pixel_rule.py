@@ -5,7 +5,6 @@ motion from pixels.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -13,6 +12,7 @@ import pandas as pd
 
 from . import policy
 from ._pixel_experiments import SEED_PROTOCOL, SHORT
+from ._protocols import decided_by
 from ._rules import CLAIM_TITLES
 from .kit import (
     Discrimination,
@@ -161,9 +161,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     r = _pixels(runs, ("hnn", "node"))
     if not len(r) or not seed_protocol(r).any():
         return both["ours"]
-    s = both["seed"]
-    detail = f"{s.detail}; the seed's protocol (ours: {both['ours'].verdict})"
-    return dataclasses.replace(s, detail=detail)
+    return decided_by(both["seed"], "the seed's protocol", "ours", both["ours"])
 
 
 def reading_ours(runs: pd.DataFrame):

@@ -4,6 +4,7 @@ section; README's findings take the seeds' protocols from those tables (``bench.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from ._verdict import Verdict
@@ -24,6 +25,16 @@ class Protocol:
     steps: str
     metric: str
     verdict: Verdict | None = None
+
+
+def decided_by(v: Verdict, what: str, name: str, other: Verdict) -> Verdict:
+    """``v``, the reading that decides the claim (``what``: its protocol, in words), with the
+    verdict of the ``other`` reading (``name``) in its ``other_readings`` and its detail."""
+    return dataclasses.replace(
+        v,
+        detail=f"{v.detail}; {what} ({name}: {other.verdict})",
+        other_readings=(*v.other_readings, (name, other.verdict)),
+    )
 
 
 def learned_text(v: Verdict | None) -> str:

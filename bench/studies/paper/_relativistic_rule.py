@@ -5,6 +5,8 @@ on (q, qdot); the claim's verdict is the LNN seed's protocol's, the rollout-trai
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 
@@ -182,7 +184,10 @@ def claim_7_seed(
     r = _particle_rows(runs, "derivative")
     if not len(r) and extra:
         extra = f"no runs of the seed's protocol (relativistic_seed); {extra}"
-    return _reading(r, variant="", extra=extra)
+    v = _reading(r, variant="", extra=extra)
+    if ours is not None and ours.n_seeds:
+        v = dataclasses.replace(v, other_readings=((f"7 ({ROLLOUT_VARIANT})", ours.verdict),))
+    return v
 
 
 def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verdict]:

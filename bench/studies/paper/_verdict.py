@@ -44,7 +44,8 @@ class Verdict:
     campaign (a selection such as ``paper-core``) has not stored them all, else None;
     ``primary`` is the verdict on the profile's own seeds where the replication checks demoted
     it to an inconclusive one, with ``readings`` the seed sets' verdicts that did
-    (:func:`bench.studies.paper._replication.judge`), else None and ""."""
+    (:func:`bench.studies.paper._replication.judge`), else None and ""; ``other_readings``
+    the verdicts of the claim's other protocols where one protocol decides."""
 
     claim: int
     title: str
@@ -63,6 +64,9 @@ class Verdict:
     pending: tuple[int, int] | None = None
     primary: str | None = None
     readings: str = ""
+    # the claim's other readings (another protocol's verdict), as (name, verdict) pairs; the
+    # detail names them too (``_protocols.decided_by``)
+    other_readings: tuple[tuple[str, str], ...] = ()
 
     @property
     def key(self) -> str:

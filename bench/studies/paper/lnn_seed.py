@@ -9,7 +9,6 @@ distribution, the network, the optimiser, the metric's scale): docs/studies/lnn_
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
+from ._protocols import decided_by
 from ._rules import CLAIM_TITLES
 from .hnn_seed import fmt as _f
 from .hnn_seed import geometric_mean as _gm
@@ -258,9 +258,7 @@ def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     text = reading(_seed_rows(runs))
     if not len(notebook):
         return text
-    nb = reading(notebook)
-    detail = f"{nb.detail}; the notebook's protocol (the text's: {text.verdict})"
-    return dataclasses.replace(nb, detail=detail)
+    return decided_by(reading(notebook), "the notebook's protocol", "the text's", text)
 
 
 def reading(r0: pd.DataFrame):

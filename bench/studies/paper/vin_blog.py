@@ -28,7 +28,7 @@ from .._figure import save_figure, subplots
 from . import pixels, policy
 from ._pixel_rule import _pixels
 from ._protocols import HEADER as PROTOCOL_HEADER
-from ._protocols import learned_text
+from ._protocols import decided_by, learned_text
 from ._rules import CLAIM_TITLES
 from .kit import (
     Gate,
@@ -253,9 +253,8 @@ def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     blog = _blog_rows(runs)
     if not len(blog):
         return ours
-    v = reading(blog)
-    detail = f"{v.detail}; the VIN seed's protocol (ours, the HNN seed's latent: {ours.verdict})"
-    return dataclasses.replace(v, detail=detail)
+    name = "ours, the HNN seed's latent"
+    return decided_by(reading(blog), "the VIN seed's protocol", name, ours)
 
 
 # ------------------------------------------------------------------- table and figure
