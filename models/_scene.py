@@ -19,8 +19,10 @@ class Standardisation:
     models, ngruver/decon-hnn ``mujoco.py``): each network input x -> (x - loc) / scale for the
     non-angular q, the velocities (or momenta) and the controls u; a network whose output is a
     rate of the state gives loc + scale * y, with the statistics of the finite-difference rates
-    (dq/dt, dv/dt) ~ (Delta q, Delta v) / dt of consecutive training states. Angles keep their
-    (cos q, sin q) embedding. Not trained: the fields are constants of the model."""
+    (dq/dt, dv/dt) ~ (Delta q, Delta v) / dt of consecutive training states: the NODE's field
+    and the NODE+SO's acceleration; the other models standardise their inputs only (the
+    reference's MixtureHNN too). Angles keep their (cos q, sin q) embedding. Not trained: the
+    fields are constants of the model."""
 
     q_loc: tuple[float, ...]
     q_scale: tuple[float, ...]
