@@ -106,7 +106,7 @@ def test_a_task_file_is_read_and_checked_against_its_card(monkeypatch, tmp_path)
     ep, card = D.stand_in(TASK, 300)
     assert not [c for c in expand("mujoco", "paper")]  # no file: no runs
     path = D.save_data(ep, {"policy": "test", "policy_budget": "none"})
-    assert [c.system for c in expand("mujoco", "paper")] == [TASK] * 4 * 5
+    assert [c.system for c in expand("mujoco", "paper")] == [TASK] * (4 + 2) * 5  # 2 at 5e-3
     assert not expand("mujoco", "quick")  # quick runs HalfCheetahFull-v0 only
     c = RunConfig(**{**SMOKE, "system_params": X.FILE, "n_generated": 250}, model="node")
     got, source, sha = C.load_episodes(c)

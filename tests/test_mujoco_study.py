@@ -8,11 +8,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import systems
 from bench.core import _store
 from bench.core._experiments import RunConfig, expand
+from bench.studies.paper import _mujoco_rule as R
 from bench.studies.paper import mujoco as X
 from bench.studies.paper import policy
 from systems import mujoco_data as D
@@ -88,7 +90,10 @@ def test_quick_runs_one_task_and_every_profile_reads_the_files_size(monkeypatch,
     for task in X.TASKS:  # the include rule asks only whether a task's file is there
         D.data_path(task).touch()
     quick = expand(X.EXPERIMENT, "quick")
-    assert {c.system for c in quick} == {X.QUICK_TASK} and len(quick) == 4 * 5
+    assert {c.system for c in quick} == {X.QUICK_TASK} and len(quick) == (4 + 2) * 5
+    code = {(c.model, c.seed) for c in quick if c.lr == R.CODE_LR}
+    assert code == {(m, s) for m in ("node", "node_so") for s in SEEDS}  # NODEs at the code's
+    assert {c.lr for c in quick} == {R.LR, R.CODE_LR}
     assert {c.seed for c in quick} == set(SEEDS) and {c.steps for c in quick} == {X.QUICK_STEPS}
     core = expand(X.EXPERIMENT, "paper-core")
     assert {c.system for c in core} == set(X.TASKS) and {c.seed for c in core} == set(SEEDS)
@@ -249,3 +254,22 @@ def test_the_smoke_profile_runs_and_reports_on_the_stand_in(tmp_path):
     assert v.variant == X.NOT_JUDGED and "pipeline check" in v.detail, v.detail
     assert "RANDOM-CONTROL STAND-IN" in X.section(tmp_path / "res")
     assert len(X.figure(tmp_path / "res")) == 2
+
+
+def test_the_code_lr_runs_are_a_sensitivity_reading_not_the_verdicts():
+    """NODE and NODE+SO at the reference code's learning rate: left out of the verdict (which
+    the App. C rows decide alone), their part (a) read apart, judged with the App. C trivial
+    predictor as gate, shown in the detail and the section."""
+    runs = _tables()
+    base = X.claim_16(runs)
+    node = runs[runs["model"].isin(["node", "node_so"])].copy()
+    node["lr"] = R.CODE_LR
+    # at the code's lr the order flips: NODE+SO 4x worse than NODE
+    node.loc[node["model"] == "node_so", "test_mse"] *= 40
+    both = pd.concat([runs, node], ignore_index=True)
+    v = X.claim_16(both)
+    assert (v.verdict, _statuses(v)) == (base.verdict, _statuses(base))
+    (a,) = R.code_lr_parts(both)
+    assert a.status == "contradicts" and a.n == len(SEEDS)
+    assert "at the reference code's lr, not judged" in v.detail
+    assert not R.code_lr_parts(runs)

@@ -13,12 +13,16 @@ import pandas as pd
 from ...core._query import aggregate, experiment_rows, pick_profile
 from ...core._store import load_runs
 from ._mujoco_rule import (
+    CODE_LR,
     LABELS,
+    LR,
     MODELS,
     NAME,
     NOT_JUDGED,
     TASKS,
+    at_lr,
     claim_16,
+    code_lr_parts,
     controlled,
     data_kind,
     disagreements,
@@ -39,7 +43,8 @@ DIFFERENCES = (
     "Split: a random 10% of the episodes for test; training windows and test trajectories drawn "
     "uniformly from every valid start (the reference cuts 20-step chunks); one split per task.",
     "Training: AdamW at App. C's lr 2e-4 with a per-step cosine to 1e-6 (the reference: Adam "
-    "at a hard-coded 5e-3, coupled L2, a per-epoch cosine). Inputs and rate outputs are "
+    "at a hard-coded 5e-3, coupled L2, a per-epoch cosine; NODE and NODE+SO also run at 5e-3, "
+    "above). Inputs and rate outputs are "
     "standardised with the training windows' statistics, as the reference's; its MixtureHNN "
     "feeds the standardised state to H and ours does the same for (q, p), p scaled by the "
     "velocity's statistics.",
@@ -63,8 +68,9 @@ def rows_of(results_dir) -> tuple[pd.DataFrame, str | None]:
 
 
 def shown(rows: pd.DataFrame) -> tuple[pd.DataFrame, str]:
-    """The rows a table or figure shows, and their data: the task files' where there are any,
-    else the stand-in's."""
+    """The rows a table or figure shows, and their data: the verdict's (App. C's learning
+    rate), the task files' where there are any, else the stand-in's."""
+    rows = at_lr(rows, LR)
     if not len(rows):
         return rows, "file"
     kind = data_kind(rows)
@@ -84,6 +90,44 @@ def _cell(agg: pd.DataFrame, task: str, model: str) -> str:
         return "-"
     se = g["sem"].iloc[0]
     return fmt(g["mean"].iloc[0]) + (f" ± {fmt(se)}" if np.isfinite(se) else "")
+
+
+def _code_lr_lines(rows: pd.DataFrame) -> list[str]:
+    """NODE and NODE+SO at the reference code's learning rate beside App. C's, and part (a) at
+    it (a sensitivity reading, not judged); nothing where those runs do not exist."""
+    files = rows[data_kind(rows) == "file"] if len(rows) else rows
+    parts = code_lr_parts(files) if len(files) else []
+    if not parts:
+        return []
+    lines = [
+        "",
+        f"Learning rate: the verdict trains at App. C's {LR:g}; the reference's `fit_net` "
+        f"hard-codes {CODE_LR:g}, at which NODE and NODE+SO were trained too (not judged: a "
+        "sensitivity reading of (a)).",
+        "",
+        "| task | model | lr | seeds | test MSE | train MSE |",
+        "|---|---|---|---|---|---|",
+    ]
+    for task in TASKS:
+        for m in ("node", "node_so"):
+            for lr in (LR, CODE_LR):
+                g = at_lr(files[(files["system"] == task) & (files["model"] == m)], lr)
+                if not len(g):
+                    continue
+                test, train = summary(g, "test_mse"), summary(g, "train_mse")
+                lines.append(
+                    f"| {task} | {LABELS[m]} | {lr:g} | {g['seed'].nunique()} | "
+                    f"{_cell(test, task, m)} | {_cell(train, task, m)} |"
+                )
+    lines += [
+        "",
+        "| part at the code's lr | status | effect | 90% CI | seeds |",
+        "|---|---|---|---|---|",
+    ]
+    for p in parts:
+        ci = f"[{fmt(p.lo)}, {fmt(p.hi)}]" if np.isfinite(p.lo) else "-"
+        lines.append(f"| {p.name} | {p.status} | {fmt(p.point)} | {ci} | {p.n} |")
+    return lines
 
 
 def _data_lines(rows: pd.DataFrame) -> list[str]:
@@ -169,6 +213,7 @@ def section(results_dir) -> str:
             else "The suite's rollout error orders every test comparison as the test MSE does."
         ),
     ]
+    lines += _code_lr_lines(rows if kind == "file" else rows.iloc[0:0])
     if v.variant == NOT_JUDGED:
         lines += ["", "No signed verdict: the runs read the random-control stand-in."]
     lines += ["", "What differs from the paper:", "", *(f"- {d}" for d in DIFFERENCES)]

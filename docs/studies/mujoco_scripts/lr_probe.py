@@ -1,0 +1,29 @@
+"""NODE and NODE+SO on HalfCheetahFull-v0 (quick's cells, seed 0) at App. C's learning rate
+(2e-4) and at the one the reference's code hard-codes (5e-3), for ``steps`` steps on the
+cosine schedule: test and train MSE of each (docs/studies/mujoco.md).
+
+    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/lr_probe.py [steps]
+"""
+
+import dataclasses
+import sys
+import time
+
+from bench.core import _controlled as C
+from bench.core._experiments import expand
+
+steps = int(sys.argv[1]) if len(sys.argv) > 1 else 5000
+cells = [c for c in expand("mujoco", "quick") if c.seed == 0 and c.model in ("node", "node_so")]
+for c in cells:
+    for lr in (2e-4, 5e-3):
+        run = dataclasses.replace(c, lr=lr, steps=steps)
+        t = time.time()
+        built = C.build(run)
+        model, meta = C.train(run, built, None, False)
+        r = C.evaluate(run, built, model, meta, None)[0]
+        print(
+            f"{c.model:8s} lr {lr:g} steps {steps}: test_mse {r['test_mse']:.4g} "
+            f"train_mse {r['train_mse']:.4g} rollout_error {r['rollout_error']:.4g} "
+            f"({time.time() - t:.0f} s)",
+            flush=True,
+        )
