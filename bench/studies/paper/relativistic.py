@@ -9,25 +9,8 @@ its data and where ours differs: docs/studies/relativistic.md. Both readings are
 same parts under the same margin policy and fit gate; the claim's verdict (key ``7``) is the
 seed's protocol's, the rollout-trained reading is ``7 (rollout loss)``.
 
-``relativistic_seed`` follows the seed's notebooks (``notebooks/SpecialRelativity*.ipynb``)
-as far as a declaration can; what differs, and why:
-
-- units: the seed's physics with time and length 10x longer (the same qdot(t), g / 10), so
-  that g has unit spread: the seed divides g by 10 before its networks, ours take raw inputs
-  (measured: in the seed's raw units the pure LNN did not learn at the quick budget);
-- g uniform with the seed's spread (the system draws g uniform), not normal;
-- training states: two states of each of many short trajectories started at q ~ N(0, 1),
-  qdot ~ U(-0.99, 0.99) (datasets are trajectory chunks), not independent random states with
-  q ~ U(-10, 10) and qdot = 0.99999 tanh(2 N(0, 1));
-- loss: plain L1 of dz/dt; the seed weights each state by 1 + 1 / sqrt(1 - qdot^2);
-- the HNN on (q, p) is trained on (dq/dt, dp/dt) in (q, p); the seed maps its output back to
-  (qdot, qddot) through the true momentum map;
-- optimiser: the trainer's AdamW with cosine decay, weight decay 1e-4 and clipping (the seed:
-  Adam with a one-cycle schedule), batch 32 states (the text; the notebooks 512), 30,000 steps
-  at paper and 5000 at quick (the notebooks: 300,000); the HNNs' initialisation is the suite's
-  orthogonal one (the seed: stax defaults); float64 (the seed: float32);
-- metric: the suite's rollout error on (q, qdot) over many test trajectories; the seed's
-  Figure 3 shows qdot(t) of one trajectory per model.
+``relativistic_seed`` follows the seed's notebooks as far as a declaration can; what differs,
+and why: docs/studies/relativistic.md.
 
 This module holds the figures and registers the two studies; the experiments, the verdict rule
 and the report section are in ``_relativistic_experiments``, ``_relativistic_rule`` and
