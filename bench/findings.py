@@ -4,10 +4,12 @@
 ``<!-- findings:end -->`` of README.md from the *Claims* tables of
 ``results/reference/quick/REPORT.md`` and ``results/reference/paper/REPORT.md`` (paper-core);
 ``--check`` exits 1, naming the file, when the README no longer says what the reports say.
-Each row: the claim, the paper's sentence, the final verdict at both budgets, and the measured
-effect behind the paper-core verdict with its 90% interval; then the margin policy (quantity,
-margin, plausible band), each budget's margin-dependent claims and the compute the committed
-runs took (the reports' *compute on* lines; the GPU folder's beside them).
+Each row: the claim, the paper's sentence, the final verdict at both budgets (paper-core's with
+its replication: seeds 0-4 and 5-9 where they differ, else whether 5-9 are stored), and the
+measured effect behind the paper-core verdict with its 90% interval; then each budget's
+margin-dependent claims, the seeds' protocols and the compute the committed runs took (the
+reports' *compute on* lines; the GPU folder's beside them). The margins themselves are in
+docs/verdicts.md and each report's *Margin policy*.
 """
 
 from __future__ import annotations
@@ -72,6 +74,24 @@ def _verdict(row: dict[str, str] | None) -> str:
         return "not run"
     text = row["verdict"]
     return text + (" (not discriminating)" if row.get("discriminating") == "**no**" else "")
+
+
+def _replicated(row: dict[str, str] | None) -> str:
+    """The final verdict with its replication: both seed sets' readings where they differ,
+    else whether the replication seeds agree, are pending or are not run."""
+    if row is None:
+        return "not run"
+    sets = [c for c in row if c.startswith("seeds ")]
+    rep = row.get("replicates", "not run")
+    if len(sets) < 2:
+        return _verdict(row)
+    first, second = (re.sub(r" \(\d+\)$", "", row[c]) for c in sets[:2])
+    if rep == "**no**":
+        spans = [c.removeprefix("seeds ") for c in sets[:2]]
+        return f"{_verdict(row)}: {spans[0]} {first}, {spans[1]} {second}"
+    if rep == "yes":
+        return f"{_verdict(row)}, replicates"
+    return f"{_verdict(row)}; {sets[1].removeprefix('seeds ')} {rep}"
 
 
 def _why(row: dict[str, str]) -> str:
@@ -150,7 +170,8 @@ def findings(root: Path = ROOT) -> str:
     reports = {b: (root / d / "REPORT.md").read_text() for b, d in BUDGETS.items()}
     quick, core = (claims_table(reports[b]) for b in ("quick", "paper-core"))
     lines = [
-        "| claim | the paper says | quick | paper-core | measured at paper-core (90% CI) |",
+        "| claim | the paper says | quick | paper-core (seeds 0-4, then 5-9) | "
+        "measured at paper-core (90% CI) |",
         "| --- | --- | --- | --- | --- |",
     ]
     for label in [*core, *(label for label in quick if label not in core)]:
@@ -158,10 +179,8 @@ def findings(root: Path = ROOT) -> str:
         why = _why(core[label]) if label in core else "-"
         lines.append(
             f"| {label} | {row['statement']} | {_verdict(quick.get(label))} | "
-            f"{_verdict(core.get(label))} | {why} |"
+            f"{_replicated(core.get(label))} | {why} |"
         )
-    lines += ["", "| quantity compared | margin | plausible band |", "| --- | --- | --- |"]
-    lines += [f"| {q} | {m} | {b} |" for q, m, b in policy_rows(reports["paper-core"])]
     dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())
     lines += ["", f"Margin-dependent inside the bands: {dependent}."]
     lines += _protocol_lines(reports)

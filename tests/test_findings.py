@@ -37,10 +37,50 @@ def test_a_changed_verdict_changes_the_table_and_the_check(tmp_path):
     line = next(x for x in report.read_text().splitlines() if x.startswith("| 5 |"))
     report.write_text(report.read_text().replace(line, line.replace(row["verdict"], "**no way**")))
     new = findings.findings(tmp_path)
-    assert "| **no way** |" in next(x for x in new.splitlines() if x.startswith("| 5 |"))
+    assert "| **no way**; 5-9 not run |" in next(
+        x for x in new.splitlines() if x.startswith("| 5 |")
+    )
     assert findings.current(readme) != new
     assert findings.write(readme, tmp_path) and findings.current(readme) == new
     assert not findings.write(readme, tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("primary", "replication", "replicates", "cell"),
+    [
+        (
+            "partly reproduced (5)",
+            "partly reproduced (5)",
+            "yes",
+            "**partly reproduced**, replicates",
+        ),
+        (
+            "partly reproduced (5)",
+            "not reproduced (5)",
+            "**no**",
+            "**inconclusive (does not replicate)**: 0-4 partly reproduced, 5-9 not reproduced",
+        ),
+        (
+            "reproduced (5)",
+            "-",
+            "pending (3 of 50 runs)",
+            "**reproduced**; 5-9 pending (3 of 50 runs)",
+        ),
+        ("reproduced (5)", "-", "not run", "**reproduced**; 5-9 not run"),
+    ],
+)
+def test_the_paper_core_cell_states_each_seed_sets_reading(primary, replication, replicates, cell):
+    verdict = "**inconclusive (does not replicate)**" if replicates == "**no**" else None
+    row = {
+        "verdict": verdict or "**" + primary.removesuffix(" (5)") + "**",
+        "seeds 0-4": primary,
+        "seeds 5-9": replication,
+        "replicates": replicates,
+    }
+    assert findings._replicated(row) == cell
+    assert findings._replicated(None) == "not run"
+    # a report without replication columns (an older one) gives the verdict alone
+    assert findings._replicated({"verdict": "**reproduced**"}) == "**reproduced**"
 
 
 def test_claims_table_reads_every_column_and_refuses_a_report_without_one():

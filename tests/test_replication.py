@@ -11,6 +11,7 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench.core._experiments import PROFILES, REPLICATION_SEEDS, expand
+from bench.studies._text import fmt
 from bench.studies.paper import evaluate_claims
 from bench.studies.paper import kit as R
 from bench.studies.paper._replication import (
@@ -20,6 +21,7 @@ from bench.studies.paper._replication import (
     seed_sets,
     seed_span,
     settled,
+    why_not_replicated,
 )
 
 PROFILE = "quick"
@@ -123,6 +125,14 @@ def test_disagreeing_seed_sets_do_not_replicate(
     assert final["3"].n_seeds == 5
     # claims that agree (inconclusive for want of runs on both sets) are left alone
     assert final["5"].verdict == R.INCONCLUSIVE and j.replicates("5") is None
+    # why: the parts the sets read in reverse, each with its effect on both; the pooled
+    # reading shown for information, never the verdict
+    why = why_not_replicated(j, "3")
+    assert why.startswith("**") and "reverse" in why.split(":")[0], why
+    assert f"on seeds 0-4 ({fmt(j.primary['3'].parts[0].point)}" in why
+    assert f"pooled 0-9, for information: {j.pooled_any['3'].verdict}" in why
+    assert "3" not in j.pooled and j.pooled_any["3"].n_seeds == 10
+    assert why_not_replicated(j, "5") is None
 
 
 def test_partly_stored_replication_is_pending_not_a_failure_to_replicate(
@@ -239,6 +249,28 @@ def test_losing_significance_without_a_seed_does_not_demote(reproduce_primary, f
     assert j.loso_reversals("3") == []
     v = _final(j)["3"]
     assert v.verdict == R.REPRODUCED and v.primary is None and v.readings == ""
+
+
+def test_a_part_left_undecided_on_the_other_set_does_not_replicate_without_a_reversal(
+    reproduce_primary, reproduce_replication
+):
+    """Seeds 5-9 leave undecided a part seeds 0-4 sign (SO gains 3.3x on four of them, loses 3x
+    on one): the claim does not replicate, and the report says no part reverses."""
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    runs = runs.copy()
+    gains = {5: 3.3, 6: 3.3, 7: 1 / 3, 8: 3.3, 9: 3.3}
+    node = runs.loc[_chain(runs, "node")].set_index("seed")["rollout_error"]
+    so = _chain(runs, "node_so") & runs["seed"].isin(REPLICATION)
+    seeds = runs.loc[so, "seed"]
+    runs.loc[so, "rollout_error"] = (seeds.map(node) / seeds.map(gains)).values
+    j = judge(runs, curves, PROFILE, loso=False)
+    assert j.primary["3"].verdict == R.REPRODUCED
+    assert j.replication["3"].verdict == R.INCONCLUSIVE
+    assert _final(j)["3"].verdict == DOES_NOT_REPLICATE
+    why = why_not_replicated(j, "3")
+    assert why.startswith("no part reverses"), why
+    assert "chain_pendulum: (a) log(NODE / NODE+SO): holds on seeds 0-4" in why
+    assert "undecided on seeds 5-9" in why
 
 
 def test_a_part_reversed_without_a_seed_demotes_the_verdict(reproduce_primary, monkeypatch):

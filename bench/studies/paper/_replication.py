@@ -46,6 +46,9 @@ class Judgement:
     # not judged until all are stored (a partial reading is not a replication)
     replication_pending: dict[str, tuple[int, int]] = field(default_factory=dict)
     pooled: dict[str, Verdict] = field(default_factory=dict)
+    # key -> both sets pooled for every claim whose replication is judged: the final reading
+    # where they agree, for information only where they do not (it decides nothing there)
+    pooled_any: dict[str, Verdict] = field(default_factory=dict)
 
     def replicates(self, key: str) -> bool | None:
         r = self.replication.get(key)
@@ -146,7 +149,7 @@ def judge(
 
     prim = evaluate(primary_seeds)
     primary = {v.key: v for v in prim}
-    replication, rep_pending, pooled = {}, {}, {}
+    replication, rep_pending, pooled, pooled_any = {}, {}, {}, {}
     if rep_seeds and len(_on(runs, rep_seeds)):
         replication = {v.key: v for v in evaluate(rep_seeds)}
         counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
@@ -157,10 +160,11 @@ def judge(
             if 0 < n < m or r.n_seeds == 0:
                 del replication[key]
         agree = [k for k, r in replication.items() if r.verdict == primary[k].verdict]
-        if agree:
+        if replication:
             both = tuple(sorted({*primary_seeds, *rep_seeds}))
             every = {v.key: v for v in evaluate(both)}
             pooled = {k: every[k] for k in agree if k in every}
+            pooled_any = {k: every[k] for k in replication if k in every}
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
     if loso:
         groups: dict[tuple[int, ...], list[str]] = {}
@@ -177,7 +181,8 @@ def judge(
                     for v in evaluate(rest):
                         if v.key in keys:
                             out_loso.setdefault(v.key, []).append((int(s), v))
-    j = Judgement([], primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending, pooled)
+    j = Judgement([], primary, replication, out_loso, primary_seeds, rep_seeds, rep_pending)
+    j.pooled, j.pooled_any = pooled, pooled_any
     for v in prim:
         r = replication.get(v.key)
         if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
@@ -207,6 +212,50 @@ def judge(
             )
         j.final.append(v)
     return j
+
+
+def _effect(q) -> str:
+    from .._text import fmt
+
+    ci = f" [{fmt(q.lo)}, {fmt(q.hi)}]" if q.lo == q.lo and q.hi == q.hi else ""
+    return f"{fmt(q.point)}{ci}"
+
+
+def why_not_replicated(j: Judgement, key: str) -> str | None:
+    """Why a claim's seed sets read different verdicts, from its parts: those whose status
+    differs, each with its effect and 90% interval on both sets; whether any reverses (holds
+    <-> contradicts: the sets disagree) or none does (one set leaves undecided or untested
+    what the other signs); and the pooled reading, which decides nothing here. None where the
+    claim replicates or is not judged."""
+    p, r = j.primary.get(key), j.replication.get(key)
+    if p is None or r is None or r.n_seeds == 0 or r.verdict == p.verdict:
+        return None
+    ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
+    theirs = {q.name: q for q in r.parts}
+    moved = [
+        f"{q.name}: {q.status} on seeds {ps} ({_effect(q)}), {theirs[q.name].status} on seeds {rs} "
+        f"({_effect(theirs[q.name])})"
+        for q in p.parts
+        if q.name in theirs and theirs[q.name].status != q.status
+    ]
+    flipped = reversed_parts(p, r)
+    n = len(flipped)
+    lead = (
+        f"**{n} part{'s reverse' if n > 1 else ' reverses'}** (the seed sets disagree)"
+        if flipped
+        else "no part reverses (holds <-> contradicts): the sets differ only in what reaches "
+        "significance or gets tested"
+    )
+    if not moved:  # the same statuses, a different verdict: a gate or the discrimination check
+        moved = [f"seeds {ps}: {p.verdict}; seeds {rs}: {r.verdict} ({r.detail[:160]})"]
+    pooled = j.pooled_any.get(key)
+    tail = (
+        f"; pooled {seed_span({*j.primary_seeds, *j.replication_seeds})}, for information: "
+        f"{pooled.verdict}"
+        if pooled
+        else ""
+    )
+    return f"{lead}: " + "; ".join(moved) + tail
 
 
 def seed_span(seeds) -> str:

@@ -65,20 +65,46 @@ def _claims_table(j) -> list[str]:
             rep = "pending ({} of {} runs)".format(*j.replication_pending[v.key])
         effect = f"{fmt(p.effect)} ({p.effect_name})" if p.effect_name else fmt(p.effect)
         prim = j.primary[v.key]
+        if pooled is None and v.key in j.pooled_any:  # shown, never the verdict
+            pooled = j.pooled_any[v.key]
+            pooled_text = f"({pooled.verdict} ({pooled.n_seeds}), not judged)"
+        else:
+            pooled_text = f"{pooled.verdict} ({pooled.n_seeds})" if pooled else "-"
         out.append(
             f"| {md_escape(v.key)} | {md_escape(v.title)} | **{v.verdict}** | {prim.verdict} "
             f"({prim.n_seeds}) | {r.verdict + f' ({r.n_seeds})' if r else '-'} | "
-            f"{pooled.verdict + f' ({pooled.n_seeds})' if pooled else '-'} | {rep} | "
+            f"{pooled_text} | {rep} | "
             f"{md_escape(_loso_text(j, v.key))} | {md_escape(effect)} | "
             f"{_ci(p.ci_low, p.ci_high)} | {_disc_mark(p)} | {p.n_failed} |"
         )
     return out
 
 
+def _why_not_replicated(j) -> list[str]:
+    """One line per claim whose seed sets read different verdicts: the parts that moved."""
+    from ._replication import why_not_replicated
+
+    lines = [
+        f"- claim {md_escape(v.key)}: {md_escape(why)}"
+        for v in j.final
+        if (why := why_not_replicated(j, v.key))
+    ]
+    if not lines:
+        return []
+    return [
+        "Why a claim does not replicate (effect [90% CI] on each seed set). A part one set signs "
+        "and the other leaves undecided is no contradiction, but the rule counts only a verdict "
+        "both sets read:",
+        "",
+        *lines,
+        "",
+    ]
+
+
 def _parts_table(j) -> list[str]:
     """Every part of the final reading (pooled where the seed sets agree): its effect, margin,
-    the margins at which it holds and is contradicted, its test and level, its status on each
-    seed set, and whether dropping one seed reverses it."""
+    the margins at which it holds and is contradicted, its test and level, its status and point
+    estimate on each seed set, and whether dropping one seed reverses it."""
     from ._replication import seed_span
     from .kit import margin_ranges
 
@@ -116,7 +142,10 @@ def _parts_table(j) -> list[str]:
             name = part.name + (
                 f" (not tested: {part.note})" if part.status == "not tested" else ""
             )
-            cells = [d[part.name].status if part.name in d else "-" for d in (prim, rep, pooled)]
+            cells = [
+                f"{d[part.name].status} {fmt(d[part.name].point)}" if part.name in d else "-"
+                for d in (prim, rep, pooled)
+            ]
             out.append(
                 f"| {md_escape(v.key)} | {md_escape(name)} | {part.role} | "
                 f"{part.kind or '-'} | {md_escape(part.margin) or '-'} | "
@@ -229,8 +258,9 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "",
         *_claims_table(j),
         "",
+        *_why_not_replicated(j),
         *_not_run_note(ctx.profile),
-        "### Every part: effect, margin, test, level, and its status on each seed set",
+        "### Every part: effect, margin, test, level, and its status and estimate on each seed set",
         "",
         *_parts_table(j),
         "",
