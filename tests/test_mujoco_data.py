@@ -285,3 +285,56 @@ def test_a_committed_file_replays_to_its_cards_episodes(path, monkeypatch, tmp_p
     monkeypatch.setenv("DECON_CACHE", str(tmp_path))  # no cached replay: replay it here
     ep, card = D.load_data(path.stem, path.parent)
     assert mj.content_hash(ep.arrays()) == card["episodes_sha256"]
+
+
+def _episodes_of_lengths(task, lengths):
+    """Episodes with the committed file's episode structure and zero states: enough for the
+    split, which reads only the episode ids and steps."""
+    t = mj.task(task)
+    n = int(lengths.sum())
+    return mj.Episodes(
+        t.name,
+        z=np.zeros((n, t.nq + t.nv)),
+        u=np.zeros((n, t.nu)),
+        reward=np.zeros(n),
+        episode=np.repeat(np.arange(len(lengths)), lengths),
+        step=np.concatenate([np.arange(k) for k in lengths]),
+        seed=0,
+    )
+
+
+@pytest.mark.parametrize("profile", ["quick", "paper-core", "paper"])
+def test_every_declared_cell_finds_its_windows_in_the_committed_files(profile):
+    """Each task's training and test windows at each profile's sizes exist in the committed
+    file's episodes (a Hopper policy that falls early holds too few 201-state test windows,
+    hence its shorter test trajectories, mujoco.SHORT_TEST_CHUNKS)."""
+    from bench.core import _controlled as C
+    from bench.core._experiments import expand
+    from systems import mujoco_data as D
+
+    cells = {
+        (c.system, c.n_generated, c.n_train, c.chunk, c.n_test, c.test_chunks)
+        for c in expand("mujoco", profile)
+    }
+    assert cells
+    for task, n_generated, n_train, chunk, n_test, test_chunks in sorted(cells):
+        with np.load(D.data_path(task)) as f:
+            lengths = f["length"]
+        ep = _episodes_of_lengths(task, lengths)
+        assert len(ep.episode) >= n_generated
+        split = mj.split_episodes(
+            ep,
+            seed=C.SPLIT_SEED,
+            n_train=n_train,
+            train_len=chunk,
+            n_test=n_test,
+            test_len=chunk * test_chunks,
+        )
+        assert split.test_z.shape[:2] == (n_test, chunk * test_chunks), task
+    # and the check can fail: the paper's 201 states are too many for Hopper's episodes
+    with np.load(D.data_path("HopperFull-v0")) as f:
+        ep = _episodes_of_lengths("HopperFull-v0", f["length"])
+    with pytest.raises(ValueError, match="test: 200 windows of 201 steps asked"):
+        mj.split_episodes(
+            ep, seed=C.SPLIT_SEED, n_train=40_000, train_len=3, n_test=200, test_len=201
+        )
