@@ -1,6 +1,6 @@
 """Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
 
-Verbs: list, run, sweep, figures, report, perf, stability, bench, estimate, campaign,
+Verbs: list, run, sweep, preflight, figures, report, perf, stability, bench, estimate, campaign,
 compare, data (export, verify). A bad
 name or value, a run that can never run (e.g. leapfrog on a first-order model) or a results
 folder that cannot be used prints one line ``error: ...`` on stderr and exits with code 2,
@@ -77,6 +77,17 @@ def _parser() -> argparse.ArgumentParser:
         metavar="5,6,7",
         help="these seeds instead of the profile's (e.g. quick's replication seeds 5-9)",
     )
+
+    pf = sub.add_parser(
+        "preflight",
+        help="every cell of an experiment (or --all) at a profile's sizes, trained a few steps "
+        "and not stored: what fails, before a long campaign",
+    )
+    pf.add_argument("experiment", nargs="?")
+    pf.add_argument("--all", action="store_true", help="every registered experiment")
+    pf.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
+    pf.add_argument("--steps", type=int_arg("steps"), default=2, help="training steps (2)")
+    pf.add_argument("--models", default=None, metavar="A,B", help="as sweep's --models")
 
     cm = sub.add_parser(
         "compare",
@@ -197,6 +208,17 @@ def _do_sweep(args, names) -> int:
             counts[r["status"]] = counts.get(r["status"], 0) + 1
         print(f"{name}: {len(rows)} new runs {counts}")
     return 0
+
+
+def _cmd_preflight(args) -> int:
+    from ._preflight import preflight
+    from .studies._options import model_list
+
+    check_choice("profile", args.profile, list(PROFILES))
+    rows = preflight(_sweep_names(args), args.profile, steps=args.steps, models=model_list(args))
+    failed = [r for r in rows if r["status"] == "failed"]
+    print(f"preflight at {args.profile}: {len(rows)} cells, {len(failed)} failed")
+    return 1 if failed else 0
 
 
 class NoRuns(Exception):
@@ -459,6 +481,8 @@ def _main(argv) -> int:
         return _adhoc.run(args)
     if args.verb == "sweep":
         return _do_sweep(args, _sweep_names(args))
+    if args.verb == "preflight":
+        return _cmd_preflight(args)
     verbs = {
         "figures": _cmd_figures,
         "report": _cmd_report,
