@@ -256,6 +256,8 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     ]
     judged = _replication.Judgement(final=primary, primary={x.key: x for x in primary})
     monkeypatch.setattr(_replication, "judge", lambda *a, **k: judged)
+    counts = {4: (45, 45), 2: (30, 30), 7: (40, 40)}
+    monkeypatch.setattr(_replication, "stored_counts", lambda *a, **k: counts)
     monkeypatch.setattr(_query, "load_tables", lambda d: (None, None, None))
     seeds = E.replication_seeds("paper-core")
 
@@ -287,6 +289,10 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     assert {c.config_hash for _, c in only} < {c.config_hash for _, c in rep}
     phase = C.plan("paper-core", tmp_path, seeds=seeds, order=order, claims=signed)
     assert set(phase["claim"][:-1]) == {4, 2, 7} and phase.iloc[-1]["runs"] == len(only)
+    # a claim with runs still to store is not signed, whatever one of its readings says
+    # (claim 7's second protocol, pending on its own seeds)
+    counts[7] = (21, 40)
+    assert C.signed_claims(tmp_path) == {4, 2}
 
 
 def test_plan_reads_a_stored_run_of_every_claim(tmp_path):

@@ -72,20 +72,25 @@ def replication_order(results_dir, profile: str = "paper-core", signed=None) -> 
 
 
 def signed_claims(results_dir, profile: str = "paper-core") -> frozenset:
-    """The claims whose verdict on the profile's own seeds is stored in full and signed
-    (reproduced, partly reproduced or not reproduced): the campaign replicates them first."""
+    """The claims whose runs on the profile's own seeds are all stored and whose verdict there
+    is signed (reproduced, partly reproduced or not reproduced): the campaign replicates them
+    first. A claim with runs still to store is not signed, even where one of its readings is
+    (claim 7's rollout-loss reading, while the seed's protocol that decides it is pending)."""
     from ...core._query import load_tables
-    from ._replication import judge
+    from ._replication import judge, stored_counts
     from .kit import NOT_REPRODUCED, PARTLY, REPRODUCED
 
     if results_dir is None or not holds_runs(Path(results_dir)):
         return frozenset()
     runs, curves, _ = load_tables(Path(results_dir))
     j = judge(runs, curves, profile, loso=False)
+    incomplete = {c for c, (n, m) in stored_counts(runs, profile).items() if n < m}
     return frozenset(
         v.claim
         for v in j.primary.values()
-        if v.pending is None and v.verdict in (REPRODUCED, PARTLY, NOT_REPRODUCED)
+        if v.pending is None
+        and v.claim not in incomplete
+        and v.verdict in (REPRODUCED, PARTLY, NOT_REPRODUCED)
     )
 
 
