@@ -112,6 +112,8 @@ SHORT_TEST_CHUNKS = {"HopperFull-v0": 34}
 def task_test_chunks(task: str) -> int:
     """The number of 3-state chunks in a test trajectory of ``task`` at the paper's sizes."""
     return SHORT_TEST_CHUNKS.get(task, TEST_CHUNKS)
+
+
 # quick (within make bench's 30 minutes): the cheapest simulator's task only, 2 of the 256
 # epochs and 50 of the 200 test trajectories: 5 seeds cost about 7 CPU minutes, the HNN's
 # training and compilation most of it (docs/studies/mujoco.md)
