@@ -18,6 +18,7 @@ from bench.studies.paper._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
     judge,
+    pooled_moves,
     seed_sets,
     seed_span,
     settled,
@@ -271,6 +272,41 @@ def test_a_part_left_undecided_on_the_other_set_does_not_replicate_without_a_rev
     assert why.startswith("no part reverses"), why
     assert "chain_pendulum: (a) log(NODE / NODE+SO): holds on seeds 0-4" in why
     assert "undecided on seeds 5-9" in why
+
+
+def test_pooling_that_resolves_a_part_is_said(
+    reproduce_primary, reproduce_replication, monkeypatch
+):
+    """Both seed sets read one verdict; the pooled ten seeds (the final reading) sign a part
+    that each set left undecided, and read another verdict: the report names that part."""
+    import dataclasses
+
+    from bench.studies.paper import _replication
+
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    real = _replication.evaluate_claims
+
+    def fake(runs_, curves_, profile, claims=None, *, seeds=None, restricted=None):
+        got = real(runs_, curves_, profile, claims, seeds=seeds, restricted=restricted)
+        out = []
+        for v in got:
+            if v.key == "3":  # each set alone: the first part undecided (synthetic)
+                parts = [dataclasses.replace(q) for q in v.parts]
+                if len(seeds) == 5:
+                    parts[0].status = "undecided"
+                    v = dataclasses.replace(v, verdict=R.INCONCLUSIVE, parts=tuple(parts))
+            out.append(v)
+        return out
+
+    monkeypatch.setattr(_replication, "evaluate_claims", fake)
+    j = judge(runs, curves, PROFILE, loso=False)
+    assert j.primary["3"].verdict == j.replication["3"].verdict == R.INCONCLUSIVE
+    assert _final(j)["3"].verdict == R.REPRODUCED and j.replicates("3") is True
+    said = pooled_moves(j, "3")
+    name = j.pooled["3"].parts[0].name
+    assert said.startswith(f"both seed sets read {R.INCONCLUSIVE}, pooled {R.REPRODUCED}: ")
+    assert f"{name}: holds on 0-9 (" in said and "undecided on each set alone" in said
+    assert pooled_moves(j, "5") is None and why_not_replicated(j, "3") is None
 
 
 def test_a_part_reversed_without_a_seed_demotes_the_verdict(reproduce_primary, monkeypatch):

@@ -258,6 +258,24 @@ def why_not_replicated(j: Judgement, key: str) -> str | None:
     return f"{lead}: " + "; ".join(moved) + tail
 
 
+def pooled_moves(j: Judgement, key: str) -> str | None:
+    """Where two seed sets agree and their pooled reading (the final one) differs from what
+    both read: the parts whose pooled status differs from the one both sets gave it, with the
+    pooled effect and interval (ten seeds resolve what five left undecided). None elsewhere."""
+    p, r, pooled = j.primary.get(key), j.replication.get(key), j.pooled.get(key)
+    if pooled is None or p is None or r is None or pooled.verdict == p.verdict:
+        return None
+    first, second = ({q.name: q.status for q in v.parts} for v in (p, r))
+    both = seed_span({*j.primary_seeds, *j.replication_seeds})
+    moved = [
+        f"{q.name}: {q.status} on {both} ({_effect(q)}), {first[q.name]} on each set alone"
+        for q in pooled.parts
+        if first.get(q.name) == second.get(q.name) and q.status != first.get(q.name)
+    ]
+    text = "; ".join(moved) or pooled.detail[:160]
+    return f"both seed sets read {p.verdict}, pooled {pooled.verdict}: {text}"
+
+
 def seed_span(seeds) -> str:
     seeds = sorted(seeds)
     if seeds and seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:

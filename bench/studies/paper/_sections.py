@@ -81,24 +81,40 @@ def _claims_table(j) -> list[str]:
 
 
 def _why_not_replicated(j) -> list[str]:
-    """One line per claim whose seed sets read different verdicts: the parts that moved."""
-    from ._replication import why_not_replicated
+    """One line per claim whose seed sets read different verdicts (the parts that moved), and
+    per claim whose pooled reading differs from the one both sets read (the parts pooling
+    resolved)."""
+    from ._replication import pooled_moves, why_not_replicated
 
     lines = [
         f"- claim {md_escape(v.key)}: {md_escape(why)}"
         for v in j.final
         if (why := why_not_replicated(j, v.key))
     ]
-    if not lines:
-        return []
-    return [
-        "Why a claim does not replicate (effect [90% CI] on each seed set). A part one set signs "
-        "and the other leaves undecided is no contradiction, but the rule counts only a verdict "
-        "both sets read:",
-        "",
-        *lines,
-        "",
+    pooled = [
+        f"- claim {md_escape(v.key)}: {md_escape(why)}"
+        for v in j.final
+        if (why := pooled_moves(j, v.key))
     ]
+    out = []
+    if lines:
+        out += [
+            "Why a claim does not replicate (effect [90% CI] on each seed set). A part one set "
+            "signs and the other leaves undecided is no contradiction, but the rule counts only "
+            "a verdict both sets read:",
+            "",
+            *lines,
+            "",
+        ]
+    if pooled:
+        out += [
+            "Where both seed sets read one verdict and the pooled ten seeds another (the final "
+            "reading: ten seeds resolve a part that five leave undecided):",
+            "",
+            *pooled,
+            "",
+        ]
+    return out
 
 
 def _parts_table(j) -> list[str]:
