@@ -90,6 +90,9 @@ def _replicated(row: dict[str, str] | None) -> str:
         spans = [c.removeprefix("seeds ") for c in sets[:2]]
         return f"{_verdict(row)}: {spans[0]} {first}, {spans[1]} {second}"
     if rep == "yes":
+        if first != row["verdict"].strip("*"):  # ten seeds resolve what five did not
+            spans = " and ".join(c.removeprefix("seeds ") for c in sets[:2])
+            return f"{_verdict(row)}, replicates (pooled; {spans}: {first} each)"
         return f"{_verdict(row)}, replicates"
     return f"{_verdict(row)}; {sets[1].removeprefix('seeds ')} {rep}"
 

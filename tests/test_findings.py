@@ -67,10 +67,18 @@ def test_a_changed_verdict_changes_the_table_and_the_check(tmp_path):
             "**reproduced**; 5-9 pending (3 of 50 runs)",
         ),
         ("reproduced (5)", "-", "not run", "**reproduced**; 5-9 not run"),
+        (
+            "not reproduced (5)",
+            "not reproduced (5)",
+            "yes",
+            "**partly reproduced**, replicates (pooled; 0-4 and 5-9: not reproduced each)",
+        ),
     ],
 )
 def test_the_paper_core_cell_states_each_seed_sets_reading(primary, replication, replicates, cell):
     verdict = "**inconclusive (does not replicate)**" if replicates == "**no**" else None
+    if cell.startswith("**partly reproduced**, replicates (pooled"):
+        verdict = "**partly reproduced**"  # the pooled reading, unlike each set's
     row = {
         "verdict": verdict or "**" + primary.removesuffix(" (5)") + "**",
         "seeds 0-4": primary,
