@@ -9,10 +9,10 @@ learned-M HNN's blows up? (docs/studies/mujoco.md, "What the reference's HNN can
 
 import dataclasses
 import sys
-import time
 
 import equinox as eqx
 import jax.numpy as jnp
+from _probe import score
 
 from bench.core import _controlled as C
 from bench.core._experiments import expand
@@ -44,16 +44,7 @@ def build(c):
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
 c = next(c for c in expand("mujoco", "quick") if c.seed == 0 and c.model == "hnn_force")
 for lr in (2e-4, 5e-3):
-    run = dataclasses.replace(c, lr=lr, steps=steps)
-    t = time.time()
-    b = build(run)
-    model, meta = C.train(run, b, None, False)
-    r = C.evaluate(run, b, model, meta, None)[0]
-    print(
-        f"hnn_force M=I lr {lr:g} steps {steps}: train_mse {r['train_mse']:.4g} "
-        f"test_mse {r['test_mse']:.4g} ({time.time() - t:.0f} s)",
-        flush=True,
-    )
+    score(dataclasses.replace(c, lr=lr, steps=steps), f"M=I lr {lr:g} steps {steps}", build)
 
 # and with the force's output as a rate of the velocity, as NODE+SO's acceleration
 
@@ -67,12 +58,4 @@ def force_term(self, q, p, args):
 _forced.ForcedHNN.force_term = force_term
 for lr in (2e-4, 5e-3):
     run = dataclasses.replace(c, lr=lr, steps=steps)
-    t = time.time()
-    b = build(run)
-    model, meta = C.train(run, b, None, False)
-    r = C.evaluate(run, b, model, meta, None)[0]
-    print(
-        f"hnn_force M=I, F as a rate, lr {lr:g} steps {steps}: train_mse {r['train_mse']:.4g} "
-        f"test_mse {r['test_mse']:.4g} ({time.time() - t:.0f} s)",
-        flush=True,
-    )
+    score(run, f"M=I, F as a rate, lr {lr:g} steps {steps}", build)

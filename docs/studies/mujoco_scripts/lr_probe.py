@@ -7,23 +7,17 @@ cosine schedule: test and train MSE of each (docs/studies/mujoco.md).
 
 import dataclasses
 import sys
-import time
 
-from bench.core import _controlled as C
+from _probe import score
+
 from bench.core._experiments import expand
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 5000
-cells = [c for c in expand("mujoco", "quick") if c.seed == 0 and c.model in ("node", "node_so")]
+cells = [
+    c
+    for c in expand("mujoco", "quick")
+    if c.seed == 0 and c.model in ("node", "node_so") and c.lr == 2e-4
+]
 for c in cells:
     for lr in (2e-4, 5e-3):
-        run = dataclasses.replace(c, lr=lr, steps=steps)
-        t = time.time()
-        built = C.build(run)
-        model, meta = C.train(run, built, None, False)
-        r = C.evaluate(run, built, model, meta, None)[0]
-        print(
-            f"{c.model:8s} lr {lr:g} steps {steps}: test_mse {r['test_mse']:.4g} "
-            f"train_mse {r['train_mse']:.4g} rollout_error {r['rollout_error']:.4g} "
-            f"({time.time() - t:.0f} s)",
-            flush=True,
-        )
+        score(dataclasses.replace(c, lr=lr, steps=steps), f"{c.model:8s} lr {lr:g} steps {steps}")

@@ -6,23 +6,16 @@ outputs raw and standardised: the test and train MSE of each (docs/studies/mujoc
 
 import dataclasses
 import sys
-import time
+
+from _probe import score
 
 from bench.core import _controlled as C
 from bench.core._experiments import expand
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else None
-for c in (c for c in expand("mujoco", "quick") if c.seed == 0):
+for c in (c for c in expand("mujoco", "quick") if c.seed == 0 and c.lr == 2e-4):
     for standardise in (False, True):
         if c.model == C.TRIVIAL and standardise:
             continue
         run = dataclasses.replace(c, standardise=standardise, steps=steps or c.steps)
-        t = time.time()
-        built = C.build(run)
-        model, meta = C.train(run, built, None, False)
-        r = C.evaluate(run, built, model, meta, None)[0]
-        print(
-            f"{c.model:18s} standardise={standardise!s:5s} test_mse {r['test_mse']:.4g} "
-            f"train_mse {r['train_mse']:.4g} ({time.time() - t:.0f} s)",
-            flush=True,
-        )
+        score(run, f"{c.model:18s} standardise={standardise!s:5s}")

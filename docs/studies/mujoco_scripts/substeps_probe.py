@@ -8,9 +8,9 @@ code's learning rates, for ``steps`` steps: test and train MSE of each, beside t
 
 import dataclasses
 import sys
-import time
 
-from bench.core import _controlled as C
+from _probe import score
+
 from bench.core._experiments import expand
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 400
@@ -25,13 +25,4 @@ for c in cells:
             run = dataclasses.replace(
                 c, lr=lr, steps=steps, train_substeps=substeps, eval_substeps=substeps
             )
-            t = time.time()
-            built = C.build(run)
-            model, meta = C.train(run, built, None, False)
-            r = C.evaluate(run, built, model, meta, None)[0]
-            print(
-                f"{c.model:9s} lr {lr:g} substeps {substeps} steps {steps}: "
-                f"train_mse {r['train_mse']:.4g} test_mse {r['test_mse']:.4g} "
-                f"({time.time() - t:.0f} s)",
-                flush=True,
-            )
+            score(run, f"{c.model:9s} lr {lr:g} substeps {substeps} steps {steps}")

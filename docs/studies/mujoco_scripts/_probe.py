@@ -1,0 +1,20 @@
+"""The probes' one step: build a MuJoCo run, train it, score it, and print one line."""
+
+import time
+
+from bench.core import _controlled as C
+
+
+def score(run, label: str, build=C.build) -> dict:
+    """Train and evaluate ``run`` (its data and model from ``build``), print ``label`` with its
+    train, test and rollout errors and the seconds taken, and return the row's columns."""
+    t = time.time()
+    built = build(run)
+    model, meta = C.train(run, built, None, False)
+    r = C.evaluate(run, built, model, meta, None)[0]
+    print(
+        f"{label}: train_mse {r['train_mse']:.4g} test_mse {r['test_mse']:.4g} "
+        f"rollout_error {r['rollout_error']:.4g} ({time.time() - t:.0f} s)",
+        flush=True,
+    )
+    return r
