@@ -273,3 +273,18 @@ def test_the_code_lr_runs_are_a_sensitivity_reading_not_the_verdicts():
     assert a.status == "contradicts" and a.n == len(SEEDS)
     assert "at the reference code's lr, not judged" in v.detail
     assert not R.code_lr_parts(runs)
+
+
+def test_models_worse_than_holding_the_velocity_on_their_training_data_are_named():
+    """A trained model whose training MSE is above the constant-velocity predictor's fits its
+    own training data worse than holding the velocity (a finite loss, so not flagged
+    diverged): the section names its seeds; models below the predictor are not named."""
+    from bench.studies.paper._mujoco_section import worse_than_trivial_in_training
+
+    runs = _tables()
+    assert worse_than_trivial_in_training(runs) == []
+    hnn = runs["model"] == "hnn_force"
+    runs.loc[hnn & (runs["seed"] == 3), "train_mse"] = 1e10
+    runs.loc[hnn & (runs["seed"] == 1), "train_mse"] = 6.0
+    (line,) = worse_than_trivial_in_training(runs)
+    assert line == f"HNN on {X.QUICK_TASK}, seed 1 (6), 3 (1e+10) (the predictor: 5)"
