@@ -2,6 +2,9 @@
 
 import time
 
+import equinox as eqx
+import jax.numpy as jnp
+
 from bench.core import _controlled as C
 
 
@@ -18,3 +21,17 @@ def score(run, label: str, build=C.build) -> dict:
         flush=True,
     )
     return r
+
+
+class Identity(eqx.Module):
+    """M^-1 = I in place of a learned one, with the kinetic term's jitter share taken out of
+    the factor (so that H = 1/2 |p|^2 + V)."""
+
+    dof: int = eqx.field(static=True)
+    jitter: float = eqx.field(static=True)
+
+    def factor(self, q, args):
+        return jnp.sqrt(1.0 - self.jitter) * jnp.eye(self.dof, dtype=q.dtype)
+
+    def matrix(self, q, args):
+        return jnp.eye(self.dof, dtype=q.dtype)

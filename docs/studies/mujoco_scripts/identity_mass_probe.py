@@ -11,24 +11,11 @@ import dataclasses
 import sys
 
 import equinox as eqx
-import jax.numpy as jnp
-from _probe import score
+from _probe import Identity, score
 
 from bench.core import _controlled as C
 from bench.core._experiments import expand
 from models import _forced
-
-
-class Identity(eqx.Module):
-    dof: int = eqx.field(static=True)
-    jitter: float = eqx.field(static=True)
-
-    def factor(self, q, args):
-        return jnp.sqrt(1.0 - self.jitter) * jnp.eye(self.dof, dtype=q.dtype)
-
-    def matrix(self, q, args):
-        return jnp.eye(self.dof, dtype=q.dtype)
-
 
 orig_build = C.build
 
