@@ -9,7 +9,7 @@ import equinox as eqx
 import jax.random as jr
 
 from ._features import Features
-from ._hamiltonian import SeparableHamiltonian
+from ._hamiltonian import INVERSE_MASS_JITTER, SeparableHamiltonian
 from ._hnn import AbstractSeparableHNN
 from ._mlp import MLP
 from ._scene import Scene
@@ -19,7 +19,7 @@ class ForcedHNN(AbstractSeparableHNN):
     """A separable HNN with a non-conservative learned force, in z = (q, qdot):
 
         dq/dt = dH/dp = M^-1(q) p,   dp/dt = -dH/dq + F(q, p, u),
-        H = 1/2 p^T M^-1(q) p + V(q),   M^-1 = L L^T + 1e-4 I,   p = M(q) qdot,
+        H = 1/2 p^T M^-1(q) p + V(q),   M^-1 = L L^T + floor I,   p = M(q) qdot,
 
     F = MLP(cos q, sin q, p, args, u). H, M and V never see u (their features leave it out);
     F enters dp/dt only, so dq/dt = qdot exactly (second order) and
@@ -31,6 +31,11 @@ class ForcedHNN(AbstractSeparableHNN):
     M^-1 is multiplied by 0, so M = I and p = qdot. Ours keeps the suite's learned M^-1(q) (the
     ``hnn_so`` Hamiltonian, which can represent M = I): MuJoCo's generalised coordinates have
     configuration-dependent inertia. Angles enter through (cos q, sin q) as everywhere here.
+
+    ``inverse_mass_floor`` (default 1e-4, ``hnn_so``'s jitter) is the floor under M^-1's
+    spectrum, so M <= I / floor. Integrated by explicit Euler, a learned M^-1 that turns
+    near-singular makes the flow stiff and training blows up with a finite loss
+    (docs/studies/mujoco.md); a floor of 0.1 keeps it trainable and still lets M vary tenfold.
     """
 
     takes_controls: ClassVar[bool] = True
@@ -42,12 +47,22 @@ class ForcedHNN(AbstractSeparableHNN):
     features: Features
     force: MLP
 
-    def __init__(self, scene, width, depth, activation, dtype, *, key):
+    def __init__(
+        self,
+        scene,
+        width,
+        depth,
+        activation,
+        dtype,
+        *,
+        key,
+        inverse_mass_floor: float = INVERSE_MASS_JITTER,
+    ):
         self.scene, self.dtype = scene, dtype
         kh, kf = jr.split(key)
         self.features = Features(scene)  # F's input: (q, p, args, u)
         self.hamiltonian_part = SeparableHamiltonian(  # leaves u out of M^-1 and V
-            self.features, width, depth, activation, dtype, key=kh
+            self.features, width, depth, activation, dtype, key=kh, floor=inverse_mass_floor
         )
         self.force = MLP(
             self.features.size(True), scene.dof, width, depth, activation, dtype, key=kf

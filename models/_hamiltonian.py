@@ -32,26 +32,37 @@ class GeneralHamiltonian(eqx.Module):
 
 
 class SeparableHamiltonian(eqx.Module):
-    """H(q, p) = 1/2 p^T M^-1(q) p + V(q), M^-1 = L L^T + 1e-4 I ("HNN with SO").
+    """H(q, p) = 1/2 p^T M^-1(q) p + V(q), M^-1 = L L^T + floor I ("HNN with SO").
 
-    L(q) lower-triangular with softplus diagonal from an MLP; V an MLP.
+    L(q) lower-triangular with softplus diagonal from an MLP; V an MLP. ``floor`` (default
+    1e-4, :data:`INVERSE_MASS_JITTER`) bounds M^-1's spectrum from below, so M <= I / floor.
     """
 
     inverse_mass: CholeskyNet
     features: Features
     potential: MLP
 
-    def __init__(self, features: Features, width, depth, activation, dtype, *, key):
+    def __init__(
+        self,
+        features: Features,
+        width,
+        depth,
+        activation,
+        dtype,
+        *,
+        key,
+        floor: float = INVERSE_MASS_JITTER,
+    ):
         k1, k2 = jr.split(key)
         self.inverse_mass = CholeskyNet(
-            features, width, depth, activation, dtype, key=k1, jitter=INVERSE_MASS_JITTER
+            features, width, depth, activation, dtype, key=k1, jitter=floor
         )
         self.features = features = features.without_controls()  # V(q) never sees u
         self.potential = MLP(features.size(False), 1, width, depth, activation, dtype, key=k2)
 
     def kinetic(self, q: Array, p: Array, args: Array) -> Array:
         lt_p = self.inverse_mass.factor(q, args).T @ p
-        return 0.5 * (lt_p @ lt_p) + 0.5 * INVERSE_MASS_JITTER * (p @ p)
+        return 0.5 * (lt_p @ lt_p) + 0.5 * self.inverse_mass.jitter * (p @ p)
 
     def potential_energy(self, q: Array, args: Array) -> Array:
         return self.potential(self.features(q, None, args))[0]

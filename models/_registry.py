@@ -21,8 +21,9 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 
 ``hnn`` takes ``momentum_map`` (default True: p = M(q) qdot with a learned M in a velocity
 scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
-in for p and dz/dt = J grad H on (q, qdot). ``hnn`` (its H network), ``node`` and ``lnn`` take
-``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation).
+in for p and dz/dt = J grad H on (q, qdot). ``hnn_force`` takes ``inverse_mass_floor``
+(default 1e-4: the floor under its M^-1's spectrum). ``hnn`` (its H network), ``node`` and
+``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation).
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
@@ -68,6 +69,15 @@ def _choice(name, allowed):
         if x not in allowed:
             raise ValueError(f"option {name} must be one of {allowed}, got {x!r}")
         return x
+
+    return check
+
+
+def _strictly_positive_float(name):
+    def check(x):
+        if isinstance(x, bool) or not isinstance(x, int | float) or not x > 0:
+            raise ValueError(f"option {name} must be a number > 0, got {x!r}")
+        return float(x)
 
     return check
 
@@ -182,7 +192,12 @@ _REGISTRY = {
         ImplicitVIN, ImplicitVIN, {"newton_steps": _positive_int("newton_steps")}, True, _V
     ),
     "resnet": _Entry(ResNet, _plain(ResNet)),
-    "hnn_force": _Entry(ForcedHNN, _plain(ForcedHNN), needs=_V),
+    "hnn_force": _Entry(
+        ForcedHNN,
+        _plain(ForcedHNN),
+        {"inverse_mass_floor": _strictly_positive_float("inverse_mass_floor")},
+        needs=_V,
+    ),
     "constant_velocity": _Entry(ConstantVelocity, _trivial(ConstantVelocity)),
     "at_rest": _Entry(AtRest, _trivial(AtRest)),
 }

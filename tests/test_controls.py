@@ -226,6 +226,37 @@ def test_hnn_force_conserves_h_without_force_and_f_enters_dp_dt_only():
     np.testing.assert_array_equal(model.vector_field(0.0, Z0, a1)[:2], Z0[2:])
 
 
+def test_hnn_force_floor_bounds_the_inverse_mass_spectrum_in_h_and_the_field():
+    """``inverse_mass_floor``: with the factor's network driven to L ~ 0, M^-1 = floor I, and
+    H's kinetic term and the field read the same M^-1 (H against 1/2 p^T M^-1 p + V, and
+    dq/dt = M^-1 p against the gradient of H)."""
+    a = jnp.concatenate([ARGS, U[0]])
+    for floor in (1e-4, 0.1, 2.0):
+        model = models.make(
+            "hnn_force", CTRL, key=jr.PRNGKey(0), width=8, dtype="float64",
+            inverse_mass_floor=floor,
+        )  # fmt: skip
+        inv = model.hamiltonian_part.inverse_mass
+        last = lambda m: (m.net.weights[-1], m.net.biases[-1])
+        rows, cols = np.tril_indices(2)
+        bias = jnp.asarray(np.where(rows == cols, -40.0, 0.0))  # softplus(-40) ~ 0 on L's diagonal
+        flat = eqx.tree_at(last, inv, (jnp.zeros_like(last(inv)[0]), bias))
+        model = eqx.tree_at(lambda m: m.hamiltonian_part.inverse_mass, model, flat)
+        q, p = Z0[:2], jnp.array([0.7, -1.1])
+        minv = model.hamiltonian_part.inverse_mass.matrix(q, a)
+        np.testing.assert_allclose(minv, floor * np.eye(2), rtol=1e-9, atol=1e-15)
+        h = model.hamiltonian_part(q, p, a) - model.hamiltonian_part.potential_energy(q, a)
+        np.testing.assert_allclose(h, 0.5 * floor * (p @ p), rtol=1e-9)
+        qdot = jax.grad(model.hamiltonian_part, argnums=1)(q, p, a)
+        np.testing.assert_allclose(qdot, floor * p, rtol=1e-9)
+    default = _make("hnn_force").hamiltonian_part.inverse_mass.jitter
+    plain = Scene(dof=2, angular=(True, False), n_args=1)
+    assert default == _make("hnn_so", scene=plain).hamiltonian_part.inverse_mass.jitter == 1e-4
+    for bad in (0, -0.1, True, "0.1"):
+        with pytest.raises(ValueError, match="inverse_mass_floor must be a number > 0"):
+            models.make("hnn_force", CTRL, key=jr.PRNGKey(0), inverse_mass_floor=bad)
+
+
 def test_gradients_reach_the_force_network_through_a_controlled_rollout():
     model = _make("hnn_force")
     z0s, args = jnp.stack([Z0, -Z0]), jnp.stack([ARGS, ARGS])

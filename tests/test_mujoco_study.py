@@ -56,7 +56,8 @@ def _tables(
                 jitter = math.exp(spread * SPREAD[s]) if model in ("node_so", "hnn_force") else 1
                 c = RunConfig(**{**c0, "system": task, "dt": dt, "model": model, "seed": s,
                                  "train_integrator": integ, "eval_integrator": integ,
-                                 "system_params": data})  # fmt: skip
+                                 "system_params": data,
+                                 "model_options": R.MODEL_OPTIONS.get(model, ())})  # fmt: skip
                 stand = data == X.STAND_IN
                 row = c.to_dict()
                 row.update(
@@ -77,6 +78,24 @@ def _tables(
                 rows.append(_store.jsonable(row))
     runs = _store.rows_frame(rows)
     return (runs, _store.curves_frame(rows)) if frames else runs
+
+
+def test_the_hnn_of_an_older_declaration_is_not_the_claim_s():
+    """Rows of the HNN without its floor under M^-1 (stored before it was declared) stay out of
+    the verdict: swapped in for the declared HNN, the part they would decide is not judged."""
+    runs = _tables(tasks=X.TASKS)
+    assert R.claim_16(runs).verdict == "reproduced"
+    hnn = runs["model"] == "hnn_force"
+    old = runs.copy()
+    old.loc[hnn, "model_options"] = "[]"
+    assert not R.declared_options(old)[hnn].any() and R.declared_options(old)[~hnn].all()
+    v = R.claim_16(old)
+    assert v.verdict != "reproduced"
+    assert all(p.status == "undecided" for p in v.parts if "HNN" in p.name)
+    expected = (("inverse_mass_floor", R.HNN_FLOOR),)
+    assert {c.model_options for c in expand(X.EXPERIMENT, "smoke") if c.model == "hnn_force"} == {
+        expected
+    }
 
 
 def _statuses(v) -> dict[str, str]:

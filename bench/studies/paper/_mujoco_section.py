@@ -50,8 +50,9 @@ DIFFERENCES = (
     "feeds the standardised state to H and ours does the same for (q, p), p scaled by the "
     "velocity's statistics.",
     "The HNN (hnn_force) takes 8 Euler steps per transition as every model does (the "
-    "reference's MixtureHNN takes one) and learns its mass matrix M(q) (the reference's has M "
-    "= I).",
+    "reference's MixtureHNN takes one) and learns its mass matrix M(q) with a floor of 0.1 "
+    "under M^-1's spectrum (the reference's has M = I; without the floor ours blows up with a "
+    "finite loss as M^-1 turns near-singular, docs/studies/mujoco.md).",
     "Error bars: standard error over the seeds (the caption says standard error over 4 "
     "seeds; the plotting code draws the standard deviation).",
 )

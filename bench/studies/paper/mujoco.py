@@ -25,6 +25,7 @@ from ._mujoco_rule import (
     CODE_LR,
     LABELS,
     LR,
+    MODEL_OPTIONS,
     MODELS,
     NAME,
     NOT_JUDGED,
@@ -142,14 +143,16 @@ _SMOKE = {
 
 
 def _include(c: RunConfig) -> bool:
-    """The cells of :data:`CELLS`, at the task's dt and test length, the file's runs only where
-    it is there; at App. C's learning rate, and NODE and NODE+SO at the reference code's too."""
+    """The cells of :data:`CELLS` with their models' options (the HNN's floor under M^-1), at
+    the task's dt and test length, the file's runs only where it is there; at App. C's learning
+    rate, and NODE and NODE+SO at the reference code's too."""
     task = systems.MUJOCO_TASKS.get(c.system)
     paper_lengths = {TEST_CHUNKS, *SHORT_TEST_CHUNKS.values()}  # smoke's own passes as it is
     return (
         task is not None
         and (c.test_chunks == task_test_chunks(c.system) or c.test_chunks not in paper_lengths)
         and (c.model, c.train_integrator) in CELLS
+        and c.model_options == MODEL_OPTIONS.get(c.model, ())
         and (c.lr == LR or c.model in ("node", "node_so"))
         and c.eval_integrator == c.train_integrator
         and abs(c.dt - task.dt) < 1e-12
@@ -167,6 +170,7 @@ EXPERIMENT = Experiment(
         "train_integrator": ("euler", "euler_so"),
         "eval_integrator": ("euler", "euler_so"),
         "system_params": (FILE,),
+        "model_options": ((), *MODEL_OPTIONS.values()),
         "lr": (LR, CODE_LR),
         "test_chunks": (TEST_CHUNKS, *SHORT_TEST_CHUNKS.values()),
     },

@@ -1,0 +1,36 @@
+"""The HNN (hnn_force) with and without a floor of 0.1 under M^-1's spectrum, beside the NODE,
+on each of Fig. 7's tasks: quick's cell moved to the task (its dt and test length), seed 0,
+App. C's learning rate, ``steps`` steps. Built through the registry's option, as the experiment
+declares it (docs/studies/mujoco.md).
+
+    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/floor_tasks_probe.py [steps] [seed]
+"""
+
+import dataclasses
+import sys
+
+from _probe import score
+
+import systems
+from bench.core._experiments import expand
+from bench.studies.paper.mujoco import TASKS, task_test_chunks
+
+steps = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
+seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+quick = {c.model: c for c in expand("mujoco", "quick") if c.seed == seed and c.lr == 2e-4}
+forms = (
+    ("NODE", quick["node"], ()),
+    ("HNN", quick["hnn_force"], ()),
+    ("HNN floor 0.1", quick["hnn_force"], (("inverse_mass_floor", 0.1),)),
+)
+for task in TASKS:
+    for label, cell, options in forms:
+        run = dataclasses.replace(
+            cell,
+            system=task,
+            dt=systems.MUJOCO_TASKS[task].dt,
+            test_chunks=task_test_chunks(task),
+            steps=steps,
+            model_options=options,
+        )
+        score(run, f"{task} {label:13s} seed {seed} steps {steps}")
