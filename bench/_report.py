@@ -33,6 +33,7 @@ from ._tables import (
 )
 from .core._env import cpu_count
 from .core._experiments import get
+from .core._params import BLOW_UP_RISE
 from .core._provenance import compare_provenance, provenance_markdown
 from .core._query import (
     experiment_rows,
@@ -223,6 +224,33 @@ def make_figures(results_dir: Path) -> list[Path]:
     return written
 
 
+def _blown_up_lines(rows: pd.DataFrame) -> list[str]:
+    """The finished runs whose training blew up with a finite loss (``loss_rise`` above
+    :data:`BLOW_UP_RISE`): stored as ``ok`` and scored as they are, named so that a reader
+    does not take them for models that merely fit poorly. Empty where none did."""
+    if not len(rows) or "loss_rise" not in rows:
+        return []
+    rise = pd.to_numeric(rows["loss_rise"], errors="coerce")
+    hit = rows[(rows["status"] == "ok") & (rise > BLOW_UP_RISE)]
+    if not len(hit):
+        return []
+    hit = hit.assign(_label=_table_variant(hit))
+    lines = [
+        "Training blew up with a finite loss (its last stretch's median loss over "
+        f"{BLOW_UP_RISE:g}x its best; status ok, scored as it is):",
+        "",
+    ]
+    for _, r in hit.sort_values(["system", "_label", "seed"]).iterrows():
+        rise_r = float(r["loss_rise"])
+        lines.append(
+            f"- {r['_label']} on {r['system']} seed {r['seed']}: ended {rise_r:.3g}x above its best"
+        )
+    recorded = int(rise.notna().sum())
+    if recorded < len(rows):
+        lines.append(f"- ({recorded} of {len(rows)} runs record it; older rows do not)")
+    return [*lines, ""]
+
+
 def write_report(results_dir: Path, compare=None) -> Path:
     """Write ``results_dir/REPORT.md`` from the stored runs and return its path.
 
@@ -294,6 +322,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
             )
         if len(bad):
             lines.append("")
+        lines += _blown_up_lines(rows)
         stem = study.stem
         if (figdir / f"{stem}.png").exists():
             lines += [f"![{name}](figures/{stem}.png) ([PDF](figures/{stem}.pdf))", ""]

@@ -18,6 +18,7 @@ UNTRAINED = {
     "compile_seconds": 0.0,
     "steps_done": 0,
     "final_loss": None,
+    "loss_rise": None,
     "flops_per_step": 0.0,
     "train_cached": False,
 }

@@ -76,9 +76,34 @@ def _load_snapshots(pdir: Path, meta: dict, checkpoints: tuple, like, final) -> 
     return tuple(out)
 
 
+# the stretches of a training trace whose medians loss_rise compares
+RISE_STRETCHES = 50
+# a run whose loss_rise is above this ended a decade above its best: a finite blow-up (the
+# median of a stretch of batch losses of a run that trains moves well under 2x between
+# neighbouring stretches, and a cosine schedule ends at the lowest rate)
+BLOW_UP_RISE = 10.0
+
+
+def loss_rise(losses) -> float | None:
+    """How far training ended above its best: the median loss of the last of
+    :data:`RISE_STRETCHES` equal stretches of the trace (fewer for a shorter one) over the lowest
+    such median. About 1 where the loss ends at its best; orders of magnitude above 1 where
+    training blew up and the loss stayed finite, which the ``diverged`` status (a non-finite
+    loss) does not see. Non-finite losses are left out; None with fewer than 2 finite ones."""
+    x = np.asarray(losses, dtype=np.float64)
+    x = x[np.isfinite(x)]
+    if x.size < 2:
+        return None
+    medians = np.array([np.median(s) for s in np.array_split(x, min(RISE_STRETCHES, x.size))])
+    best = float(medians.min())
+    if best <= 0.0:  # a loss that reached 0 exactly: any rise is infinite, none is 1
+        return 1.0 if medians[-1] <= 0.0 else float("inf")
+    return float(medians[-1] / best)
+
+
 def result_meta(res) -> dict:
     """A :class:`bench.TrainResult`'s outcome and costs as the row's training fields
-    (``final_loss``: the last finite loss; None without one)."""
+    (``final_loss``: the last finite loss, None without one; ``loss_rise``: :func:`loss_rise`)."""
     losses = np.asarray(res.losses, dtype=np.float64)
     return {
         "status": res.status,
@@ -88,6 +113,7 @@ def result_meta(res) -> dict:
         "steps_done": int(res.steps_done),
         "flops_per_step": float(res.flops_per_step),
         "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
+        "loss_rise": loss_rise(losses),
     }
 
 

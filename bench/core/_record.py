@@ -53,6 +53,7 @@ def training_columns(meta: dict) -> dict:
         compile_seconds=meta["compile_seconds"],
         steps_done=meta.get("steps_done"),
         final_loss=meta.get("final_loss"),
+        loss_rise=meta.get("loss_rise"),
         flops_per_step=_nan_if_none(meta.get("flops_per_step")),
         train_cached=meta["train_cached"],
     )

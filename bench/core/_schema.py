@@ -120,6 +120,11 @@ _RUN = {
     "diverged_step": ("count", "training step of the first non-finite loss; empty if none"),
     "steps_done": ("count", "training steps completed"),
     "final_loss": ("1", "training loss of the last step (the loss column's kind)"),
+    "loss_rise": (
+        "1",
+        "median loss of the trace's last 2% over its lowest 2% median: ~1 where training ended "
+        "at its best, >> 1 where it blew up with a finite loss; empty before the field",
+    ),
     "train_cached": ("-", "the parameters came from the cache (train_seconds is the original's)"),
     "rollout_error": (
         "1",
