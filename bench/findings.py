@@ -147,12 +147,12 @@ def _protocol_lines(reports: dict[str, str]) -> list[str]:
     lines = [
         "",
         "Where a seed's own protocol differs from ours, both run and the seed's decides; each "
-        "model's learning gate at quick (a model that did not learn leaves its comparison "
-        "untested, not refuted; REPORT.md sets the protocols side by side):",
+        "model's learning gate at each budget (a model that did not learn leaves its "
+        "comparison untested, not refuted; REPORT.md sets the protocols side by side):",
         "",
         "| claim | learned at quick: ours / the seed's | quick: ours / the seed's | "
-        "paper-core: ours / the seed's |",
-        "| --- | --- | --- | --- |",
+        "learned at paper-core | paper-core: ours / the seed's |",
+        "| --- | --- | --- | --- | --- |",
     ]
     for claim in sorted({*quick, *core}):
         q, c = quick.get(claim, {}), core.get(claim, {})
@@ -163,7 +163,7 @@ def _protocol_lines(reports: dict[str, str]) -> list[str]:
 
         lines.append(
             f"| {claim} | {pair(q, 'learned', False)} | {pair(q, 'verdict')} | "
-            f"{pair(c, 'verdict')} |"
+            f"{pair(c, 'learned', False)} | {pair(c, 'verdict')} |"
         )
     return lines
 

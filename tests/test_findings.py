@@ -123,7 +123,11 @@ def test_the_seeds_protocols_come_from_each_claims_section():
     assert got[9]["loss"] == ("squared error", "L1")
     assert got[9]["verdict"] == ("not run", "not run")
     lines = F._protocol_lines({"quick": report, "paper-core": "## Claims"})
-    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run |"
+    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run | not run / not run |"
+    # each budget's learning gates from its own report
+    gates = report.replace("| learned | - | - |", "| learned | HNN yes | HNN no |")
+    lines = F._protocol_lines({"quick": report, "paper-core": gates})
+    assert lines[-1] == "| 9 | - / - | not run / not run | HNN yes / HNN no | not run / not run |"
 
 
 def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
