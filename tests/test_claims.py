@@ -1046,6 +1046,28 @@ def test_claim_5_c_cost(tables, contradicting):
     assert _status(v, s, "(c) cost") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
+def test_claim_5_c_cost_pairs_only_runs_of_one_machine(tables):
+    """A time ratio across two machines measures the machines: a seed whose NODE+SO and mixture
+    HNN trained on different machines is left out of (c) and named; rows that record no
+    machine (stored before the field) are kept."""
+    runs, curves = tables
+    s = "chain_pendulum"
+    so, mix = _damped(runs, s, "node_so"), _damped(runs, s, "mixture_hnn")
+    one = _assign(_assign(runs, so | mix, "cpu A", "device"), so | mix, "25/1", "cpu_family_model")
+    assert _part(C.CLAIMS[5](one, curves), s, "(c) cost").n == 5
+    # seeds 0 and 1: NODE+SO on a machine 100x slower; without the rule it would contradict (c)
+    on_b = so & runs["seed"].isin([0, 1])
+    two = _assign(_assign(one, on_b, "cpu B", "device"), on_b, 1e6, "train_seconds")
+    c = _part(C.CLAIMS[5](two, curves), s, "(c) cost")
+    assert c.n == 3 and c.status != "contradicts" and c.point > 0, c
+    assert "seeds 0, 1 left out: their two models trained on different machines" in c.note
+    other = _assign(one, on_b, "25/17", "cpu_family_model")  # same name, another CPU model
+    assert _part(C.CLAIMS[5](other, curves), s, "(c) cost").n == 3
+    unknown = _assign(one, on_b, None, "device")
+    unknown = _assign(unknown, on_b, None, "cpu_family_model")
+    assert _part(C.CLAIMS[5](unknown, curves), s, "(c) cost").n == 5
+
+
 # ----------------------------------------------------------------------------- claim 6
 
 

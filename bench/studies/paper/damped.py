@@ -105,17 +105,35 @@ DAMPED = Experiment(
 DAMPED_COMPARATOR = "mixture_hnn"
 
 
+def _mixed_machines(a: pd.DataFrame, b: pd.DataFrame) -> set:
+    """The seeds whose runs in ``a`` and ``b`` record different machines (``device``, and
+    ``cpu_family_model`` where both record it): their times are not comparable. A run that
+    records neither is taken to share its partner's machine (rows stored before the fields)."""
+    cols = [c for c in ("device", "cpu_family_model") if c in a and c in b]
+    if not cols:
+        return set()
+
+    def machine(rows: pd.DataFrame) -> pd.Series:
+        key = rows[cols].astype("string").fillna("").agg("|".join, axis=1)
+        return key.groupby(rows["seed"]).agg(lambda k: frozenset(x for x in k if x.strip("|")))
+
+    ma, mb = machine(a), machine(b)
+    return {s for s in ma.index.intersection(mb.index) if ma[s] and mb[s] and ma[s] != mb[s]}
+
+
 def _cost_part(d: pd.DataFrame, so: Mapping, mix: Mapping, system: str) -> Part:
     """Claim 5 (c): NODE+SO is cheaper than the mixture HNN: the per-seed
     ``log(train s mixture / train s NODE+SO)`` exceeds the margin (1.25x, a *greater* part);
-    contradicted also when NODE+SO's FLOPs per step (where recorded) are not smaller."""
+    contradicted also when NODE+SO's FLOPs per step (where recorded) are not smaller. A seed
+    whose two runs trained on different machines is left out (:func:`_mixed_machines`)."""
     rs, rm = select(d, **so), select(d, **mix)  # finished runs only: cost of a failure is moot
     name = f"{system}: (c) cost log(train s mixture HNN / NODE+SO)"
     if not len(rs) or not len(rm) or "train_seconds" not in d:
         return undecided(name, "no runs")
     ts = np.log(rs.groupby("seed")["train_seconds"].mean().astype(float))
     tm = np.log(rm.groupby("seed")["train_seconds"].mean().astype(float))
-    dt = (tm - ts).dropna()
+    mixed = _mixed_machines(rs, rm)  # a time ratio across two machines measures the machines
+    dt = (tm - ts).dropna().drop(index=list(mixed), errors="ignore")
     flops = math.nan
     if "flops_per_step" in d:
         fs = pd.to_numeric(rs["flops_per_step"], errors="coerce").mean()
@@ -127,6 +145,9 @@ def _cost_part(d: pd.DataFrame, so: Mapping, mix: Mapping, system: str) -> Part:
         if np.isfinite(flops)
         else "no flops_per_step recorded"
     ) + f"; params {rs['n_params'].mean():.0f} vs {rm['n_params'].mean():.0f}"
+    if mixed:
+        seeds = ", ".join(str(x) for x in sorted(mixed))
+        note += f"; seeds {seeds} left out: their two models trained on different machines"
     part = greater(name, dt.to_numpy(), policy.margin("cost"), note=note)
     if np.isfinite(flops) and flops >= 1:  # more FLOPs per step: not cheaper, at any margin
         part.decide = lambda value, alpha: "contradicts"
