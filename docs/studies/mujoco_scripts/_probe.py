@@ -23,6 +23,17 @@ def score(run, label: str, build=C.build) -> dict:
     return r
 
 
+def on_task(cell, task: str, **changes):
+    """Quick's ``cell`` moved to ``task``: its dt and test length, and ``changes``."""
+    import dataclasses
+
+    import systems
+    from bench.studies.paper.mujoco import task_test_chunks
+
+    dt, chunks = systems.MUJOCO_TASKS[task].dt, task_test_chunks(task)
+    return dataclasses.replace(cell, system=task, dt=dt, test_chunks=chunks, **changes)
+
+
 class Identity(eqx.Module):
     """M^-1 = I in place of a learned one, with the kinetic term's jitter share taken out of
     the factor (so that H = 1/2 |p|^2 + V)."""

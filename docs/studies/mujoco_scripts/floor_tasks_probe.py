@@ -6,14 +6,12 @@ declares it (docs/studies/mujoco.md).
     PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/floor_tasks_probe.py [steps] [seed]
 """
 
-import dataclasses
 import sys
 
-from _probe import score
+from _probe import on_task, score
 
-import systems
 from bench.core._experiments import expand
-from bench.studies.paper.mujoco import TASKS, task_test_chunks
+from bench.studies.paper.mujoco import TASKS
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
 seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
@@ -25,12 +23,5 @@ forms = (
 )
 for task in TASKS:
     for label, cell, options in forms:
-        run = dataclasses.replace(
-            cell,
-            system=task,
-            dt=systems.MUJOCO_TASKS[task].dt,
-            test_chunks=task_test_chunks(task),
-            steps=steps,
-            model_options=options,
-        )
+        run = on_task(cell, task, steps=steps, model_options=options)
         score(run, f"{task} {label:13s} seed {seed} steps {steps}")

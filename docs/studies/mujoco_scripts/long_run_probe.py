@@ -6,27 +6,21 @@ its 51,200 steps (docs/studies/mujoco.md). Prints the train and test MSE and ``l
     PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/long_run_probe.py [steps] [task]
 """
 
-import dataclasses
 import sys
 import time
 
-import systems
+from _probe import on_task
+
 from bench.core import _controlled as C
 from bench.core._experiments import expand
-from bench.studies.paper.mujoco import QUICK_TASK, task_test_chunks
+from bench.studies.paper.mujoco import QUICK_TASK
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 10_000
 task = sys.argv[2] if len(sys.argv) > 2 else QUICK_TASK
 for cell in expand("mujoco", "quick"):
     if cell.seed != 0 or cell.lr != 2e-4 or cell.model not in ("node", "hnn_force"):
         continue
-    run = dataclasses.replace(
-        cell,
-        system=task,
-        dt=systems.MUJOCO_TASKS[task].dt,
-        test_chunks=task_test_chunks(task),
-        steps=steps,
-    )
+    run = on_task(cell, task, steps=steps)
     t = time.time()
     built = C.build(run)
     model, meta = C.train(run, built, None, False)
