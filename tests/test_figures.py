@@ -7,6 +7,7 @@ Verdicts, agreement and causes are asserted on the structured values the report 
 from (:func:`load_other`'s verdicts, :func:`comparison_rows`), the report itself on its
 sections and rows."""
 
+import dataclasses
 import re
 
 import pytest
@@ -16,7 +17,7 @@ from bench._report import figure_stem, make_figures, write_report
 from bench._tables import discrimination_groups
 from bench.core._query import experiment_rows, load_tables
 from bench.studies.paper import FIGURES
-from bench.studies.paper._comparison import comparison_rows, load_other
+from bench.studies.paper._comparison import comparison_rows, comparison_section, load_other
 from bench.studies.paper.kit import (
     INCONCLUSIVE,
     NOT_REPRODUCED,
@@ -106,7 +107,9 @@ def test_report_sets_both_budgets_side_by_side(results, judged):
     assert [v.verdict for v in row3.verdicts] == [REPRODUCED, NOT_REPRODUCED]
     assert row3.agree is False and "budget" in {c.kind for c in row3.causes}
     section = _section(text, "## Verdicts at both budgets")
-    assert all(_row(section, key) for key in rows)  # one row per claim key
+    for key, row in rows.items():  # one row per claim key that some folder has runs for
+        ran = any(v is not None and (v.n_seeds or v.pending) for v in row.verdicts)
+        assert ran == any(line.startswith(f"| {key} |") for line in section.splitlines()), key
 
 
 def test_a_claim_judged_in_one_folder_only_names_no_cause(judged):
@@ -255,6 +258,21 @@ def test_agreement_compares_verdicts_not_the_reason_of_an_inconclusive_one():
     row3, row1 = (next(r for r in rows if r.claim == c) for c in (3, 1))
     assert row3.agree is True and row3.causes == (), row3
     assert row1.agree is False and [c.kind for c in row1.causes] == ["budget"], row1
+
+
+def test_a_key_no_folder_ran_is_left_out_of_the_comparison_table():
+    """A verdict key without runs in any folder (a variant no folder ran, e.g. claim 15's
+    *not run* once every folder has the measured data) gives no row; a pending one stays."""
+
+    def v(claim, n_seeds, variant="", verdict=INCONCLUSIVE):
+        return Verdict(claim, "t", verdict, 0.1, 0.0, 0.2, n_seeds, "d", variant=variant)
+
+    here = [v(15, 10), v(15, 0, "not run"), v(13, 0, verdict="pending (0 of 60 runs)")]
+    here[2] = dataclasses.replace(here[2], pending=(0, 60))
+    others = [("a", "quick", [v(15, 10), v(15, 0, "not run"), v(13, 5)])]
+    table = "\n".join(comparison_section(here, "paper-core", others))
+    body = [line for line in table.splitlines() if line.startswith("| ")][2:]  # no header
+    assert sorted(line.split(" | ")[0].removeprefix("| ") for line in body) == ["13", "15"], table
 
 
 def test_a_cause_shared_by_two_compared_folders_is_named_once():

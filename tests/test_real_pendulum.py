@@ -111,7 +111,10 @@ def test_measured_runs_check_their_fields():
 
 @pytest.mark.slow
 def test_a_measured_run_end_to_end_records_its_data(tmp_path):
-    c = next(c for c in expand(P.EXPERIMENT, "smoke") if c.model == "hnn")
+    # the stand-in's run (the measured file's runs are declared too where the file is there)
+    c = next(
+        c for c in expand(P.EXPERIMENT, "smoke") if c.model == "hnn" and c.system == R.SYNTHETIC
+    )
     row = execute_run(c, cache_root=tmp_path)
     assert row["status"] == "ok", row["error"]
     assert row["data_source"] == R.load(R.SYNTHETIC).source
@@ -123,10 +126,19 @@ def test_a_measured_run_end_to_end_records_its_data(tmp_path):
 
 
 # ------------------------------------------------------------------------------ claim 15
-def _tables(energy_ratio, spread=0.0, data=(R.REAL,), hnn_loss=1e-3, frames=False):
+def _tables(
+    energy_ratio,
+    spread=0.0,
+    data=(R.REAL,),
+    hnn_loss=1e-3,
+    frames=False,
+    frozen_energy=3e-3,
+    rollout=(0.1, 0.01, 0.5),
+):
     """Rows of claim 15 on seeds 0-4 (with ``frames``: (runs, curves)): the MLP's energy MSE
-    ``energy_ratio`` x the HNN's, per seed times exp(spread * SPREAD); test losses MLP 1e-3,
-    HNN ``hnn_loss``, the trivial field 0.3."""
+    ``energy_ratio`` x the HNN's (1e-2), per seed times exp(spread * SPREAD), the trivial
+    field's ``frozen_energy``; test losses MLP 1e-3, HNN ``hnn_loss``, the trivial field 0.3;
+    rollout errors MLP, HNN, trivial field ``rollout``."""
     rows = []
     for name in data:
         for model in P.MODELS:
@@ -137,7 +149,7 @@ def _tables(energy_ratio, spread=0.0, data=(R.REAL,), hnn_loss=1e-3, frames=Fals
                 energy, loss = {
                     "node": (1e-2 * energy_ratio * jitter, 1e-3),
                     "hnn": (1e-2, hnn_loss),
-                    "at_rest": (3e-3, 0.3),
+                    "at_rest": (frozen_energy, 0.3),
                 }[model]
                 row = c.to_dict()
                 row.update(
@@ -149,7 +161,9 @@ def _tables(energy_ratio, spread=0.0, data=(R.REAL,), hnn_loss=1e-3, frames=Fals
                     energy_mse=energy,
                     derivative_mse_test=loss,
                     derivative_mse_train=loss,
-                    rollout_error=0.1,
+                    rollout_error=dict(zip(P.MODELS, rollout, strict=True))[
+                        model
+                    ],
                     data_source="synthetic stand-in" if name == R.SYNTHETIC else "measured: f",
                     data_sha256="ab" * 32,
                     curves={"t": [0.0, 0.1], "rel_error": [0, 0.1], "energy_violation": [0, 0.1],
@@ -174,6 +188,24 @@ def test_real_data_far_below_is_reproduced_and_equal_is_not():
     assert v.verdict == "reproduced" and not v.variant, v.detail
     assert v.effect == pytest.approx(math.log(1000.0), rel=1e-6)
     assert P.claim_15(_tables(energy_ratio=1.0, spread=0.1)).verdict == "not reproduced"
+
+
+def test_real_data_not_discriminating_when_no_model_beats_the_frozen_state():
+    v = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, rollout=(0.5, 0.4, 0.5)))
+    assert v.verdict == "inconclusive" and v.discriminating is False, v.detail
+    v = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1))
+    assert v.verdict == "reproduced" and v.discriminating is True, v.detail
+
+
+def test_a_frozen_state_as_conserving_as_the_hnn_is_said():
+    """The seed's energy MSE on data that loses energy: a frozen state within the energy
+    margin of the HNN's score is named beside the verdict (which it does not change); one far
+    above it is not."""
+    tied = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.2e-2))
+    assert tied.verdict == "reproduced" and "frozen state dz/dt = 0" in tied.detail, tied.detail
+    assert "rollout error MLP 0.1, HNN 0.01, frozen 0.5" in tied.detail, tied.detail
+    far = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.0))
+    assert far.verdict == "reproduced" and "frozen state" not in far.detail, far.detail
 
 
 def test_real_data_undecided_at_the_margin_or_unlearned():

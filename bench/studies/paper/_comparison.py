@@ -235,6 +235,8 @@ def comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "|" + " --- |" * len(head),
     ]
     for row in comparison_rows(verdicts, profile, others):
+        if all(v is None or (v.n_seeds == 0 and not _is_pending(v)) for v in row.verdicts):
+            continue  # a key no folder has runs for (e.g. a variant none of them ran)
         agree = {None: "-", True: "yes", False: "**no**"}[row.agree]
         causes = md_escape("; ".join(c.text for c in row.causes)) or "-"
         cells = [_cell_text(v) for v in row.verdicts]
