@@ -190,6 +190,30 @@ def test_section_and_figure_from_a_store(tmp_path):
     assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
 
 
+def test_the_section_names_the_machines_and_warns_when_they_differ(tmp_path):
+    """Costs are times: the section names the machine that measured them, and says the fronts
+    are not comparable where two machines did; a store without the fields says so."""
+    rows = _synthetic_store(tmp_path)
+    assert "Costs measured on: not recorded." in T.tradeoff_section(tmp_path)
+    runs = pd.DataFrame(rows).assign(device="cpu A", cpu_family_model="6/85")
+    runs.to_parquet(tmp_path / "runs.parquet")
+    assert f"one machine: cpu A 6/85 ({len(runs)} runs)." in T.tradeoff_section(tmp_path)
+    runs.loc[runs.index[:3], "device"] = "cpu B"
+    runs.to_parquet(tmp_path / "runs.parquet")
+    text = T.tradeoff_section(tmp_path)
+    assert "2 machines: cpu A 6/85" in text and "cpu B 6/85 (3 runs)" in text
+    assert "not comparable" in text
+
+
+def test_the_figure_leaves_a_cost_the_rows_lack_blank(tmp_path):
+    rows = _synthetic_store(tmp_path)
+    pd.DataFrame(rows).drop(columns="rollout_seconds_per_traj").to_parquet(
+        tmp_path / "runs.parquet"
+    )
+    paths = T.tradeoff_figure(tmp_path)
+    assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
+
+
 def test_table_lists_every_evaluated_method(tmp_path):
     # implicit_midpoint is dominated (slower and worse than rk4x2): it is still listed,
     # marked off the front, and the legend says what each method is

@@ -285,6 +285,24 @@ def methods_legend(runs: pd.DataFrame) -> str:
     return ("Methods: " + "; ".join(parts) + ".") if parts else ""
 
 
+def machines_line(runs: pd.DataFrame) -> str:
+    """Which machines measured the costs (``device``, and ``cpu_family_model`` where recorded),
+    with a warning where there are several: a time measured on one machine against a time on
+    another measures the machines too, so a front drawn across them is not a trade-off."""
+    cols = [c for c in ("device", "cpu_family_model") if c in runs]
+    if not cols or not len(runs):
+        return "Costs measured on: not recorded."
+    key = runs[cols].astype("string").fillna("?").agg(" ".join, axis=1)
+    counts = key.value_counts().sort_index()
+    text = "; ".join(f"{m} ({n} runs)" for m, n in counts.items())
+    if len(counts) == 1:
+        return f"Costs measured on one machine: {text}."
+    return (
+        f"Costs measured on {len(counts)} machines: {text}. Times from different machines are "
+        "not comparable: rerun the trade-off on one machine before reading its fronts."
+    )
+
+
 def _runs(results_dir, profile=None) -> tuple[pd.DataFrame, str | None]:
     runs = load_runs(results_dir)
     if not len(runs):
@@ -326,6 +344,7 @@ def tradeoff_section(results_dir="results", profile: str | None = None) -> str:
     legend = methods_legend(runs)
     if legend:
         lines += [legend, ""]
+    lines += [machines_line(runs), ""]
     if "rollout_seconds_per_traj" in agg:
         lines += _md(tradeoff_table(runs))
     else:
@@ -362,6 +381,9 @@ def tradeoff_figure(results_dir="results", profile: str | None = None) -> list[P
         d = agg[agg["system"] == scene]
         for j, cost in enumerate(("rollout_seconds_per_traj", "train_seconds")):
             ax = axes[i, j]
+            if cost not in d:  # rows stored without this cost
+                ax.set_axis_off()
+                continue
             for model, g in d.groupby("model"):
                 pts = ax.loglog(g[cost], g[ERROR], "o", alpha=0.35, label=None)
                 f = pareto_front(g, cost)
