@@ -66,6 +66,23 @@ UNKNOWN = "unknown"
 _REPO = Path(__file__).resolve().parents[2]
 
 
+# The columns that name the machine a run's times were measured on: times from two machines
+# are not comparable.
+MACHINE_COLUMNS = ("device", "cpu_family_model")
+
+
+def machine_key(rows):
+    """Per row, the machine it ran on (its :data:`MACHINE_COLUMNS` the table has, joined by a
+    space); "" where the row records none of them (rows stored before the fields)."""
+    import pandas as pd
+
+    cols = [c for c in MACHINE_COLUMNS if c in rows]
+    if not cols or not len(rows):
+        return pd.Series("", index=rows.index, dtype="string")
+    parts = rows[cols].astype("string").fillna("")
+    return parts.agg(lambda r: " ".join(x for x in r if x), axis=1).astype("string")
+
+
 def _version(package: str) -> str:
     from importlib import metadata
 

@@ -18,6 +18,7 @@ import models
 
 from ..core._config import RunConfig
 from ..core._experiments import PROFILES, Experiment, expand
+from ..core._provenance import machine_key
 from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study
@@ -289,11 +290,10 @@ def machines_line(runs: pd.DataFrame) -> str:
     """Which machines measured the costs (``device``, and ``cpu_family_model`` where recorded),
     with a warning where there are several: a time measured on one machine against a time on
     another measures the machines too, so a front drawn across them is not a trade-off."""
-    cols = [c for c in ("device", "cpu_family_model") if c in runs]
-    if not cols or not len(runs):
+    key = machine_key(runs)
+    if not key.str.len().gt(0).any():
         return "Costs measured on: not recorded."
-    key = runs[cols].astype("string").fillna("?").agg(" ".join, axis=1)
-    counts = key.value_counts().sort_index()
+    counts = key.replace("", "not recorded").value_counts().sort_index()
     text = "; ".join(f"{m} ({n} runs)" for m, n in counts.items())
     if len(counts) == 1:
         return f"Costs measured on one machine: {text}."

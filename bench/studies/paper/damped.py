@@ -11,6 +11,7 @@ import pandas as pd
 
 from ...core._config import RunConfig
 from ...core._experiments import Experiment
+from ...core._provenance import machine_key
 from ...core._query import (
     select,
     variant,
@@ -109,13 +110,9 @@ def _mixed_machines(a: pd.DataFrame, b: pd.DataFrame) -> set:
     """The seeds whose runs in ``a`` and ``b`` record different machines (``device``, and
     ``cpu_family_model`` where both record it): their times are not comparable. A run that
     records neither is taken to share its partner's machine (rows stored before the fields)."""
-    cols = [c for c in ("device", "cpu_family_model") if c in a and c in b]
-    if not cols:
-        return set()
 
     def machine(rows: pd.DataFrame) -> pd.Series:
-        key = rows[cols].astype("string").fillna("").agg("|".join, axis=1)
-        return key.groupby(rows["seed"]).agg(lambda k: frozenset(x for x in k if x.strip("|")))
+        return machine_key(rows).groupby(rows["seed"]).agg(lambda k: frozenset(x for x in k if x))
 
     ma, mb = machine(a), machine(b)
     return {s for s in ma.index.intersection(mb.index) if ma[s] and mb[s] and ma[s] != mb[s]}
