@@ -18,6 +18,7 @@ import systems
 from bench.core import _store
 from bench.core._experiments import RunConfig, expand
 from bench.core._runnable import check_runnable
+from bench.studies.paper import _pixel_section as S
 from bench.studies.paper import pixels as P
 from bench.studies.paper import policy
 from bench.studies.paper import vin_blog as V
@@ -441,12 +442,18 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
     r.to_parquet(tmp_path / "runs.parquet", index=False)
     pd.DataFrame(
         [
-            {"profile": "smoke", "model": "vin", "seed": 1, "aux_weight": w, "recon_mse": rec,
+            {"profile": "smoke", "model": "vin", "seed": 1, "variant": name, "aux_weight": w,
+             "recon_mse": rec,
              "pixel_mse": pix, "pixel_mse_static": 1.0, "pixel_mse_late": pix,
              "decoded_energy_mse": 1e-3, "pixel_loss_test": 1e-3, "source": "trained here"}
-            for w, rec, pix in ((1.0, 2e-5, 0.9), (0.0, 5e-6, 0.1))
+            for name, w, rec, pix in (
+                ("protocol", 1.0, 2e-5, 0.9), ("no auxiliary loss", 0.0, 5e-6, 0.1)
+            )
         ]
     ).to_csv(tmp_path / "vin_diagnosis.csv", index=False)  # fmt: skip
+    _diagnosis(100.0, 10.0, seeds=[1]).assign(profile="smoke").to_csv(
+        tmp_path / "hnn_seed_pixel_diagnosis.csv", index=False
+    )
     text = P.section(tmp_path)
     lines = text.splitlines()
     assert "| protocol | ours | the seed's |" in lines
@@ -465,6 +472,7 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
     note = next(x for x in lines if x.startswith("Seed 1:"))
     assert "no model learns the motion (6 runs)" in note and "10x the median" in note
     assert "reconstructs at 5e-06 and learns (10x below" in note
+    assert "one element ours (its diagnosis) learns there in 2 of 2 runs: HNN no L2" in note
     assert next(x for x in lines if x.startswith("| 0 |")).startswith("| 0 | HNN (ours), MLP")
 
 
@@ -494,3 +502,38 @@ def test_the_hnn_seeds_initialisation_is_pytorchs():
         MLP(2, 1, 4, 1, "tanh", "float32", key=jax.random.PRNGKey(0), init="torch")
     with pytest.raises(ValueError, match="option init must be one of"):
         models.LatentModel("node", (2, 8, 8), key=jax.random.PRNGKey(0), options={"init": "x"})
+
+
+def _diagnosis(energy_ratio: float, hnn_gain: float, seeds=range(5)) -> pd.DataFrame:
+    """A synthetic HNN-seed protocol diagnosis: the protocol's rows (nothing learns) and a
+    variant's, the MLP 10x below holding the first frame, the HNN ``hnn_gain``x; the MLP's
+    seed energy MSE ``energy_ratio`` times the HNN's, losses equal."""
+    rows = []
+    for s in seeds:
+        for variant, gains in (("protocol", (1.5, 1.5)), ("no L2 (weight decay 0)", None)):
+            for model in ("hnn", "node"):
+                g = gains[0] if gains else (hnn_gain if model == "hnn" else 10.0)
+                rows.append(
+                    {"profile": "paper-core", "model": model, "seed": s, "variant": variant,
+                     "aux_weight": 1.0, "source": "stored run", "pixel_mse_static": 0.02,
+                     "pixel_mse": 0.02 / g, "pixel_mse_late": 0.02 / g, "recon_mse": 5e-6,
+                     "pixel_loss_test": 1e-5 * (1 + 0.01 * s), "decoded_energy_mse": 1e-3,
+                     "seed_energy_mse": 1e-3 * (energy_ratio if model == "node" else 1.0),
+                     "latent_energy_drift": 0.01}
+                )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_the_seed_protocols_one_element_variant_is_read_by_the_seeds_rule():
+    """The diagnosis's no-L2 runs read with claim 11's seed reading: a 100x energy ratio where
+    both learn reads reproduced, equal energies not reproduced, an HNN that does not learn not
+    tested; the protocol's own rows and a variant on one seed give no line."""
+    (line,) = [x for x in S.variant_lines(_diagnosis(100.0, 10.0)) if x]
+    assert "*no L2 (weight decay 0)*" in line and "**reproduced** (5 seeds" in line
+    assert "learned: HNN yes, MLP yes" in line
+    (line,) = [x for x in S.variant_lines(_diagnosis(1.0, 10.0)) if x]
+    assert "**not reproduced**" in line
+    (line,) = [x for x in S.variant_lines(_diagnosis(100.0, 1.2)) if x]
+    assert "(a) not tested" in line and "HNN no, MLP yes" in line
+    assert S.variant_lines(_diagnosis(100.0, 10.0, seeds=[0])) == []
+    assert S.variant_lines(None) == []

@@ -1,5 +1,6 @@
 """The paper's verbs of ``python -m bench``: the campaign's estimate and sweep, and the
-diagnoses of the plain HNN, the double pendulum's LNNs and the pixel VIN."""
+diagnoses of the plain HNN, the double pendulum's LNNs and the pixel protocols (the VIN's
+auxiliary loss, the HNN seed's optimiser)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from .._options import (
     sweep_options,
     usable_results,
 )
+from ._pixel_ablation import ABLATIONS
 
 
 def _estimate_arguments(p):
@@ -111,19 +113,32 @@ def _diagnose_hnn(args) -> int:
     return 0
 
 
-def _vin_arguments(p):
+def _ablation_arguments(p):
     p.add_argument("--profile", default="paper-core", help="smoke, quick or paper-core")
     p.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
+    p.add_argument(
+        "--runs-from",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="a results folder holding runs of the variants' configurations (read by "
+        "config_hash instead of training them again); repeatable",
+    )
 
 
-def _diagnose_vin(args) -> int:
-    from ._vin_diagnosis import FILE, diagnose, summary
+def _ablation_command(ablation) -> Command:
+    def run(args) -> int:
+        from ._pixel_ablation import diagnose, summary
 
-    results = usable_results(args)
-    df = diagnose(args.profile, results, seeds=seed_list(args.seeds))
-    print(summary(df))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
+        results = usable_results(args)
+        df = diagnose(
+            ablation, args.profile, results, seeds=seed_list(args.seeds), runs_from=args.runs_from
+        )
+        print(summary(ablation, df))
+        print(f"wrote {results / ablation.file} ({len(df)} rows)")
+        return 0
+
+    return Command(ablation.command, ablation.help, run, _ablation_arguments, ablation.help)
 
 
 def _campaign_arguments(p):
@@ -192,10 +207,6 @@ _HNN_HELP = (
     "the first training steps of the plain HNN on the spring, replayed and probed "
     "(claims 1 and 3): <results>/hnn_diagnosis.csv"
 )
-_VIN_HELP = (
-    "the latent VIN of the pixel pendulum trained again without the auxiliary latent loss, "
-    "beside the protocol's VIN and ResNet (claim 12): <results>/vin_diagnosis.csv"
-)
 
 COMMANDS = tuple(
     register_command(c)
@@ -208,7 +219,7 @@ COMMANDS = tuple(
         ),
         Command("diagnose-lnn", _LNN_HELP, _diagnose_lnn, _lnn_arguments, _LNN_HELP),
         Command("diagnose-hnn", _HNN_HELP, _diagnose_hnn, _hnn_arguments, _HNN_HELP),
-        Command("diagnose-vin", _VIN_HELP, _diagnose_vin, _vin_arguments, _VIN_HELP),
+        *(_ablation_command(a) for a in ABLATIONS),
         Command(
             "campaign",
             "sweep a profile's claim experiments claim by claim (make paper-core runs it niced "

@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 
 from ...core._experiments import Experiment
-from . import _vin_diagnosis, policy
+from . import _pixel_ablation, policy
 from ._pixel_experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_MSE, SHORT, _rows
-from ._pixel_rule import readings, seed_protocol
+from ._pixel_rule import reading, readings, seed_protocol
 from ._protocols import HEADER as PROTOCOL_HEADER
 from ._protocols import learned_text
 from .hnn_seed import fmt, geometric_mean
@@ -81,15 +81,17 @@ def section(results_dir) -> str:
                 + f" | {fmt(seed_numbers.get(model, math.nan))} | "
                 f"{fmt(geometric_mean(g.get('latent_energy_drift')))} |"
             )
-    diag = _vin_diagnosis_frame(Path(results_dir), profile)
+    diag = _pixel_ablation.read(_pixel_ablation.VIN, results_dir, profile)
+    seed_diag = _pixel_ablation.read(_pixel_ablation.HNN_SEED, results_dir, profile)
     return "\n".join(
         [
             *lines,
             "",
             *protocol_table(t, profile),
+            *variant_lines(seed_diag),
             "",
-            *seed_lines(t, diag),
-            *_vin_diagnosis_lines(Path(results_dir)),
+            *seed_lines(t, diag, seed_diag),
+            *_pixel_ablation.lines(results_dir, profile),
         ]
     )
 
@@ -230,11 +232,14 @@ def _gain(g: pd.DataFrame) -> pd.Series:
     return x.where(~bad_rows(g, "pixel_mse"), 0.0)
 
 
-def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
+def seed_lines(
+    t: pd.DataFrame, diag: pd.DataFrame | None = None, seed_diag: pd.DataFrame | None = None
+) -> list[str]:
     """Which models learn the motion on which seed (pixel MSE below holding the first frame by
     the learning gate), the seed's autoencoder reconstruction, and for a seed where no model
-    learns, what its runs and the VIN diagnosis (``diag``, trained without the auxiliary loss,
-    the same data and autoencoder initialisation) say about it. Every number from the rows."""
+    learns, what its runs, the VIN diagnosis (``diag``, trained without the auxiliary loss, the
+    same data and autoencoder initialisation) and the HNN seed's protocol diagnosis
+    (``seed_diag``, one element ours) say about it. Every number from the rows."""
     if not len(t) or "pixel_mse_static" not in t:
         return []
     gate = policy.margin("learning", squared=True).value
@@ -242,7 +247,7 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
     t = t.assign(_learned=t["_gain"] >= gate)
     ablation = None
     if diag is not None and len(diag):
-        ablation = diag[pd.to_numeric(diag["aux_weight"], errors="coerce") == 0].copy()
+        ablation = diag[diag["variant"] != _pixel_ablation.PROTOCOL].copy()
         ablation["_gain"] = _gain(ablation)
     lines = [
         f"Per seed: the models that learn the motion (pixel MSE {gate:g}x below holding the "
@@ -302,24 +307,45 @@ def seed_lines(t: pd.DataFrame, diag: pd.DataFrame | None = None) -> list[str]:
                     f"reconstructs at {fmt(float(a['recon_mse']))} and does not learn either "
                     f"({a['_gain']:.3g}x)."
                 )
+        if seed_diag is not None and len(seed_diag):
+            sd = seed_diag[
+                (seed_diag["seed"] == s) & (seed_diag["variant"] != _pixel_ablation.PROTOCOL)
+            ]
+            runs = [
+                f"{SHORT.get(r['model'], r['model'])} {r['variant']} {x:.3g}x"
+                for (_, r), x in zip(sd.iterrows(), _gain(sd), strict=True)
+            ]
+            if runs:
+                n = int((_gain(sd) >= gate).sum())
+                note += (
+                    " The HNN seed's protocol with one element ours (its diagnosis) learns "
+                    f"there in {n} of {len(runs)} runs: {', '.join(runs)}."
+                )
         notes.append(note)
     return [*lines, *([""] + notes if notes else [])]
 
 
-def _vin_diagnosis_frame(results_dir: Path, profile: str | None) -> pd.DataFrame | None:
-    """The VIN diagnosis rows of ``profile`` (None where the folder has none)."""
-    path = results_dir / _vin_diagnosis.FILE
-    if not path.exists():
-        return None
-    d = pd.read_csv(path)
-    if profile is not None and "profile" in d:
-        d = d[d["profile"] == profile]
-    return d if len(d) else None
-
-
-def _vin_diagnosis_lines(results_dir: Path) -> list[str]:
-    """The VIN diagnosis table (``python -m bench diagnose-vin``), where the folder has one."""
-    path = results_dir / _vin_diagnosis.FILE
-    if not path.exists():
-        return ["", "(No VIN diagnosis in this folder: `python -m bench diagnose-vin`.)"]
-    return ["", _vin_diagnosis.summary(pd.read_csv(path))]
+def variant_lines(diag: pd.DataFrame | None) -> list[str]:
+    """Claim 11's seed reading (:func:`reading`) on the runs of each variant of the HNN seed's
+    protocol diagnosis that changes one element for both models (``diag``, the rows of
+    ``hnn_seed_pixel_diagnosis.csv``): what the seed's protocol would read with that element
+    ours. Not a verdict (the claim's is the seed's protocol's); it says what keeps that one
+    untested."""
+    if diag is None or not len(diag):
+        return []
+    out = []
+    d = diag[diag["variant"] != _pixel_ablation.PROTOCOL]
+    for name, g in d.groupby("variant", sort=False):
+        if set(g["model"]) != {"hnn", "node"} or g["seed"].nunique() < 2:
+            continue
+        g = g.assign(observation="pixels")
+        g["status"] = np.where(np.isfinite(pd.to_numeric(g["pixel_mse"])), "ok", "failed")
+        v = reading(g, "seed")
+        head = v.parts[0] if v.parts else None
+        why = f"; (a) {head.status}" + (f": {head.note}" if head and head.note else "")
+        out.append(
+            f"- The seed's protocol with one element ours, *{name}* (the diagnosis below, not a "
+            f"verdict): **{v.verdict}** ({v.n_seeds} seeds; {v.effect_name} {v.effect:.3g} = "
+            f"{math.exp(v.effect):.3g}x{why if head else ''}); learned: {learned_text(v)}."
+        )
+    return ["", *out] if out else []
