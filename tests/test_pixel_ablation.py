@@ -76,6 +76,8 @@ def test_a_variant_changes_one_field_of_the_protocol_and_screens_where_declared(
     base = next(c for c in screened if c.model == "hnn")
     assert by["our initialisation"].config(base).model_options == ours.model_options
     assert by["RK4 training step"].config(base).train_integrator == ours.train_integrator
+    both = by["no L2 and RK4 training step"].config(base)
+    assert (both.weight_decay, both.train_integrator) == (0.0, ours.train_integrator)
     assert by["AdamW, clipped"].config(base).optimizer == ours.optimizer
     assert by["cosine lr"].config(base).lr_schedule == ours.lr_schedule
 
@@ -156,3 +158,35 @@ def test_a_variant_run_stored_in_another_folder_is_read_not_trained(tmp_path):
     df = D.diagnose(D.HNN_SEED, "smoke", res, runs_from=[other], progress=False)
     node = df[df["model"] == "node"].set_index("variant")["source"]
     assert node[D.PROTOCOL] == "stored run" and node[no_l2.name] == "stored run (other)"
+
+
+def _rk4(f, z, h=1.0):
+    k1 = f(z)
+    k2 = f(z + h / 2 * k1)
+    k3 = f(z + h / 2 * k2)
+    k4 = f(z + h * k3)
+    return z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+def test_an_euler_fitted_field_spirals_in_under_rk4_and_its_hamiltonian_part_does_not():
+    """The diagnosis's account of the seed's Euler training step: for a latent turning by a per
+    frame, z + f(z) = R_a z asks for f = (R_a - I) z, whose flow contracts by exp(cos a - 1) per
+    frame (its eigenvalues cos a - 1 +- i sin a); a linear Hamiltonian field J S z is traceless,
+    and the traceless part of R_a - I, a rotation at rate sin a, keeps |z| (to RK4's error)."""
+    a = 2 * np.pi / 32  # the suite's pendulum, about 32 frames per swing
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    euler_field = rot - np.eye(2)
+    assert np.allclose(np.eye(2) + euler_field, rot)  # the Euler step reproduces the frames
+    z = np.array([1.0, 0.0])
+    for _ in range(100):
+        z = _rk4(lambda x: euler_field @ x, z)
+    np.testing.assert_allclose(np.linalg.norm(z), np.exp(100 * (np.cos(a) - 1)), rtol=1e-4)
+    assert np.linalg.norm(z) < 0.9  # after 100 frames, visibly fallen in
+    hamiltonian = euler_field - np.trace(euler_field) / 2 * np.eye(2)
+    j = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    s = -j @ hamiltonian  # J S = hamiltonian with S symmetric: a quadratic H = z S z / 2
+    np.testing.assert_allclose(s, s.T, atol=1e-15)
+    z = np.array([1.0, 0.0])
+    for _ in range(100):
+        z = _rk4(lambda x: hamiltonian @ x, z)
+    assert abs(np.linalg.norm(z) - 1) < 1e-4  # RK4: (sin a)^6 / 144 per frame
