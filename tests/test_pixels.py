@@ -472,7 +472,7 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
     note = next(x for x in lines if x.startswith("Seed 1:"))
     assert "no model learns the motion (6 runs)" in note and "10x the median" in note
     assert "reconstructs at 5e-06 and learns (10x below" in note
-    assert "one element ours (its diagnosis) learns there in 2 of 2 runs: HNN no L2" in note
+    assert "elements ours (its diagnosis's variants) learns there in 2 of 2 runs: HNN no L2" in note
     assert next(x for x in lines if x.startswith("| 0 |")).startswith("| 0 | HNN (ours), MLP")
 
 

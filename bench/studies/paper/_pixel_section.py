@@ -318,8 +318,8 @@ def seed_lines(
             if runs:
                 n = int((_gain(sd) >= gate).sum())
                 note += (
-                    " The HNN seed's protocol with one element ours (its diagnosis) learns "
-                    f"there in {n} of {len(runs)} runs: {', '.join(runs)}."
+                    " The HNN seed's protocol with elements ours (its diagnosis's variants) "
+                    f"learns there in {n} of {len(runs)} runs: {', '.join(runs)}."
                 )
         notes.append(note)
     return [*lines, *([""] + notes if notes else [])]
@@ -344,8 +344,8 @@ def variant_lines(diag: pd.DataFrame | None) -> list[str]:
         head = v.parts[0] if v.parts else None
         why = f"; (a) {head.status}" + (f": {head.note}" if head and head.note else "")
         out.append(
-            f"- The seed's protocol with one element ours, *{name}* (the diagnosis below, not a "
-            f"verdict): **{v.verdict}** ({v.n_seeds} seeds; {v.effect_name} {v.effect:.3g} = "
+            f"- The seed's protocol, variant *{name}* (the diagnosis below, not a verdict): "
+            f"**{v.verdict}** ({v.n_seeds} seeds; {v.effect_name} {v.effect:.3g} = "
             f"{math.exp(v.effect):.3g}x{why if head else ''}); learned: {learned_text(v)}."
         )
     return ["", *out] if out else []
