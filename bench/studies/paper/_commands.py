@@ -1,6 +1,6 @@
 """The paper's verbs of ``python -m bench``: the campaign's estimate and sweep, and the
 diagnoses of the plain HNN, the double pendulum's LNNs and the pixel protocols (the VIN's
-auxiliary loss, the HNN seed's optimiser)."""
+auxiliary loss, the HNN seed's optimiser and training step)."""
 
 from __future__ import annotations
 

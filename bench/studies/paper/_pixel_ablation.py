@@ -54,6 +54,7 @@ from ...core._pixels import CC_LOSS, build, train_pixels
 from ...core._store import read_rows
 from . import policy
 from ._plot import _gmean as _gm
+from .kit import bad_rows
 
 PROFILES = ("smoke", "quick", "paper-core")
 COLUMNS = (
@@ -225,10 +226,12 @@ def _num(x) -> float:
 
 
 def gain(g: pd.DataFrame) -> pd.Series:
-    """Holding the first frame's pixel MSE over the run's (how far below the trivial forecast)."""
-    return pd.to_numeric(g["pixel_mse_static"], errors="coerce") / pd.to_numeric(
+    """Holding the first frame's pixel MSE over the run's, per row (how far below the trivial
+    forecast; failed rows: 0)."""
+    x = pd.to_numeric(g["pixel_mse_static"], errors="coerce") / pd.to_numeric(
         g["pixel_mse"], errors="coerce"
     )
+    return x.where(~bad_rows(g, "pixel_mse"), 0.0)
 
 
 def read(ablation: Ablation, results_dir, profile: str | None = None) -> pd.DataFrame | None:

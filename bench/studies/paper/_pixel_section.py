@@ -224,14 +224,6 @@ def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
     return lines
 
 
-def _gain(g: pd.DataFrame) -> pd.Series:
-    """Holding the first frame's pixel MSE over the model's, per row (failed rows: 0)."""
-    x = pd.to_numeric(g["pixel_mse_static"], errors="coerce") / pd.to_numeric(
-        g["pixel_mse"], errors="coerce"
-    )
-    return x.where(~bad_rows(g, "pixel_mse"), 0.0)
-
-
 def seed_lines(
     t: pd.DataFrame, diag: pd.DataFrame | None = None, seed_diag: pd.DataFrame | None = None
 ) -> list[str]:
@@ -243,12 +235,14 @@ def seed_lines(
     if not len(t) or "pixel_mse_static" not in t:
         return []
     gate = policy.margin("learning", squared=True).value
-    t = t.assign(_gain=_gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours"))
+    t = t.assign(
+        _gain=_pixel_ablation.gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours")
+    )
     t = t.assign(_learned=t["_gain"] >= gate)
     ablation = None
     if diag is not None and len(diag):
         ablation = diag[diag["variant"] != _pixel_ablation.PROTOCOL].copy()
-        ablation["_gain"] = _gain(ablation)
+        ablation["_gain"] = _pixel_ablation.gain(ablation)
     lines = [
         f"Per seed: the models that learn the motion (pixel MSE {gate:g}x below holding the "
         "first frame, the claims' gate), the rest with their factor, and the autoencoder's "
@@ -311,12 +305,13 @@ def seed_lines(
             sd = seed_diag[
                 (seed_diag["seed"] == s) & (seed_diag["variant"] != _pixel_ablation.PROTOCOL)
             ]
+            gains = _pixel_ablation.gain(sd)
             runs = [
                 f"{SHORT.get(r['model'], r['model'])} {r['variant']} {x:.3g}x"
-                for (_, r), x in zip(sd.iterrows(), _gain(sd), strict=True)
+                for (_, r), x in zip(sd.iterrows(), gains, strict=True)
             ]
             if runs:
-                n = int((_gain(sd) >= gate).sum())
+                n = int((gains >= gate).sum())
                 note += (
                     " The HNN seed's protocol with elements ours (its diagnosis's variants) "
                     f"learns there in {n} of {len(runs)} runs: {', '.join(runs)}."
@@ -327,10 +322,10 @@ def seed_lines(
 
 def variant_lines(diag: pd.DataFrame | None) -> list[str]:
     """Claim 11's seed reading (:func:`reading`) on the runs of each variant of the HNN seed's
-    protocol diagnosis that changes one element for both models (``diag``, the rows of
-    ``hnn_seed_pixel_diagnosis.csv``): what the seed's protocol would read with that element
-    ours. Not a verdict (the claim's is the seed's protocol's); it says what keeps that one
-    untested."""
+    protocol diagnosis that covers both models on two seeds or more (``diag``, the rows of
+    ``hnn_seed_pixel_diagnosis.csv``): what the seed's protocol would read with the variant's
+    elements ours. Not a verdict (the claim's is the seed's protocol's); it says what keeps that
+    one untested."""
     if diag is None or not len(diag):
         return []
     out = []
