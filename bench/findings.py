@@ -65,8 +65,23 @@ def margin_dependent(report: str) -> str:
     """The report's one-line list of margin-dependent claims ('none' when it has none)."""
     for line in _section(report, "Margin-dependent claims"):
         if line.startswith("Margin-dependent: "):
-            return line.removeprefix("Margin-dependent: claim ").rstrip(".")
+            return _grouped(line.removeprefix("Margin-dependent: claim ").rstrip("."))
     return "none"
+
+
+def _grouped(keys: str) -> str:
+    """``1, 4 (a, b), 4 (c), 5`` -> ``1, 4 (2 readings), 5``: a claim's readings counted."""
+    found: dict[str, list[str]] = {}
+    for claim, variant in re.findall(r"(\d+)(?: \(([^)]*)\))?", keys):
+        found.setdefault(claim, []).append(variant)
+    out = []
+    for claim, variants in found.items():
+        named = [v for v in variants if v]
+        if len(named) > 1:
+            out.append(f"{claim} ({len(named)} readings)")
+        else:
+            out.append(f"{claim} ({named[0]})" if named else claim)
+    return ", ".join(out)
 
 
 def _verdict(row: dict[str, str] | None) -> str:
@@ -131,13 +146,26 @@ def protocols(report: str) -> dict[int, dict[str, tuple[str, str]]]:
     return out
 
 
-_VERDICT_WORD = re.compile(r"(partly reproduced|not reproduced|reproduced|inconclusive|not run)")
+_READING = re.compile(
+    r"(pending|partly reproduced|not reproduced|reproduced|inconclusive|not run)"
+    r"[^;]*?seeds ([0-9, -]+)\)"
+)
 
 
 def _short(cell: str) -> str:
-    """The verdict a protocol-table cell states (its first), or the cell."""
-    m = _VERDICT_WORD.search(cell)
-    return m.group(1) if m else cell
+    """What a protocol-table verdict cell (``_protocols.verdict_text``: a reading per seed set)
+    says in a few words: the first set's verdict and whether the later sets read it alike
+    (``replicates``, ``does not replicate``) or are still pending; the cell where it names no
+    seed set (``not run``)."""
+    sets = _READING.findall(cell)
+    if not sets:
+        return cell
+    first, *rest = (v for v, _ in sets)
+    if not rest or first == "pending":
+        return first
+    if "pending" in rest:
+        return f"{first}; {', '.join(s for v, s in sets[1:] if v == 'pending')} pending"
+    return f"{first}, {'replicates' if set(rest) == {first} else 'does not replicate'}"
 
 
 def _protocol_lines(reports: dict[str, str]) -> list[str]:

@@ -105,8 +105,8 @@ def test_the_seeds_protocols_come_from_each_claims_section():
     from bench.studies.paper._protocols import HEADER, Protocol, protocol_table
 
     assert F.PROTOCOL_HEADER == HEADER
-    ours = Protocol("a", "dz/dt", "squared error", "AdamW", "100", "energy")
-    seeds = Protocol("b", "dz/dt", "L1", "Adam", "600000", "energy")
+    ours = Protocol({"data": "a", "loss": "squared error", "steps": "100"})
+    seeds = Protocol({"data": "b", "loss": "L1", "steps": "600000"})
     report = "\n".join(
         [
             "## Claims",
@@ -155,3 +155,28 @@ def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
     sentence = findings.compute_sentence(tmp_path)
     assert sentence.count("compute on") == 2 and "paper-core, compute on cpu A: 3 runs" in sentence
     assert "paper on GPU, compute on gpu B: 1 run" in sentence
+
+
+def test_a_protocols_verdict_cell_is_read_per_seed_set():
+    from bench.findings import _short
+
+    assert _short("not run") == "not run"
+    assert _short("reproduced (seeds 0-4)") == "reproduced"
+    both = "inconclusive (seeds 0-4), untested: HNN did not learn; inconclusive (seeds 5-9)"
+    assert _short(both) == "inconclusive, replicates"
+    assert _short("not reproduced (seeds 0-4); partly reproduced (seeds 5-9)") == (
+        "not reproduced, does not replicate"
+    )
+    waiting = "partly reproduced (seeds 0-4); pending (0 of 20 runs, seeds 5-9)"
+    assert _short(waiting) == "partly reproduced; 5-9 pending"
+    assert _short("pending (3 of 20 runs, seeds 0-4); pending (0 of 20 runs, seeds 5-9)") == (
+        "pending"
+    )
+
+
+def test_margin_dependent_readings_of_one_claim_are_counted():
+    from bench.findings import _grouped
+
+    keys = "1, 4 (geometric-mean error, spring from paper), 4 (MSE, spring from paper), 5"
+    assert _grouped(keys) == "1, 4 (2 readings), 5"
+    assert _grouped("7 (rollout loss), 10") == "7 (rollout loss), 10"

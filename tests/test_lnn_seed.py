@@ -338,8 +338,8 @@ def test_the_section_sets_the_two_protocols_side_by_side(tmp_path):
     pd.concat([text, stuck], ignore_index=True).to_parquet(tmp_path / "runs.parquet", index=False)
     rows = protocol_rows(S.section(tmp_path))
     assert rows["verdict"] == (
-        "reproduced (5 seeds)",
-        "inconclusive (5 seeds), untested: pure LNN did not learn",
+        "reproduced (seeds 0-4)",
+        "inconclusive (seeds 0-4), untested: pure LNN did not learn",
     )
     assert rows["learned"] == (
         "pure LNN yes, NODE+SO (baseline) yes",

@@ -465,7 +465,8 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
     assert "explicit Euler z + f(z)" in step
     verdict = next(x for x in lines if x.startswith("| verdict |"))
     # seed 1 learns nowhere: neither reading discriminates
-    assert verdict.count("**inconclusive**") == 2
+    assert verdict.count("inconclusive (seeds 0-4)") == 2
+    assert verdict.count("not discriminating") == 2
     assert "| MLP (HNN seed's baseline) | seed's | 5 |" in text
     one = next(x for x in lines if x.startswith("| 1 |"))
     assert one.startswith("| 1 | none |") and one.endswith("| 5e-06, 10x |")

@@ -48,7 +48,7 @@ def test_the_claim_reads_the_seeds_protocol_and_says_so_without_it(tmp_path):
     text = REL.comparison_section(_folder(tmp_path / "c", scenario="contradict"))
     assert _row(text, "verdict")[1:] == ["not reproduced (seeds 0-4)"] * 2
     text = REL.comparison_section(_folder(tmp_path / "o", drop_seed=True))
-    assert _row(text, "verdict")[1:] == ["reproduced (seeds 0-4)", "no runs (seeds 0-4)"]
+    assert _row(text, "verdict")[1:] == ["reproduced (seeds 0-4)", "not run (seeds 0-4)"]
 
 
 def test_the_report_places_the_table_in_the_claims_section(tmp_path):

@@ -15,8 +15,7 @@ from ...core._experiments import Experiment
 from . import _pixel_ablation, policy
 from ._pixel_experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_MSE, SHORT, _rows
 from ._pixel_rule import reading, readings, seed_protocol
-from ._protocols import HEADER as PROTOCOL_HEADER
-from ._protocols import learned_text
+from ._protocols import Protocol, by_seed_set, learned_text, protocol_table
 from .hnn_seed import fmt, geometric_mean
 from .kit import bad_rows
 
@@ -87,7 +86,7 @@ def section(results_dir) -> str:
         [
             *lines,
             "",
-            *protocol_table(t, profile),
+            *protocols(t, profile),
             *variant_lines(seed_diag),
             "",
             *seed_lines(t, diag, seed_diag),
@@ -126,13 +125,13 @@ def _config(exp: Experiment, profile: str | None):
     return None
 
 
-def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
+def protocols(t: pd.DataFrame, profile: str | None) -> list[str]:
     """Claim 11 under our protocol and under the seed's, side by side: what each trains on,
     how, what it scores, and its verdict (from the rows ``t``; the configurations are the
     experiments' at ``profile``)."""
     from ...core._pixels import AE_LOSS, CC_LOSS, DYN_LOSS, WEIGHT_DECAY
 
-    v = readings(t) if len(t) else {}
+    is_seed = seed_protocol(t) if len(t) else pd.Series(False, index=t.index)
     cols = {"ours": _config(PIXEL_HNN, profile), "seed": _config(PIXEL_HNN_SEED, profile)}
     desc = {
         "euler": "explicit Euler z + f(z)",
@@ -185,16 +184,7 @@ def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
                 "map to the state fitted on the training encodings, true H against the true "
                 "states' (decoded energy MSE beside it, not tested)"
             )
-        x = v.get(key)
-        if x is None or not x.n_seeds:
-            return "no runs"
-        head = x.parts[0]
-        why = f"; (a) {head.status}" + (f": {head.note}" if head.note else "")
-        disc = "; not discriminating" if x.discriminating is False else ""
-        return (
-            f"**{x.verdict}** ({x.n_seeds} seeds; {x.effect_name} {x.effect:.3g} = "
-            f"{math.exp(x.effect):.3g}x{why}{disc})"
-        )
+        raise ValueError(f"unknown protocol row {what!r}")
 
     names = {
         "data": "data",
@@ -204,24 +194,27 @@ def protocol_table(t: pd.DataFrame, profile: str | None) -> list[str]:
         "steps": "steps",
         "init": "dynamics network's initialisation",
         "metric": "energy metric (tested)",
-        "verdict": "verdict",
     }
-    lines = [
+    ours, seed = (
+        Protocol(
+            {label: cell(key, what) for what, label in names.items()},
+            by_seed_set(t[mask], profile, lambda r, k=key: readings(r)[k], exp.name, t),
+        )
+        for key, mask, exp in (
+            ("ours", ~is_seed, PIXEL_HNN),
+            ("seed", is_seed, PIXEL_HNN_SEED),
+        )
+    )
+    differs = (
+        "our pendulum and renderer (the seed: Gym's Pendulum-v0); zero autoencoder biases; both "
+        "observations reconstructed (the seed: the first); RK4 test rollouts (the seed: RK45); "
+        "every test trajectory (the seed: one)"
+    )
+    return [
         "Claim 11 under two protocols (the verdict is the seed's protocol's where it has runs; "
         "`claim_11`):",
-        "",
-        PROTOCOL_HEADER,
-        "|---|---|---|",
+        *protocol_table(ours, seed, differs),
     ]
-    for what, label in names.items():
-        lines.append(f"| {label} | {cell('ours', what)} | {cell('seed', what)} |")
-    lines.append(f"| learned | {learned_text(v.get('ours'))} | {learned_text(v.get('seed'))} |")
-    lines.append(
-        "| still differs from the seed's code | - | our pendulum and renderer (the seed: Gym's "
-        "Pendulum-v0); zero autoencoder biases; both observations reconstructed (the seed: the "
-        "first); RK4 test rollouts (the seed: RK45); every test trajectory (the seed: one) |"
-    )
-    return lines
 
 
 def seed_lines(

@@ -12,8 +12,7 @@ import pandas as pd
 from ...core._config import RunConfig
 from ...core._experiments import Experiment, expand
 from ...core._train import TrainConfig
-from ._protocols import HEADER as PROTOCOL_HEADER
-from ._protocols import learned_text
+from ._protocols import Protocol, by_seed_set, protocol_table
 from ._relativistic_experiments import RELATIVISTIC, RELATIVISTIC_SEED
 from ._relativistic_rule import (
     _HNN_P,
@@ -23,7 +22,7 @@ from ._relativistic_rule import (
     _particle_rows,
     velocity_scores,
 )
-from .kit import bad_rows, cell_rows, required_seeds
+from .kit import bad_rows, cell_rows
 
 SECTION_TITLE = "Claim 7: ours and the LNN seed's protocol"
 _MODEL_ROWS = (
@@ -83,28 +82,6 @@ def _protocol(c: RunConfig | None) -> dict[str, str]:
     }
 
 
-def _verdicts(runs, curves, profile) -> dict[str, str]:
-    """``{reading key: verdicts on each stored seed set}`` for claim 7."""
-    from ._replication import seed_sets, seed_span
-    from ._rules import evaluate_claims
-
-    declared, rep = seed_sets(profile)
-    if len(declared) >= required_seeds():
-        primary = declared
-    else:  # as the claims table: the stored seeds outside the replication set
-        primary = tuple(sorted(int(s) for s in set(runs["seed"]) if s not in rep))
-    sets = [s for s in (primary, rep) if s] or [None]
-    out: dict[str, list[str]] = {}
-    for seeds in sets:
-        for v in evaluate_claims(runs, curves, profile, claims=[7], seeds=seeds):
-            if v.n_seeds == 0 and seeds is not None and seeds is not primary:
-                continue
-            where = f" (seeds {seed_span(seeds)})" if seeds is not None else ""
-            said = "no runs" if v.detail.startswith("no runs") else v.verdict
-            out.setdefault(v.key, []).append(f"{said}{where}")
-    return {k: "; ".join(x) for k, x in out.items()}
-
-
 def _errors(runs: pd.DataFrame, target: str) -> dict[str, str]:
     """Per model: geometric mean over seeds of the error on (q, qdot) [min, max], failed."""
     r = _particle_rows(runs, target) if len(runs) else runs
@@ -129,13 +106,25 @@ def _errors(runs: pd.DataFrame, target: str) -> dict[str, str]:
 def comparison_section(results_dir) -> str:
     """Claim 7's two protocols side by side: what each trains on and how, and its verdicts."""
     from ...core._query import load_tables
+    from ._rules import evaluate_claims
 
     runs, curves, profile = load_tables(Path(results_dir))
     at = profile or "quick"
-    ours, seed = _protocol(_one(RELATIVISTIC, at)), _protocol(_one(RELATIVISTIC_SEED, at))
-    verdicts = _verdicts(runs, curves, profile) if len(runs) else {}
-    ours["verdict"] = verdicts.get(f"7 ({ROLLOUT_VARIANT})", "no runs")
-    seed["verdict"] = verdicts.get("7", "no runs")
+
+    def read(key):
+        def rule(r: pd.DataFrame):
+            return {v.key: v for v in evaluate_claims(r, curves, profile, claims=[7])}.get(key)
+
+        return rule
+
+    ours = Protocol(
+        _protocol(_one(RELATIVISTIC, at)),
+        by_seed_set(runs, profile, read(f"7 ({ROLLOUT_VARIANT})"), RELATIVISTIC.name),
+    )
+    seed = Protocol(
+        _protocol(_one(RELATIVISTIC_SEED, at)),
+        by_seed_set(runs, profile, read("7"), RELATIVISTIC_SEED.name),
+    )
     lines = [
         f"### {SECTION_TITLE}",
         "",
@@ -148,25 +137,15 @@ def comparison_section(results_dir) -> str:
         "10x longer (qdot(t) is the seed's), so that g has the spread the seed's networks see.",
         "",
         "Ours is `relativistic`, the seed's protocol `relativistic_seed`.",
-        "",
-        PROTOCOL_HEADER,
-        "| --- | --- | --- |",
+        *protocol_table(
+            ours,
+            seed,
+            "time and length 10x the seed's (its input scaling); g uniform (the seed: normal); "
+            "states from trajectories (the seed: independent draws); unweighted L1; the (q, p) "
+            "HNN trained in (q, p); AdamW with cosine decay (the seed: Adam, one cycle); the "
+            "suite's rollout error as the metric (the seed: a figure)",
+        ),
     ]
-    for row in ("data", "targets", "loss", "optimiser", "steps", "network", "metric", "verdict"):
-        lines.append(f"| {row} | {ours.get(row, '-')} | {seed.get(row, '-')} |")
-    read = {}
-    if len(runs):
-        from ._rules import evaluate_claims
-
-        read = {v.key: v for v in evaluate_claims(runs, curves, profile, claims=[7])}
-    ours_v, seed_v = read.get(f"7 ({ROLLOUT_VARIANT})"), read.get("7")
-    lines.append(f"| learned | {learned_text(ours_v)} | {learned_text(seed_v)} |")
-    lines.append(
-        "| still differs from the seed's code | - | time and length 10x the seed's (its input "
-        "scaling); g uniform (the seed: normal); states from trajectories (the seed: independent "
-        "draws); unweighted L1; the (q, p) HNN trained in (q, p); AdamW with cosine decay (the "
-        "seed: Adam, one cycle); the suite's rollout error as the metric (the seed: a figure) |"
-    )
     errs = {t: _errors(runs, t) for t in ("rollout", "derivative")}
     if any(errs.values()):
         lines += [

@@ -23,7 +23,7 @@ from ...core._studies import Study, register_study
 from .._figure import save_figure, subplots
 from . import _lnn_diagnosis, policy
 from ._common import UNIT_DOUBLE_PENDULUM
-from ._protocols import decided_by
+from ._protocols import by_seed_set, decided_by
 from ._rules import CLAIM_TITLES
 from .hnn_seed import fmt as _f
 from .hnn_seed import geometric_mean as _gm
@@ -322,8 +322,9 @@ def _rows(results_dir, experiment=LNN_SEED) -> tuple[pd.DataFrame, str | None]:
 
 def _protocols(results_dir: Path) -> list[str]:
     """The two readings side by side (:func:`kit.protocol_table`)."""
-    text, _ = _rows(results_dir)
+    text, profile = _rows(results_dir)
     notebook, _ = _rows(results_dir, LNN_SEED_NOTEBOOK)
+    runs = load_runs(results_dir)
 
     def steps(rows, fallback):
         seen = sorted({int(x) for x in rows["steps"]}) if len(rows) else []
@@ -331,22 +332,26 @@ def _protocols(results_dir: Path) -> list[str]:
 
     metric = "energy error, % of max V - min V, 40 rollouts of 10 s"
     ours = Protocol(
-        data="the dataset's trajectories, 4 states 0.1 s apart",
-        targets="dz/dt",
-        loss="squared error",
-        optimiser="AdamW 1e-3, cosine, clipping, batch 32",
-        steps=steps(text, "-"),
-        metric=metric,
-        verdict=reading(text) if len(text) else None,
+        {
+            "data": "the dataset's trajectories, 4 states 0.1 s apart",
+            "targets": "dz/dt",
+            "loss": "squared error",
+            "optimiser": "AdamW 1e-3, cosine, clipping, batch 32",
+            "steps": steps(text, "-"),
+            "metric": metric,
+        },
+        by_seed_set(text, profile, reading, LNN_SEED.name, runs),
     )
     seeds = Protocol(
-        data="fresh uniform states every batch, qdot in [-10, 10]",
-        targets="dz/dt",
-        loss="L1",
-        optimiser="Adam, OneCycle, batch 512",
-        steps=f"{steps(notebook, '-')} (the notebook's {NOTEBOOK_STEPS})",
-        metric=metric,
-        verdict=reading(notebook) if len(notebook) else None,
+        {
+            "data": "fresh uniform states every batch, qdot in [-10, 10]",
+            "targets": "dz/dt",
+            "loss": "L1",
+            "optimiser": "Adam, OneCycle, batch 512",
+            "steps": f"{steps(notebook, '-')} (the notebook's {NOTEBOOK_STEPS})",
+            "metric": metric,
+        },
+        by_seed_set(notebook, profile, reading, LNN_SEED_NOTEBOOK.name, runs),
     )
     differs = (
         "steps (lr raised by the same factor); the baseline's initialisation; the test set "
