@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from ...core._experiments import SELECTIONS, expand, get
+from ._seeds import required_seeds, seed_sets, seed_span
 from ._verdict import Verdict
 
 HEADER = "| protocol | ours | the seed's |"
@@ -64,10 +66,6 @@ def by_seed_set(
     own seeds of a profile that declares fewer than a verdict needs are the stored seeds outside
     the replication set (as the claims table reads them); without a profile, every stored
     seed."""
-    from ...core._experiments import SELECTIONS, expand, get
-    from ._replication import seed_sets
-    from .kit import required_seeds
-
     stored = set(rows["seed"].astype(int)) if len(rows) and "seed" in rows else set()
     declared, rep = seed_sets(profile)
     if len(declared) < required_seeds():
@@ -114,8 +112,6 @@ def seed_set_text(s: SeedSet) -> str:
     verdict whose headline part was not tested says why: the models that did not learn (the
     claim is then untested, not refuted), or its unmet condition; a reading without a trivial
     predictor it beats says it does not discriminate."""
-    from ._replication import seed_span
-
     where = f"seeds {seed_span(s.seeds)}"
     if s.pending:
         return f"pending ({s.stored} of {s.declared} runs, {where})"

@@ -21,8 +21,9 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ...core._experiments import PROFILES, SELECTIONS, expand, profile_defaults, replication_seeds
+from ...core._experiments import PROFILES, expand
 from ._rules import claim_studies, evaluate_claims, restrict_all
+from ._seeds import seed_sets, seed_span
 from .kit import INCONCLUSIVE, Verdict, min_seeds, required_seeds
 
 DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
@@ -86,18 +87,6 @@ def reversed_parts(a: Verdict, b: Verdict) -> list[str]:
     other = {q.name: q.status for q in b.parts}
     flip = {("holds", "contradicts"), ("contradicts", "holds")}
     return [q.name for q in a.parts if (q.status, other.get(q.name)) in flip]
-
-
-def seed_sets(profile: str | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """(primary seeds, replication seeds) of a profile (a selection: its base profile's)."""
-    if profile is None:
-        return (), ()
-    base = SELECTIONS.get(profile, profile)
-    try:
-        primary = profile_defaults(base)[1]
-    except ValueError:
-        return (), ()
-    return tuple(primary), replication_seeds(base)
 
 
 def stored_counts(runs: pd.DataFrame, profile: str | None, seeds=None) -> dict[int, tuple]:
@@ -274,13 +263,6 @@ def pooled_moves(j: Judgement, key: str) -> str | None:
     ]
     text = "; ".join(moved) or pooled.detail[:160]
     return f"both seed sets read {p.verdict}, pooled {pooled.verdict}: {text}"
-
-
-def seed_span(seeds) -> str:
-    seeds = sorted(seeds)
-    if seeds and seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
-        return f"{seeds[0]}-{seeds[-1]}"
-    return ", ".join(map(str, seeds))
 
 
 def settled(verdict: str) -> bool:

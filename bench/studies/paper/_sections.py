@@ -47,7 +47,7 @@ def _claims_table(j) -> list[str]:
     """One row per claim (claim 4: per metric and spring start): the final verdict, the
     verdicts on the primary and replication seeds and pooled, whether it replicates, and what
     dropping one seed does. Effect and interval are the final reading's."""
-    from ._replication import seed_span
+    from ._seeds import seed_span
 
     ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
     both = seed_span(sorted({*j.primary_seeds, *j.replication_seeds}))
@@ -121,7 +121,7 @@ def _parts_table(j) -> list[str]:
     """Every part of the final reading (pooled where the seed sets agree): its effect, margin,
     the margins at which it holds and is contradicted, its test and level, its status and point
     estimate on each seed set, and whether dropping one seed reverses it."""
-    from ._replication import seed_span
+    from ._seeds import seed_span
     from .kit import margin_ranges
 
     ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from ...core._experiments import SELECTIONS, profile_defaults, replication_seeds
 from ...core._query import initial_state, option, select
 
 __all__ = [
@@ -30,6 +31,8 @@ __all__ = [
     "paper_spring",
     "required_seeds",
     "scored",
+    "seed_sets",
+    "seed_span",
 ]
 
 # The fewest paired seeds that give a verdict.
@@ -150,3 +153,22 @@ def curve_slopes(runs: pd.DataFrame, curves: pd.DataFrame | None, t_min_frac: fl
         r = runs[runs["config_hash"] == h].iloc[0]
         rows.append({"config_hash": h, "seed": r["seed"], "model": r["model"], "slope": slope})
     return pd.DataFrame(rows, columns=cols)
+
+
+def seed_sets(profile: str | None) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """(primary seeds, replication seeds) of a profile (a selection: its base profile's)."""
+    if profile is None:
+        return (), ()
+    base = SELECTIONS.get(profile, profile)
+    try:
+        primary = profile_defaults(base)[1]
+    except ValueError:
+        return (), ()
+    return tuple(primary), replication_seeds(base)
+
+
+def seed_span(seeds) -> str:
+    seeds = sorted(seeds)
+    if seeds and seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 2:
+        return f"{seeds[0]}-{seeds[-1]}"
+    return ", ".join(map(str, seeds))
