@@ -102,11 +102,12 @@ def test_claims_table_reads_every_column_and_refuses_a_report_without_one():
 
 def test_the_seeds_protocols_come_from_each_claims_section():
     from bench import findings as F
-    from bench.studies.paper._protocols import HEADER, Protocol, protocol_table
+    from bench.studies.paper._protocols import HEADER, ROWS, Protocol, protocol_table
 
     assert F.PROTOCOL_HEADER == HEADER
-    ours = Protocol({"data": "a", "loss": "squared error", "steps": "100"})
-    seeds = Protocol({"data": "b", "loss": "L1", "steps": "600000"})
+    rows = dict.fromkeys(ROWS, "-")
+    ours = Protocol({**rows, "data": "a", "loss": "squared error", "steps": "100"})
+    seeds = Protocol({**rows, "data": "b", "loss": "L1", "steps": "600000"})
     report = "\n".join(
         [
             "## Claims",

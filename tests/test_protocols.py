@@ -2,12 +2,14 @@
 seed set, a campaign's reading pending until its declared runs are stored."""
 
 import pandas as pd
+import pytest
 
 from bench.core._experiments import expand, get
-from bench.studies.paper._protocols import Protocol, by_seed_set, protocol_table
+from bench.studies.paper._protocols import ROWS, Protocol, by_seed_set, protocol_table
 from bench.studies.paper.kit import Verdict
 
 EXPERIMENT = "relativistic_seed"
+CELLS = dict.fromkeys(ROWS, "-")
 
 
 def _rows(profile, seeds, keep=None):
@@ -28,20 +30,20 @@ def _reader(seen):
 
 
 def _verdict_cell(p):
-    line = next(x for x in protocol_table(p, Protocol({}), "-") if x.startswith("| verdict |"))
+    line = next(x for x in protocol_table(p, Protocol(CELLS), "-") if x.startswith("| verdict |"))
     return line.split("|")[2].strip()
 
 
 def test_a_campaign_reading_is_pending_until_its_runs_are_stored():
     declared = len(expand(get(EXPERIMENT), "paper-core", seeds=[0, 1, 2, 3, 4]))
     rows = _rows("paper-core", range(5), keep=3)
-    p = Protocol({"data": "x"}, by_seed_set(rows, "paper-core", _reader([]), EXPERIMENT))
+    p = Protocol(CELLS, by_seed_set(rows, "paper-core", _reader([]), EXPERIMENT))
     assert _verdict_cell(p) == (
         f"pending (3 of {declared} runs, seeds 0-4); pending (0 of {declared} runs, seeds 5-9)"
     )
     assert p.verdict is None  # no learning gate read off a partial reading
     full = _rows("paper-core", range(5))
-    p = Protocol({}, by_seed_set(full, "paper-core", _reader([]), EXPERIMENT))
+    p = Protocol(CELLS, by_seed_set(full, "paper-core", _reader([]), EXPERIMENT))
     assert _verdict_cell(p) == f"reproduced (seeds 0-4); pending (0 of {declared} runs, seeds 5-9)"
     assert p.verdict.verdict == "reproduced"
 
@@ -49,20 +51,24 @@ def test_a_campaign_reading_is_pending_until_its_runs_are_stored():
 def test_each_seed_set_is_judged_on_its_own_seeds():
     seen = []
     rows = _rows("quick", range(10))
-    p = Protocol({}, by_seed_set(rows, "quick", _reader(seen), EXPERIMENT))
+    p = Protocol(CELLS, by_seed_set(rows, "quick", _reader(seen), EXPERIMENT))
     assert seen == [(0, 1, 2, 3, 4), (5, 6, 7, 8, 9)]
     assert _verdict_cell(p) == "reproduced (seeds 0-4); reproduced (seeds 5-9)"
     # outside a campaign's selection nothing is pending and no replication set is invented
-    p = Protocol({}, by_seed_set(_rows("quick", range(5), keep=2), "quick", _reader([])))
+    p = Protocol(CELLS, by_seed_set(_rows("quick", range(5), keep=2), "quick", _reader([])))
     assert _verdict_cell(p).startswith("reproduced (seeds ")
     assert "5-9" not in _verdict_cell(p)
-    assert _verdict_cell(Protocol({})) == "not run"
+    assert _verdict_cell(Protocol(CELLS)) == "not run"
 
 
 def test_the_table_takes_each_readings_rows_in_order():
-    ours = Protocol({"data": "a", "loss": "L2"})
-    seeds = Protocol({"data": "b", "network": "4 x 500"})
+    ours = Protocol({**CELLS, "data": "a", "loss": "L2"})
+    seeds = Protocol({**CELLS, "data": "b", "network": "4 x 500"})
     lines = protocol_table(ours, seeds, "the steps")
     assert lines[1] == "| protocol | ours | the seed's |"
-    assert lines[3:6] == ["| data | a | b |", "| loss | L2 | - |", "| network | - | 4 x 500 |"]
+    assert lines[3] == "| data | a | b |"
+    assert "| loss | L2 | - |" in lines
+    assert lines[3 + len(ROWS)] == "| network | - | 4 x 500 |"  # after ours' rows
     assert lines[-1] == "| still differs from the seed's code | - | the steps |"
+    with pytest.raises(ValueError, match="missing \\['metric'\\]"):
+        protocol_table(Protocol({r: "-" for r in ROWS if r != "metric"}), Protocol({}), "-")

@@ -193,7 +193,7 @@ def protocols(t: pd.DataFrame, profile: str | None) -> list[str]:
         "optimiser": "optimiser",
         "steps": "steps",
         "init": "dynamics network's initialisation",
-        "metric": "energy metric (tested)",
+        "metric": "metric",
     }
     ours, seed = (
         Protocol(

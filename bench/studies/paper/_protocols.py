@@ -62,10 +62,9 @@ def by_seed_set(
     own seeds, then the replication seeds where any run is stored or declared there. Where
     ``profile`` is a campaign's selection (``paper-core``), a set on which fewer of
     ``experiment``'s declared runs are stored (in ``runs``, the folder's rows; default ``rows``)
-    than it declares is pending and not judged. The
-    own seeds of a profile that declares fewer than a verdict needs are the stored seeds outside
-    the replication set (as the claims table reads them); without a profile, every stored
-    seed."""
+    than it declares is pending and not judged. The own seeds of a profile that declares fewer
+    than a verdict needs are the stored seeds outside the replication set (as the claims table
+    reads them); without a profile, every stored seed."""
     stored = set(rows["seed"].astype(int)) if len(rows) and "seed" in rows else set()
     declared, rep = seed_sets(profile)
     if len(declared) < required_seeds():
@@ -81,8 +80,9 @@ def by_seed_set(
         mine = rows[rows["seed"].isin(seeds)].reset_index(drop=True) if stored else rows
         if i and not len(mine) and not want:
             continue  # no replication runs stored or declared
-        v = read(mine) if len(mine) else None
-        out.append(SeedSet(tuple(seeds), v, len(want & done), len(want)))
+        n = len(want & done)
+        v = read(mine) if len(mine) and n == len(want) else None  # pending: not judged
+        out.append(SeedSet(tuple(seeds), v, n, len(want)))
     return tuple(out)
 
 
@@ -137,11 +137,14 @@ def verdict_text(p: Protocol) -> str:
 
 
 def protocol_table(ours: Protocol, seeds: Protocol, differs: str) -> list[str]:
-    """The markdown table: a row per cell (ours' rows first, then any only the seed's has), each
-    model's learning gate (on the profile's own seeds; ``-`` while pending), the verdict of each
-    reading per seed set, and ``differs``, one line on what still separates the seed's reading
-    from the seed's code (the claim's verdict is the seed's reading's where it has runs)."""
+    """The markdown table: a row per cell (ours' rows first, then any only the seed's has; each
+    of :data:`ROWS` at least), each model's learning gate (on the profile's own seeds; ``-``
+    while pending), the verdict of each reading per seed set, and ``differs``, one line on what
+    still separates the seed's reading from the seed's code (the claim's verdict is the seed's
+    reading's where it has runs)."""
     names = [*ours.cells, *(k for k in seeds.cells if k not in ours.cells)]
+    if missing := [r for r in ROWS if r not in names]:
+        raise ValueError(f"a protocol table needs the rows {ROWS}; missing {missing}")
     lines = ["", HEADER, "|---|---|---|"]
     lines += [f"| {n} | {ours.cells.get(n, '-')} | {seeds.cells.get(n, '-')} |" for n in names]
     lines.append(f"| learned | {learned_text(ours.verdict)} | {learned_text(seeds.verdict)} |")
