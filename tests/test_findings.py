@@ -181,3 +181,18 @@ def test_margin_dependent_readings_of_one_claim_are_counted():
     keys = "1, 4 (geometric-mean error, spring from paper), 4 (MSE, spring from paper), 5"
     assert _grouped(keys) == "1, 4 (2 readings), 5"
     assert _grouped("7 (rollout loss), 10") == "7 (rollout loss), 10"
+
+
+def test_a_pending_claim_is_not_called_margin_dependent():
+    from bench.studies.paper._sections import _dependence_section
+    from bench.studies.paper._sensitivity import Dependence
+    from bench.studies.paper.kit import Verdict
+
+    def v(key, pending=None):
+        return Verdict(int(key), "t", "inconclusive", 0.0, 0.0, 0.0, 5, "", pending=pending)
+
+    deps = [Dependence(k, "error", ((1.5, "reproduced"),), "inconclusive") for k in ("1", "12")]
+    text = "\n".join(_dependence_section(deps, [v("1"), v("12", pending=(27, 30))]))
+    assert "Margin-dependent: claim 1." in text and "| 12 |" not in text
+    text = "\n".join(_dependence_section(deps, [v("1"), v("12")]))
+    assert "Margin-dependent: claim 1, 12." in text

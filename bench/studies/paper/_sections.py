@@ -203,12 +203,17 @@ def _policy_section() -> list[str]:
 
 
 def _dependence_section(deps, final) -> list[str]:
+    """The claims whose final reading changes inside a band; a claim still pending in a
+    campaign has no reading to depend on a margin, and is left out."""
+    waiting = {v.key for v in final if v.pending}
+    deps = [d for d in deps if d.key not in waiting]
     out = [
         "## Margin-dependent claims",
         "",
         "Each claim's final reading judged again at the ends and the middle of the plausible "
         "band of each quantity its parts use (one quantity at a time, the others at the policy's; "
-        "learning is the learning gate).",
+        "learning is the learning gate). A claim whose campaign runs are not all stored is "
+        "left out until they are.",
         "",
     ]
     if not deps:
