@@ -14,7 +14,8 @@ import models
 from bench.core import _execute, _fit, _store
 from bench.core._ensemble import train_ensemble
 from bench.core._experiments import RunConfig
-from bench.core._train import Batches, TrainConfig, checkpoint_steps, loss_fn, prepare, train
+from bench.core._fit import checkpoint_steps
+from bench.core._train import Batches, TrainConfig, loss_fn, prepare, train
 
 
 def test_checkpoint_grid_halves_and_snaps_to_blocks():

@@ -113,7 +113,7 @@ class RunConfig:
     eval_integrator: str = "rk4_38"
     eval_substeps: int = 1
     eval_rtol: float = 1e-6
-    eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._train.checkpoint_steps)
+    eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._fit.checkpoint_steps)
     dtype: str = "float32"
     seed: int = 0
     # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the

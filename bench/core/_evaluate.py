@@ -294,7 +294,7 @@ def _derivative_mse(config, system, data, model) -> dict:
 
 def _checkpoints(config, system, data, meta, final_metrics, final_curves, roll) -> dict | None:
     """The learning curve of a run: :data:`CHECKPOINT_METRICS` at each of its training
-    checkpoints (``bench.core._train.checkpoint_steps``), on the whole test set with the
+    checkpoints (``bench.core._fit.checkpoint_steps``), on the whole test set with the
     evaluation integrator, as columns (lists, one entry per checkpoint) plus the per-time
     curves ``rel_error_t``, ``energy_violation_t`` (geometric mean over trajectories).
 

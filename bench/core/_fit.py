@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ._config import RunConfig
 from ._params import cached_training
 
@@ -24,15 +26,33 @@ UNTRAINED = {
 }
 
 
-def train_config(config: RunConfig, *, block: int = TRAIN_BLOCK, weight_decay=None):
+def checkpoint_steps(steps: int, n: int, block: int = 100) -> tuple[int, ...]:
+    """``n`` checkpoints on the halving grid ``steps * 2**-(n-1), ..., steps / 2, steps``, each
+    rounded to the nearest multiple of ``block`` (at least one block; the last is ``steps``),
+    duplicates dropped: ``checkpoint_steps(8000, 4) == (1000, 2000, 4000, 8000)``,
+    ``checkpoint_steps(1000, 4) == (100, 300, 500, 1000)``. ``n = 0`` gives ``()``."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+        raise ValueError(f"the number of checkpoints must be an integer >= 0, got {n!r}")
+    block = max(1, min(block, steps))
+    out = []
+    for i in range(n):
+        target = steps * 2.0 ** (i - n + 1)
+        snapped = min(steps, max(block, int(np.floor(target / block + 0.5)) * block))
+        out.append(steps if i == n - 1 else snapped)
+    return tuple(sorted(set(out)))
+
+
+def train_config(config: RunConfig, *, block: int | None = None, weight_decay=None):
     """The :class:`bench.TrainConfig` of a run: its optimiser, schedule, loss, target and
-    checkpoints, ``block`` steps per compiled block. ``weight_decay``: the observation's
-    default, taken where the run sets none (None: the TrainConfig's, 1e-4)."""
+    checkpoints, ``block`` (default :data:`TRAIN_BLOCK`) steps per compiled block.
+    ``weight_decay``: the observation's default, taken where the run sets none (None: the
+    TrainConfig's, 1e-4)."""
     import models
 
-    from ._train import TrainConfig, checkpoint_steps
+    from ._train import TrainConfig
 
     decay = config.weight_decay if config.weight_decay is not None else weight_decay
+    block = TRAIN_BLOCK if block is None else block
     return TrainConfig(
         steps=config.steps,
         batch=config.batch,
@@ -76,6 +96,8 @@ def train_cached(config: RunConfig, model, data, cache_root: Path, progress):
         config,
         model,
         cache_root,
-        lambda: train(model, data, tcfg, progress=progress, objective=objective(config)),
+        lambda resume: train(
+            model, data, tcfg, progress=progress, objective=objective(config), resume=resume
+        ),
         checkpoints=tcfg.checkpoints,
     )

@@ -187,12 +187,14 @@ def train_config(c: RunConfig):
     return run_train_config(c, block=BLOCK, weight_decay=0.0)
 
 
-def fit_frames(c: RunConfig, model, data, progress: bool = False):
+def fit_frames(c: RunConfig, model, data, progress: bool = False, resume=None):
     """Train ``model`` on ``data``'s frames by the one training loop with
-    :class:`FrameObjective`; returns its :class:`bench.TrainResult`."""
+    :class:`FrameObjective` (``resume``: ``bench.train``'s); returns its
+    :class:`bench.TrainResult`."""
     from ._train import train
 
-    return train(model, data, train_config(c), progress, objective=FrameObjective(c.chunk))
+    objective = FrameObjective(c.chunk)
+    return train(model, data, train_config(c), progress, objective=objective, resume=resume)
 
 
 def train_frames(c: RunConfig, model, data, progress: bool = False) -> tuple:
@@ -203,7 +205,9 @@ def train_frames(c: RunConfig, model, data, progress: bool = False) -> tuple:
 
 def train_cached_frames(c: RunConfig, model, data, cache_root: Path, progress: bool) -> tuple:
     """The train step of a frames run: trained, or loaded from the parameter cache."""
-    return cached_training(c, model, cache_root, lambda: fit_frames(c, model, data, progress))
+    return cached_training(
+        c, model, cache_root, lambda resume: fit_frames(c, model, data, progress, resume=resume)
+    )
 
 
 def _forecast_jit(model, frames):

@@ -17,11 +17,13 @@ from systems import source_fingerprint
 
 from ._atomic import atomic_write, write_json
 from ._config import RunConfig
+from ._resume import ResumePoint
 
 # The packages whose source cached parameters and floors depend on (the models, the data's
 # physics, training and metrics). A cache entry records their fingerprint and is discarded when
 # any of their files changed since.
 TRAIN_CODE = ("models", "systems", "bench.core")
+RESUME = "resume"  # under an entry: the state of its training while it runs (bench.core._resume)
 
 
 def code_fingerprint() -> str:
@@ -114,6 +116,8 @@ def result_meta(res) -> dict:
         "flops_per_step": float(res.flops_per_step),
         "final_loss": float(losses[np.isfinite(losses)][-1]) if np.isfinite(losses).any() else None,
         "loss_rise": loss_rise(losses),
+        "resumed_step": int(getattr(res, "resumed_step", 0)),
+        "resumed_cpu_seconds": float(getattr(res, "resumed_cpu_seconds", 0.0)),
     }
 
 
@@ -147,7 +151,9 @@ def cached_training(
 ) -> tuple:
     """``(model, meta)``: the parameters cached under ``config.train_hash`` (with the snapshots
     of ``checkpoints``; ``like`` gives their structure) where they hold, else those of
-    ``fit()`` (a :class:`bench.TrainResult`), stored. ``meta["train_cached"]`` says which;
+    ``fit(resume)`` (a :class:`bench.TrainResult`; ``resume``, the entry's
+    :class:`bench.core._resume.ResumePoint`, goes to :func:`bench.train`, so that a killed
+    training goes on from its last saved state), stored. ``meta["train_cached"]`` says which;
     ``meta["_snapshots"]`` holds the checkpoint snapshots."""
     import equinox as eqx
 
@@ -161,5 +167,8 @@ def cached_training(
             return loaded, meta
         except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
             pass
-    res = fit()
-    return res.model, store_trained(config, res, cache_root, checkpoints)
+    resume = ResumePoint(pdir / RESUME, code=code_fingerprint())
+    res = fit(resume)
+    meta = store_trained(config, res, cache_root, checkpoints)
+    resume.clear()
+    return res.model, meta

@@ -180,13 +180,16 @@ def train_config(c: RunConfig):
     return run_train_config(c, block=BLOCK, weight_decay=WEIGHT_DECAY)
 
 
-def fit_pixels(c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS):
+def fit_pixels(
+    c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS, resume=None
+):
     """Train ``model`` on ``data``'s frames by the one training loop (``bench.train``) with
-    :class:`PixelObjective`; returns its :class:`bench.TrainResult`."""
+    :class:`PixelObjective` (``resume``: ``bench.train``'s); returns its
+    :class:`bench.TrainResult`."""
     from ._train import train
 
     objective = PixelObjective(chunk=c.chunk, aux_weight=aux_weight)
-    return train(model, data, train_config(c), progress, objective=objective)
+    return train(model, data, train_config(c), progress, objective=objective, resume=resume)
 
 
 def train_pixels(
@@ -201,4 +204,6 @@ def train_pixels(
 def train_cached_pixels(c: RunConfig, model, data, cache_root: Path, progress: bool) -> tuple:
     """The train step of a pixel run: ``(model, meta)``, trained by :func:`fit_pixels` or
     loaded from the parameter cache (:func:`bench.core._params.cached_training`)."""
-    return cached_training(c, model, cache_root, lambda: fit_pixels(c, model, data, progress))
+    return cached_training(
+        c, model, cache_root, lambda resume: fit_pixels(c, model, data, progress, resume=resume)
+    )

@@ -56,6 +56,9 @@ def training_columns(meta: dict) -> dict:
         loss_rise=meta.get("loss_rise"),
         flops_per_step=_nan_if_none(meta.get("flops_per_step")),
         train_cached=meta["train_cached"],
+        resumed_step=meta.get("resumed_step") or 0,
+        # the interrupted part's CPU time belongs to this run only where this run trained
+        resumed_cpu_seconds=0.0 if meta["train_cached"] else meta.get("resumed_cpu_seconds", 0.0),
     )
 
 
@@ -81,7 +84,9 @@ def record_failure(row: dict, art: Path, error: Exception) -> None:
 def close_row(row: dict, art: Path, t_start: float, c_start: float) -> dict:
     """Add the costs and provenance to ``row``, write ``metrics.json``; return the row."""
     row["wall_seconds"] = time.perf_counter() - t_start
-    row["cpu_seconds"] = time.process_time() - c_start  # every thread of the process
+    # every thread of the process, plus an interrupted training's CPU time until its last save
+    cpu = time.process_time() - c_start
+    row["cpu_seconds"] = cpu + float(row.get("resumed_cpu_seconds") or 0.0)
     row.update(provenance())  # versions, device and commit: bench.core._provenance
     write_json(art / "metrics.json", {a: b for a, b in row.items() if a not in NESTED})
     return row

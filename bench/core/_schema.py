@@ -126,6 +126,17 @@ _RUN = {
         "at its best, >> 1 where it blew up with a finite loss; empty before the field",
     ),
     "train_cached": ("-", "the parameters came from the cache (train_seconds is the original's)"),
+    "resumed_step": (
+        "count",
+        "the step the training resumed from after an interruption (its state saved every 5 "
+        "minutes: bench.core._resume; the result is the uninterrupted training's); 0: trained in "
+        "one go; empty in rows stored before the field",
+    ),
+    "resumed_cpu_seconds": (
+        "s (CPU)",
+        "CPU time of the interrupted part of a resumed training, until its last save "
+        "(included in cpu_seconds; 0 when trained in one go or cached)",
+    ),
     "rollout_error": (
         "1",
         "geometric mean over test trajectories and times t >= 1 of the relative state error "
@@ -204,9 +215,9 @@ _RUN = {
     "cpu_seconds": (
         "s (CPU)",
         "CPU time of the run's process over the run, every thread (an ensemble member: its "
-        "own evaluation plus its share of the ensemble's); unlike the wall times it excludes "
-        "time spent waiting for the CPU (a niced campaign); empty in rows stored before the "
-        "column existed",
+        "own evaluation plus its share of the ensemble's; a resumed training: plus "
+        "resumed_cpu_seconds); unlike the wall times it excludes time spent waiting for the "
+        "CPU (a niced campaign); empty in rows stored before the column existed",
     ),
     "ensemble_size": ("count", "runs trained together as one vmapped ensemble (1: alone)"),
     # pixel runs (observation "pixels", bench.core._pixels); empty for state runs

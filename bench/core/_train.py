@@ -35,9 +35,10 @@ class TrainConfig:
 
     ``checkpoints`` names training steps at which a copy of the parameters is kept
     (:class:`Snapshot`, taken at the end of the first compiled block that reaches the step, so
-    steps that are multiples of ``steps_per_call`` are exact: :func:`checkpoint_steps`). Taking
-    a snapshot changes nothing in the training: the final parameters are those of the same run
-    without checkpoints, bit for bit (a test)."""
+    steps that are multiples of ``steps_per_call`` are exact:
+    ``bench.core._fit.checkpoint_steps``). Taking a snapshot changes nothing in the training:
+    the final parameters are those of the same run without checkpoints, bit for bit (a
+    test)."""
 
     steps: int = 8000
     batch: int = 200
@@ -117,22 +118,6 @@ class Snapshot:
     model: Any
 
 
-def checkpoint_steps(steps: int, n: int, block: int = 100) -> tuple[int, ...]:
-    """``n`` checkpoints on the halving grid ``steps * 2**-(n-1), ..., steps / 2, steps``, each
-    rounded to the nearest multiple of ``block`` (at least one block; the last is ``steps``),
-    duplicates dropped: ``checkpoint_steps(8000, 4) == (1000, 2000, 4000, 8000)``,
-    ``checkpoint_steps(1000, 4) == (100, 300, 500, 1000)``. ``n = 0`` gives ``()``."""
-    if isinstance(n, bool) or not isinstance(n, int) or n < 0:
-        raise ValueError(f"the number of checkpoints must be an integer >= 0, got {n!r}")
-    block = max(1, min(block, steps))
-    out = []
-    for i in range(n):
-        target = steps * 2.0 ** (i - n + 1)
-        snapped = min(steps, max(block, int(np.floor(target / block + 0.5)) * block))
-        out.append(steps if i == n - 1 else snapped)
-    return tuple(sorted(set(out)))
-
-
 @dataclass(frozen=True)
 class TrainResult:
     """``losses[i]`` is the loss at step i (before its update); ``steps_done`` updates applied.
@@ -141,7 +126,10 @@ class TrainResult:
     gradient; ``model`` is then the last model with finite loss (the one before that step's
     update) and ``losses`` stop before that step. ``flops_per_step``: see :func:`step_flops`.
     ``snapshots``: one :class:`Snapshot` per ``config.checkpoints`` step reached before any
-    divergence (the last one, at ``steps``, holds the final model).
+    divergence (the last one, at ``steps``, holds the final model). A training resumed from a
+    saved state (``train``'s ``resume``) started at ``resumed_step`` (0: in one go);
+    ``train_seconds`` counts both parts, ``resumed_cpu_seconds`` is the CPU time of the
+    interrupted part until its save.
     """
 
     model: Any
@@ -153,6 +141,8 @@ class TrainResult:
     steps_done: int
     flops_per_step: float = float("nan")
     snapshots: tuple = ()
+    resumed_step: int = 0
+    resumed_cpu_seconds: float = 0.0
 
 
 def loss_fn(model, z, args, ts, config: TrainConfig, dz=None, *, controls=None, scale=None):
@@ -400,6 +390,7 @@ def train(
     config: TrainConfig = TrainConfig(),
     progress: bool = False,
     objective=STATES,
+    resume=None,
 ):
     """Fit ``model`` to ``dataset`` (by default its training chunks of states: ``objective``
     :data:`STATES`); never raises on divergence.
@@ -408,7 +399,13 @@ def train(
     training block (0 when this configuration was compiled before in this process);
     ``train_seconds`` is the wall time of the steps alone; ``flops_per_step`` comes from the
     same compiled block (no extra compile).
+
+    ``resume`` (a :class:`bench.core._resume.ResumePoint`) keeps the training's state there
+    every so often and starts from a state saved there by an interrupted training of the same
+    configuration: the result is the uninterrupted training's, bit for bit, with
+    ``resumed_step`` the step it started from and the wall and CPU seconds of both parts.
     """
+    cpu_start = time.process_time()
     data = objective.data(model, dataset, config)
     params, static = eqx.partition(model, eqx.is_inexact_array)
     # the blocks donate their state buffers: copy so that the caller's model stays valid
@@ -429,18 +426,29 @@ def train(
         params, static, opt_state, dead, good, data, idx, active, config, objective
     )
 
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=config.steps, desc="train", unit="step", mininterval=0.5)
     losses: list[np.ndarray] = []
     snapshots: list[Snapshot] = []
     pending = list(config.checkpoints)
     diverged_step = None
-    train_seconds = 0.0
-    last_log = 0
+    train_seconds = cpu_before = 0.0
     done = 0
+    saved = None if resume is None else resume.load(params, opt_state, good, k)
+    if saved is not None and saved.done < config.steps:
+        done, train_seconds, cpu_before = saved.done, saved.train_seconds, saved.cpu_seconds
+        params, opt_state, good = saved.params, saved.opt_state, saved.good
+        losses.append(saved.losses)
+        snapshots = [Snapshot(a, b, eqx.combine(m, static)) for a, b, m in saved.snapshots]
+        pending = [c for c in pending if c > done]
+        for _ in range(done // k - 1):  # the stream's draws up to here: block_inputs(0) made one
+            batches.take(k)
+    resumed_step = done
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=config.steps, initial=done, desc="train", unit="step", mininterval=0.5)
+    last_log = done
     while done < config.steps:
         if done > 0:
             idx, active = block_inputs(done)
@@ -470,6 +478,9 @@ def train(
             if done - last_log >= config.log_every or done >= config.steps:
                 bar.set_postfix(loss=f"{block_losses[-1]:.3e}")
                 last_log = done
+        if resume is not None and done < config.steps and resume.due():
+            cpu = cpu_before + time.process_time() - cpu_start
+            resume.save(done, k, params, opt_state, good, snapshots, losses, train_seconds, cpu)
     if bar is not None:
         bar.close()
     return TrainResult(
@@ -482,4 +493,6 @@ def train(
         steps_done=done,
         flops_per_step=getattr(compiled, "flops", float("nan")),
         snapshots=tuple(snapshots),
+        resumed_step=resumed_step,
+        resumed_cpu_seconds=cpu_before,
     )
