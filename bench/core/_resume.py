@@ -56,9 +56,9 @@ class Resumed:
 
 class ResumePoint:
     """Where one training keeps its state (``folder``), saved at most every ``every`` seconds
-    (default :data:`EVERY_S`; 0: at every block), for the code of fingerprint ``code`` (the parameter
-    cache's :func:`bench.core._params.code_fingerprint`): a state saved for other code is
-    ignored."""
+    (default :data:`EVERY_S`; 0: at every block), for the code of fingerprint ``code`` (the
+    parameter cache's :func:`bench.core._params.code_fingerprint`): a state saved for other
+    code is ignored."""
 
     def __init__(self, folder, every: float | None = None, code: str = ""):
         every = EVERY_S if every is None else every
