@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from pathlib import Path
 
 import equinox as eqx
 import jax
@@ -19,7 +20,7 @@ import models
 from bench.core import _params
 from bench.core._box import BoxObjective
 from bench.core._config import RunConfig
-from bench.core._resume import RECORD, STATE, ResumePoint
+from bench.core._resume import RECORD, ResumePoint
 from bench.core._train import TrainConfig, train
 
 
@@ -89,6 +90,10 @@ def test_a_killed_training_resumes_to_the_uninterrupted_result(tmp_path, killed_
         train(_node(), data, CFG, resume=KilledAfter(tmp_path, killed_after))
     saved = json.loads((tmp_path / RECORD).read_text())
     assert saved["done"] == 5 * killed_after  # a save at every block boundary (every=0)
+    # one state on disk, the record's: the earlier saves' files are gone
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [RECORD, saved["state"], saved["losses"]]
+    )
     again = train(_node(), data, CFG, resume=ResumePoint(tmp_path, every=1e9))
     assert again.resumed_step == 5 * killed_after and whole.resumed_step == 0
     assert again.resumed_cpu_seconds > 0
@@ -125,7 +130,7 @@ def test_state_from_other_code_or_damaged_is_ignored(tmp_path):
     assert fresh.resumed_step == 0
     _same(fresh, whole)
     # a state file that does not match its record (a damaged or foreign file)
-    (tmp_path / STATE).write_bytes(b"not a state")
+    (tmp_path / json.loads((tmp_path / RECORD).read_text())["state"]).write_bytes(b"damaged")
     fresh = train(_node(), data, CFG, resume=ResumePoint(tmp_path, every=1e9))
     assert fresh.resumed_step == 0
     _same(fresh, whole)
@@ -178,3 +183,28 @@ def test_the_row_counts_the_interrupted_cpu_time_only_where_it_trained():
 def test_resume_point_validates_its_interval(tmp_path):
     with pytest.raises(ValueError, match="every must be a number of seconds >= 0"):
         ResumePoint(tmp_path, every=-1)
+
+
+def test_a_kill_before_the_record_leaves_the_previous_state(tmp_path, monkeypatch):
+    """The record is written last: a kill after a new state's files but before its record
+    resumes from the previous state, not from scratch."""
+    from bench.core import _resume
+
+    data = Oscillators()
+    whole = train(_node(), data, CFG)
+    with pytest.raises(Killed):
+        train(_node(), data, CFG, resume=KilledAfter(tmp_path, 3))
+    real = _resume.write_json
+
+    def killed_record(path, obj):
+        if Path(path).name == RECORD:
+            raise Killed
+        return real(path, obj)
+
+    monkeypatch.setattr(_resume, "write_json", killed_record)
+    with pytest.raises(Killed):  # resumes at 15, trains a block, dies writing the record
+        train(_node(), data, CFG, resume=ResumePoint(tmp_path, every=0))
+    monkeypatch.undo()
+    again = train(_node(), data, CFG, resume=ResumePoint(tmp_path, every=1e9))
+    assert again.resumed_step == 15
+    _same(again, whole)

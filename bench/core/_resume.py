@@ -11,9 +11,10 @@ which every objective's stream allows, being a function of its seed and the numb
 A resumed training therefore ends with the parameters of the same training run in one go,
 bit for bit (a test); a kill between two saves loses the blocks trained since the last one.
 
-The state file is written first and its record (``resume.json``: step, costs, the state's
-sha256) last, each atomically, so a kill at any moment leaves the previous state or the new
-one. The state is removed once the finished training is cached.
+The state's files (``state-<step>.eqx``, ``losses-<step>.npy``) are written first and its
+record (``resume.json``: step, costs, the files' names and sha256) last, each atomically, and
+the previous files are removed after it: a kill at any moment leaves the previous state or the
+new one. The folder is removed once the finished training is cached.
 """
 
 from __future__ import annotations
@@ -30,8 +31,6 @@ import numpy as np
 
 from ._atomic import atomic_write, clear_orphans, write_json
 
-STATE = "state.eqx"
-LOSSES = "losses.npy"
 RECORD = "resume.json"
 EVERY_S = 300.0  # seconds of training between two saves
 
@@ -80,10 +79,12 @@ class ResumePoint:
 
         snaps = [eqx.filter(s.model, eqx.is_inexact_array) for s in snapshots]
         losses = np.concatenate(losses) if losses else np.zeros(0)
-        path = self.folder / STATE
+        # files named by their step: the record (written last) names the pair it belongs to,
+        # so a kill before it leaves the previous pair and record intact
+        state, loss_file = self.folder / f"state-{done}.eqx", self.folder / f"losses-{done}.npy"
         tree = (params, opt_state, good, snaps)
-        atomic_write(path, lambda tmp: eqx.tree_serialise_leaves(tmp, tree))
-        atomic_write(self.folder / LOSSES, lambda tmp: np.save(tmp, losses))
+        atomic_write(state, lambda tmp: eqx.tree_serialise_leaves(tmp, tree))
+        atomic_write(loss_file, lambda tmp: np.save(tmp, losses))
         record = {
             "done": int(done),
             "block": int(block),
@@ -92,10 +93,15 @@ class ResumePoint:
             "train_seconds": float(seconds),
             "cpu_seconds": float(cpu),
             "code": self.code,
-            "sha256": _sha256(path),
-            "losses_sha256": _sha256(self.folder / LOSSES),
+            "state": state.name,
+            "losses": loss_file.name,
+            "sha256": _sha256(state),
+            "losses_sha256": _sha256(loss_file),
         }
         write_json(self.folder / RECORD, record)
+        for old in (*self.folder.glob("state-*.eqx"), *self.folder.glob("losses-*.npy")):
+            if old.name not in (state.name, loss_file.name):
+                old.unlink(missing_ok=True)
         self._last = time.monotonic()
 
     def load(self, params, opt_state, good, block: int) -> Resumed | None:
@@ -110,14 +116,13 @@ class ResumePoint:
             rec = json.loads((self.folder / RECORD).read_text())
             if rec.get("code") != self.code or rec.get("block") != block:
                 return None
-            if _sha256(self.folder / STATE) != rec["sha256"]:
-                return None
-            if _sha256(self.folder / LOSSES) != rec["losses_sha256"]:
+            state, loss_file = self.folder / rec["state"], self.folder / rec["losses"]
+            if _sha256(state) != rec["sha256"] or _sha256(loss_file) != rec["losses_sha256"]:
                 return None
             n = len(rec["snapshots"])
             like = (params, opt_state, good, [params] * n)
-            p, o, g, snaps = eqx.tree_deserialise_leaves(self.folder / STATE, like=like)
-            losses = np.load(self.folder / LOSSES)
+            p, o, g, snaps = eqx.tree_deserialise_leaves(state, like=like)
+            losses = np.load(loss_file)
         except (OSError, ValueError, KeyError, TypeError, RuntimeError):
             return None
         if losses.size != rec["n_losses"] or rec["done"] % block:
