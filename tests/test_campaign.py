@@ -322,3 +322,28 @@ def test_the_cheapest_claims_run_first(tmp_path):
     assert [hours[c] for c in first] == sorted(hours[c] for c in C.CAMPAIGN_CLAIMS)
     assert hours[first[0]] < hours[first[-1]]
     assert C.cheapest_first((), tmp_path) == ()
+
+
+def test_status_names_the_trainings_saved_mid_way(tmp_path):
+    """A run whose training was interrupted with its state saved is listed with its step, and
+    as restarting where other code saved it; stored runs and unsaved ones are not listed."""
+    import json
+
+    from bench.core._params import RESUME, code_fingerprint, params_dir
+
+    (name, first), (_, second) = C.campaign_runs("paper-core")[:2]
+    for cfg, code in ((first, code_fingerprint()), (second, "other code")):
+        folder = params_dir(tmp_path, cfg.train_hash) / RESUME
+        folder.mkdir(parents=True)
+        record = {"done": 300, "train_seconds": 7200.0, "code": code}
+        (folder / "resume.json").write_text(json.dumps(record))
+    lines = C.saved_trainings("paper-core", None, cache_root=tmp_path)
+    assert len(lines) == 2, lines
+    assert f"seed {first.seed}: step 300 of {first.steps:,} (2.00 h trained; resumes)" in lines[0]
+    assert lines[0].startswith(f"claim {E.get(name).claim}, {name}, {first.model}")
+    assert lines[1].endswith("restarts: saved by other code)")
+    # a stored run is not listed
+    results = tmp_path / "results"
+    row = {"config_hash": first.config_hash, "status": "ok", "system": first.system}
+    _store.write_row(results, {**row, "model": first.model, "seed": first.seed})
+    assert len(C.saved_trainings("paper-core", results, cache_root=tmp_path)) == 1

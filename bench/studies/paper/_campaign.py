@@ -317,3 +317,36 @@ def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None, which=
         "rescaled by it"
     )
     return "\n".join(lines)
+
+
+def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=None) -> list[str]:
+    """One line per campaign run (either seed set) not stored whose training was interrupted
+    with its state saved (``bench.core._resume``): where it resumes, and whether the code
+    that saved it is the code that runs now (otherwise it trains from the start)."""
+    import json
+
+    import systems
+
+    from ...core._params import RESUME, code_fingerprint, params_dir
+
+    cache_root = Path(cache_root or systems.cache_root())
+    done = done_hashes(Path(results_dir)) if results_dir and Path(results_dir).exists() else set()
+    code = code_fingerprint()
+    lines, seen = [], set()
+    for seeds in (None, replication_seeds(profile)):
+        for name, c in campaign_runs(profile, seeds):
+            if c.config_hash in done or c.train_hash in seen:
+                continue
+            seen.add(c.train_hash)
+            record = params_dir(cache_root, c.train_hash) / RESUME / "resume.json"
+            try:
+                rec = json.loads(record.read_text())
+            except (OSError, ValueError):
+                continue
+            state = "resumes" if rec.get("code") == code else "restarts: saved by other code"
+            lines.append(
+                f"claim {get(name).claim}, {name}, {c.model} seed {c.seed}: step "
+                f"{rec['done']:,} of {c.steps:,} ({rec['train_seconds'] / 3600:.2f} h trained; "
+                f"{state})"
+            )
+    return lines

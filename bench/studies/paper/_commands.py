@@ -31,6 +31,7 @@ def _estimate(args) -> int:
         format_plan,
         plan,
         replication_order,
+        saved_trainings,
         signed_claims,
     )
 
@@ -60,6 +61,10 @@ def _estimate(args) -> int:
         print(
             format_plan(df, args.profile, args.workers, seeds=seeds if title else None, which=title)
         )
+    saved = saved_trainings(args.profile, args.results)
+    if saved:
+        print("\ntrainings saved mid-way (the next start resumes them):")
+        print("\n".join(f"  {line}" for line in saved))
     return 0
 
 
