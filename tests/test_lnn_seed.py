@@ -346,3 +346,25 @@ def test_the_section_sets_the_two_protocols_side_by_side(tmp_path):
         "pure LNN no, NODE+SO (baseline) yes",
     )
     assert rows["loss"] == ("squared error", "L1")
+
+
+def test_the_paper_core_diagnosis_reads_the_campaigns_own_pure_lnns():
+    """At paper-core the Hessian diagnosis trains nothing of its own: its models are the pure
+    LNNs of the seed's two protocols exactly as the campaign runs them (their cached
+    parameters), with no init part, rollout-trained LNNs or ablations."""
+    from bench.core._experiments import expand, get
+    from bench.studies.paper import _lnn_diagnosis as D
+
+    got = D._trained_models("paper-core", None)
+    want = {
+        c.config_hash
+        for name in ("lnn_seed_double_pendulum", "lnn_seed_notebook")
+        for c in expand(get(name), "paper-core")
+        if c.model == "lnn"
+    }
+    assert {c.config_hash for _, c in got} == want and len(got) == 10
+    assert D.SIZES["paper-core"][0] == ()  # no init part
+    assert {label for label, _ in got} == {
+        "derivative (seed protocol), pure, pinv",
+        "derivative (notebook protocol), pure, pinv",
+    }

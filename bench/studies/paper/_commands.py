@@ -87,7 +87,7 @@ def _rep(args, seeds, prior, order, claims):
 
 
 def _lnn_arguments(p):
-    p.add_argument("--profile", default="quick", help="smoke, quick or paper")
+    p.add_argument("--profile", default="quick", help="smoke, quick, paper or paper-core")
 
 
 def _diagnose_lnn(args) -> int:
