@@ -347,3 +347,22 @@ def test_status_names_the_trainings_saved_mid_way(tmp_path):
     row = {"config_hash": first.config_hash, "status": "ok", "system": first.system}
     _store.write_row(results, {**row, "model": first.model, "seed": first.seed})
     assert len(C.saved_trainings("paper-core", results, cache_root=tmp_path)) == 1
+
+
+def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):
+    """``campaign --claims 9,12`` runs the two claims' experiments and nothing else; with
+    --signed, only those of them that are signed."""
+    from bench._cli import main
+    from bench.studies.paper import _commands
+
+    ran = []
+    monkeypatch.setattr(
+        _commands, "run_experiments", lambda args, names, **kw: ran.append(names) or {}
+    )
+    assert main(["--results", str(tmp_path), "campaign", "--claims", "9, 12"]) == 0
+    want = {n for n in C.campaign_experiments("paper-core") if E.get(n).claim in (9, 12)}
+    assert set(ran[0]) == want and len(want) == 4
+    monkeypatch.setattr(C, "signed_claims", lambda *a: frozenset({12, 5}))
+    assert main(["--results", str(tmp_path), "campaign", "--claims", "9,12", "--signed"]) == 0
+    assert {E.get(n).claim for n in ran[1]} == {12}
+    assert "(signed verdicts: claims 12)" in capsys.readouterr().out

@@ -39,6 +39,10 @@ BAD = [
         ["campaign", "--profile", "smoke", "--replication"],
         "profile with replication seeds 'smoke'; allowed: quick, paper, paper-core",
     ),
+    (
+        ["campaign", "--profile", "paper-core", "--claims", "9,99"],
+        "unknown claim '99'; allowed: 1,",
+    ),
 ]
 
 

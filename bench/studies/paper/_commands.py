@@ -160,6 +160,25 @@ def _campaign_arguments(p):
         help="only the claims whose verdict on the profile's own seeds is stored and signed "
         "(make paper-core replicates them first)",
     )
+    p.add_argument(
+        "--claims",
+        default=None,
+        metavar="9,12",
+        help="only these claims' cells (with --signed: those of them that are signed); "
+        "make paper-core CAMPAIGN_FIRST=9 runs them before its phases",
+    )
+
+
+def _claim_list(text: str) -> frozenset:
+    """The claims of ``--claims`` (comma-separated numbers of the campaign's claims)."""
+    from ._campaign import CAMPAIGN_CLAIMS
+
+    out = set()
+    for part in str(text).split(","):
+        allowed = [str(c) for c in sorted(CAMPAIGN_CLAIMS)]
+        check_choice("claim", part.strip(), allowed)
+        out.add(int(part))
+    return frozenset(out)
 
 
 def _campaign(args) -> int:
@@ -185,16 +204,20 @@ def _campaign(args) -> int:
     usable_results(args)
     if args.signed:
         claims = signed_claims(args.results, args.profile)
+    if args.claims is not None:
+        wanted = _claim_list(args.claims)
+        claims = wanted if claims is None else claims & wanted
     if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
         order = replication_order(args.results, args.profile, claims)
     else:  # the cheapest claims first: the most verdicts per hour
         order = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
     names = campaign_experiments(args.profile, order, claims)
     if not names:
-        print(f"campaign {args.profile}: no claim with a signed verdict to replicate yet")
+        print(f"campaign {args.profile}: no claim with a signed verdict to run yet")
         return 0
     which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
-    only = f" (signed verdicts: claims {_claims(claims)})" if claims is not None else ""
+    kind = "signed verdicts: claims" if args.signed else "claims"
+    only = f" ({kind} {_claims(claims)})" if claims is not None else ""
     print(f"campaign {args.profile}{which}{only} -> {args.results}: {', '.join(names)}", flush=True)
     # claim by claim, longest runs first within a claim
     key = priority(args.profile, seeds, order, claims)
