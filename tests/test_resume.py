@@ -208,3 +208,59 @@ def test_a_kill_before_the_record_leaves_the_previous_state(tmp_path, monkeypatc
     again = train(_node(), data, CFG, resume=ResumePoint(tmp_path, every=1e9))
     assert again.resumed_step == 15
     _same(again, whole)
+
+
+_CHILD = """
+import json, sys
+from pathlib import Path
+import dataclasses
+import systems
+systems.enable_x64()
+import bench.core._resume as R
+R.EVERY_S = 0.0
+from bench.core._execute import execute_run
+from bench.core._experiments import expand, get
+cfg = [c for c in expand(get("lnn_seed_notebook"), "smoke") if c.model == "lnn"][0]
+from bench.studies.paper.lnn_seed import notebook_lr
+steps = int(sys.argv[2])
+cfg = dataclasses.replace(cfg, steps=steps, lr=notebook_lr("lnn", steps))
+row = execute_run(cfg, cache_root=Path(sys.argv[1]))
+keys = ("status", "derivative_mse_test", "energy_pct_max_pe", "final_loss", "resumed_step")
+print(json.dumps({k: row.get(k) for k in keys}))
+"""
+
+
+@pytest.mark.slow  # two processes and a third run: about a minute
+def test_a_run_killed_with_sigkill_resumes_to_the_same_row(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    root = Path(__file__).resolve().parents[1]
+    steps = "6000"
+
+    def run(cache, wait=True):
+        cmd = [sys.executable, "-c", _CHILD, str(cache), steps]
+        if wait:
+            out = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=600)
+            return json.loads(out.stdout.strip().splitlines()[-1])
+        return subprocess.Popen(cmd, cwd=root, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    killed = tmp_path / "killed"
+    child = run(killed, wait=False)
+    deadline = time.monotonic() + 300
+    while not list(killed.glob("params/*/resume/resume.json")):
+        assert child.poll() is None and time.monotonic() < deadline, "no state saved"
+        time.sleep(0.2)
+    os.kill(child.pid, signal.SIGKILL)
+    child.wait()
+    record = json.loads(next(killed.glob("params/*/resume/resume.json")).read_text())
+    assert 0 < record["done"] < int(steps)
+    resumed, whole = run(killed), run(tmp_path / "whole")
+    assert resumed["resumed_step"] >= record["done"] > 0 and whole["resumed_step"] == 0
+    assert resumed["status"] == whole["status"] == "ok"
+    for key in ("derivative_mse_test", "energy_pct_max_pe", "final_loss"):
+        assert resumed[key] == whole[key], key
+    assert not list(killed.glob("params/*/resume"))
