@@ -328,6 +328,7 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
     import systems
 
     from ...core._params import RESUME, code_fingerprint, params_dir
+    from ...core._resume import RECORD
 
     cache_root = Path(cache_root or systems.cache_root())
     done = done_hashes(Path(results_dir)) if results_dir and Path(results_dir).exists() else set()
@@ -338,7 +339,7 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
             if c.config_hash in done or c.train_hash in seen:
                 continue
             seen.add(c.train_hash)
-            record = params_dir(cache_root, c.train_hash) / RESUME / "resume.json"
+            record = params_dir(cache_root, c.train_hash) / RESUME / RECORD
             try:
                 rec = json.loads(record.read_text())
             except (OSError, ValueError):

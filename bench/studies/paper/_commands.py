@@ -173,9 +173,8 @@ def _claim_list(text: str) -> frozenset:
     """The claims of ``--claims`` (comma-separated numbers of the campaign's claims)."""
     from ._campaign import CAMPAIGN_CLAIMS
 
-    out = set()
+    out, allowed = set(), [str(c) for c in sorted(CAMPAIGN_CLAIMS)]
     for part in str(text).split(","):
-        allowed = [str(c) for c in sorted(CAMPAIGN_CLAIMS)]
         check_choice("claim", part.strip(), allowed)
         out.add(int(part))
     return frozenset(out)
