@@ -111,6 +111,7 @@ def test_env_pins_cores_and_compilation_cache():
         "import os, jax, bench, bench.core._env as e; "
         "assert 'JAX_COMPILATION_CACHE_DIR' not in os.environ; n = e.setup_process(1); "
         "assert jax.config.jax_enable_x64, 'setup_process did not turn 64-bit mode on'; "
+        "assert jax.config.jax_default_matmul_precision == 'float32', 'matmuls not float32'; "
         "print(n, len(os.sched_getaffinity(0)), os.environ['JAX_COMPILATION_CACHE_DIR'], "
         "jax.config.jax_compilation_cache_dir)"
     )
@@ -129,6 +130,7 @@ import sys, warnings, jax, matplotlib, numpy as np
 backend = dict.__getitem__(matplotlib.rcParams, "backend")  # unresolved: no backend chosen yet
 import systems, models, bench
 assert not jax.config.jax_enable_x64, "an import turned jax's 64-bit mode on"
+assert jax.config.jax_default_matmul_precision is None, "an import set the matmul precision"
 assert dict.__getitem__(matplotlib.rcParams, "backend") == backend, "an import set a backend"
 assert "matplotlib.pyplot" not in sys.modules, "an import loaded pyplot"
 warnings.simplefilter("ignore")  # making a system without 64-bit mode warns of float32 arrays

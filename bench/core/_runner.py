@@ -313,12 +313,10 @@ def _pin_worker(slots) -> None:
 
 
 def _star_execute(job):
-    import systems
-
-    from ._env import configure_compilation_cache
+    from ._env import configure_compilation_cache, configure_numerics
 
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
-    systems.enable_x64()
+    configure_numerics()
     dicts, cache_root = job
     if draining():  # the sweep is being drained: this job ends without running
         return []
