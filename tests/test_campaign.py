@@ -142,6 +142,30 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     assert [r.split()[1] for r in rows] == [str(int(n)) for n in table["runs"]]
 
 
+def test_runs_stored_from_an_accelerator_are_done_but_do_not_calibrate(tmp_path):
+    # a GPU's seconds say nothing of a CPU's: the run counts as stored, not as measured
+    runs = C.campaign_runs("paper-core")
+    done = [c for n, c in runs if n == "loss" and c.model == "hnn_so"][:4]
+    for i, c in enumerate(done):
+        _store.write_row(
+            tmp_path,
+            {
+                **c.to_dict(),
+                "config_hash": c.config_hash,
+                "status": "ok",
+                "wall_seconds": 50.0,
+                "train_seconds": 40.0,
+                "cpu_seconds": 45.0,
+                "backend": "gpu" if i else "cpu",
+            },
+        )
+    df = C.plan("paper-core", tmp_path, workers=2).set_index("claim")
+    assert df.loc[6, "stored"] == 4
+    assert df.loc[6, "measured_cpu_runs"] == 1
+    assert df.loc[6, "measured_cpu_hours"] == pytest.approx(45.0 / 3600)
+    assert df.loc[6, "cpu_hours_done"] == pytest.approx(50.0 / 3600)
+
+
 def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
     """Claim 9 at paper-core: per seed, one dataset of 150,000 ten-second trajectories (shared
     by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at

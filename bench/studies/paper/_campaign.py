@@ -153,7 +153,8 @@ def plan(
     training, evaluation and, for a niced run, time spent waiting), ``train_eval_hours`` (of
     those, the :data:`TRAIN_EVAL_COLUMNS`: training and evaluation only),
     ``measured_cpu_hours`` and ``measured_cpu_runs`` (the process CPU time, ``cpu_seconds``, of
-    the stored runs that record it, and how many do), ``measured_estimate_hours`` (the
+    the stored runs that record it, and how many do; runs stored from an accelerator count as
+    done and in none of the measured columns), ``measured_estimate_hours`` (the
     estimate of those runs), ``calibration`` (measured over estimated: the claim's, or the
     campaign's where the claim has no such run) and ``cpu_hours_left_calibrated`` /
     ``wall_hours_left_calibrated`` (the hours left rescaled by it); a last row ``total``. On
@@ -169,6 +170,10 @@ def plan(
         stored = pd.DataFrame(rows)
     else:
         done = set()
+    # what the stored runs cost on this campaign's kind of machine: rows run on an accelerator
+    # (backend other than cpu) are done, but their times do not measure a CPU's
+    if "backend" in stored:
+        stored = stored[stored["backend"].fillna("cpu") == "cpu"]
     walls = _per_run(stored, ("wall_seconds",))
     # training and evaluation: the steps, their compilation, the test rollouts and the
     # learning-curve checkpoints (wall_seconds less the data and setup)
