@@ -182,22 +182,38 @@ paper-core-stop:
 # accelerator). No install: GPU_PY must hold jax, equinox, diffrax, optax, optimistix, pandas,
 # pyarrow, scipy and matplotlib (the device image's python3 does). Resumable (runs are
 # content-addressed); each experiment stops at GPU_SECONDS from the start, its stored rows kept.
-# On the device: make paper-gpu && tar czf $OUT/rows.tgz -C results/reference/paper_gpu .rows
-# Here: tar xzf rows.tgz -C results/reference/paper_gpu, then figures and report (its README).
+# GPU_OUT (the device's $OUT): the folder's rows packed into GPU_OUT/rows.tgz every 20 s and at
+# the end, so that a call stopped at its limit still brings back every run it stored (the device
+# returns 8 files at most: never the row files themselves). GPU_WORKERS > 1: that many sweep
+# processes share the GPU, each with its share of its memory (for runs that train alone:
+# pixels, fresh-state objectives). The campaign's own cells go the same way (GPU_PROFILE=
+# paper-core GPU_DIR=results/reference/paper). The working tree travels to the device (64 MiB
+# at most): move results/reference/quick out of it for the call.
+# On the device: make paper-gpu GPU_OUT=$OUT
+# Here: tar xzf <files_at>/rows.tgz --skip-old-files -C $(GPU_DIR), then figures and report.
 GPU_PY ?= python3
 GPU_DIR ?= results/reference/paper_gpu
 GPU_PROFILE ?= paper
 GPU_SEEDS ?= 0,1,2,3,4,5,6,7,8,9
 GPU_EXPERIMENTS ?= coordinates energy second_order symplectic loss damped relativistic
 GPU_SECONDS ?= 540
+GPU_OUT ?=
+GPU_WORKERS ?= 1
 paper-gpu:
-	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); for e in $(GPU_EXPERIMENTS); do \
+	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); mkdir -p $(GPU_DIR)/.rows; \
+	pack() { [ -z "$(GPU_OUT)" ] || { tar czf $(GPU_OUT)/rows.part -C $(GPU_DIR) .rows && \
+		mv $(GPU_OUT)/rows.part $(GPU_OUT)/rows.tgz; }; }; \
+	if [ -n "$(GPU_OUT)" ]; then (while sleep 20; do pack; done) & packer=$$!; fi; \
+	if [ $(GPU_WORKERS) -gt 1 ]; then \
+		export XLA_PYTHON_CLIENT_MEM_FRACTION=$$(awk "BEGIN{print 0.9/($(GPU_WORKERS)+1)}"); fi; \
+	for e in $(GPU_EXPERIMENTS); do \
 		left=$$(( end - $$(date +%s) )); \
 		if [ $$left -le 20 ]; then echo "paper-gpu: $(GPU_SECONDS) s spent; $$e and after not started"; break; fi; \
 		echo "paper-gpu: $$e ($$left s left)"; \
 		timeout $$left $(GPU_PY) -m bench --results $(GPU_DIR) sweep $$e --profile $(GPU_PROFILE) \
-			--seeds $(GPU_SEEDS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
-	done
+			--seeds $(GPU_SEEDS) --workers $(GPU_WORKERS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
+	done; \
+	[ -z "$${packer:-}" ] || kill $$packer; pack; echo "paper-gpu: $$(ls $(GPU_DIR)/.rows | wc -l) rows in $(GPU_DIR)"
 
 # Tables, figures and report of the campaign's stored rows (before committing them).
 paper-core-report: $(STAMP)
