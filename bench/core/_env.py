@@ -1,5 +1,5 @@
-"""Process settings made by entry points: jax's 64-bit mode and matmul precision, XLA's cores on the CPU (thread
-pools) and the compilation cache.
+"""Process settings made by entry points: jax's 64-bit mode and matmul precision, XLA's cores
+on the CPU (thread pools) and the compilation cache.
 
 Threads beyond the cores cost 3-5x on small training steps (measured on the reference code), so
 sweep workers are pinned to their own cores. These must run before jax creates its backend
