@@ -117,10 +117,10 @@ def compute_lines(runs: pd.DataFrame) -> list[str]:
     for device, rows in runs.groupby(devices, sort=True):
         wall = float(np.nansum(rows["wall_seconds"].to_numpy(float)))
         n = f"{len(rows)} run" + ("s" if len(rows) != 1 else "")
-        line = f"- compute on {device}: {n}, {_hours(wall)} of run wall time"
+        line = f"- compute on {device}: {n}, {_hours(wall)} run wall time"
         if "cpu_seconds" in rows and rows["cpu_seconds"].notna().any():
             cpu = rows["cpu_seconds"].dropna()
-            line += f", {_hours(float(cpu.sum()))} CPU measured on the {len(cpu)} that record it"
+            line += f", {_hours(float(cpu.sum()))} CPU time (measured by {len(cpu)})"
         out.append(line)
     return out
 

@@ -227,10 +227,12 @@ def compute_lines(report: str) -> list[str]:
 def compute_sentence(root: Path = ROOT) -> str:
     """What the committed runs of paper-core (and of the GPU folder, if any) took."""
     parts = []
-    for label, folder in (("paper-core", BUDGETS["paper-core"]), ("paper on GPU", GPU)):
+    for label, folder in (("paper-core", BUDGETS["paper-core"]), ("paper_gpu", GPU)):
         path = root / folder / "REPORT.md"
         if path.exists():
-            parts += [f"{label}, {x}" for x in compute_lines(path.read_text())]
+            parts += [
+                f"{label} on {x[len('compute on ') :]}" for x in compute_lines(path.read_text())
+            ]
     return "Compute of the committed runs: " + ("; ".join(parts) or "not recorded") + "."
 
 

@@ -146,16 +146,15 @@ def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
     )
     lines = compute_lines(runs)
     assert lines == [
-        "- compute on cpu A: 3 runs, 2.0 h of run wall time, 1.5 h CPU measured on the 2 that "
-        "record it",
-        "- compute on gpu B: 1 run, 1.5 min of run wall time",
+        "- compute on cpu A: 3 runs, 2.0 h run wall time, 1.5 h CPU time (measured by 2)",
+        "- compute on gpu B: 1 run, 1.5 min run wall time",
     ]
     for folder, text in ((findings.BUDGETS["paper-core"], lines[0]), (findings.GPU, lines[1])):
         (tmp_path / folder).mkdir(parents=True)
         (tmp_path / folder / "REPORT.md").write_text(f"# report\n\n{text}\n- other: 1\n")
     sentence = findings.compute_sentence(tmp_path)
-    assert sentence.count("compute on") == 2 and "paper-core, compute on cpu A: 3 runs" in sentence
-    assert "paper on GPU, compute on gpu B: 1 run" in sentence
+    assert sentence.count(": ") == 3 and "paper-core on cpu A: 3 runs" in sentence
+    assert "paper_gpu on gpu B: 1 run" in sentence
 
 
 def test_a_protocols_verdict_cell_is_read_per_seed_set():
