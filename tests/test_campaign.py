@@ -2,6 +2,8 @@
 (same hashes), every claim has cells, the order settles the unsettled claims first, and the
 plan counts what is stored."""
 
+from pathlib import Path
+
 import pytest
 
 from bench.core import _experiments as E
@@ -390,3 +392,29 @@ def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):
     assert main(["--results", str(tmp_path), "campaign", "--claims", "9,12", "--signed"]) == 0
     assert {E.get(n).claim for n in ran[1]} == {12}
     assert "(signed verdicts: claims 12)" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_paper_gpu_packs_every_stored_row_into_its_out_folder(tmp_path):
+    # the device returns a few files, never a folder of rows: the target packs them as they
+    # arrive and at the end, so a call stopped at its limit still returns what it stored
+    import subprocess
+    import sys
+    import tarfile
+
+    root = Path(__file__).resolve().parents[1]
+    results, out = tmp_path / "res", tmp_path / "out"
+    out.mkdir()
+    done = subprocess.run(
+        ["make", "-s", "paper-gpu", f"GPU_PY={sys.executable}", "GPU_PROFILE=smoke",
+         f"GPU_DIR={results}", "GPU_SEEDS=0", "GPU_EXPERIMENTS=energy", f"GPU_OUT={out}",
+         "GPU_SECONDS=300", "GPU_WORKERS=2"],
+        cwd=root, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    rows = sorted(p.name for p in (results / ".rows").glob("*.json"))
+    assert rows and f"{len(rows)} rows in {results}" in done.stdout
+    with tarfile.open(out / "rows.tgz") as tar:
+        packed = sorted(Path(m.name).name for m in tar.getmembers() if m.name.endswith(".json"))
+    assert packed == rows
+    assert not (out / "rows.part").exists()
