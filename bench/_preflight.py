@@ -61,12 +61,10 @@ def preflight(
     """Run every cell of ``experiments`` at ``profile`` for ``steps`` training steps (at most
     its own) and return their rows (``experiment`` and ``seconds`` added; never stored).
     ``echo`` gets one line per cell as it ends."""
-    import systems
-
-    from .core._env import bound_compiled_programs
+    from .core._env import bound_compiled_programs, configure_numerics
     from .core._execute import execute_run
 
-    systems.enable_x64()  # the ground truth's precision, as a sweep's workers have it
+    configure_numerics()  # the precisions a sweep's workers have
     if steps < 1:
         raise ValueError(f"steps must be an integer >= 1; got {steps}")
     todo = cells(experiments, profile, models)
