@@ -186,13 +186,12 @@ def _cell_label(row: pd.Series) -> str:
 
 
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
-    from .core._config import RunConfig
-    from .core._query import cell_key
+    from .core._query import row_cell_keys
     from .studies.paper.kit import scored
 
     def prep(df):
         df = df.assign(
-            _cell=[cell_key(RunConfig.from_dict(r)) for r in df.to_dict("records")],
+            _cell=row_cell_keys(df),
             _err=np.log(scored(df).clip(lower=1e-300)),
         )
         return df[np.isfinite(df["_err"])]

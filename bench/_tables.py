@@ -10,9 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .core._config import RunConfig
 from .core._experiments import expand
-from .core._query import cell_key, option, params_of, parse_pairs, variant
+from .core._query import cell_key, option, params_of, parse_pairs, row_cell_keys, variant
 from .studies._text import fmt as _fmt
 from .studies._text import md_escape as _md_escape
 from .studies.paper import MODEL_LABELS, TRIVIAL_MODELS, discrimination, velocity_scores
@@ -160,7 +159,7 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
         want = {}
         for c in expand(name, profile):
             want.setdefault(cell_key(c), c)
-        have = {cell_key(RunConfig.from_dict(r)) for r in rows.to_dict("records")}
+        have = set(row_cell_keys(rows))
     except ValueError:
         return []
     missing = [c for k, c in want.items() if k not in have]

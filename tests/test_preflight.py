@@ -38,14 +38,14 @@ def test_each_cell_once_labelled_by_the_axes_that_vary():
 def test_a_preflight_trains_its_steps_and_stores_nothing(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     lines = []
-    rows = preflight(["vin"], "smoke", steps=1, echo=lines.append)
-    assert [r["status"] for r in rows] == ["ok"] * len(cells(["vin"], "smoke"))
+    rows = preflight(["hnn_seed_mass_spring"], "smoke", steps=1, echo=lines.append)
+    assert [r["status"] for r in rows] == ["ok"] * len(cells(["hnn_seed_mass_spring"], "smoke"))
     assert all(r["steps"] == 1 and r["eval_checkpoints"] == 0 for r in rows)
     assert len(lines) == len(rows) and lines[0].startswith(f"[1/{len(rows)}] ok")
     # no results folder: only the cache a run's data and artifacts go to
     assert [p.name for p in tmp_path.iterdir()] in ([], [".cache"])
     with pytest.raises(ValueError, match="steps must be an integer >= 1"):
-        preflight(["vin"], "smoke", steps=0)
+        preflight(["hnn_seed_mass_spring"], "smoke", steps=0)
 
 
 def test_a_cell_that_cannot_run_fails_in_one_line_and_the_verb_exits_1(broken, capsys):
@@ -57,4 +57,6 @@ def test_a_cell_that_cannot_run_fails_in_one_line_and_the_verb_exits_1(broken, c
     out = capsys.readouterr().out.splitlines()
     assert out[-1] == f"preflight at smoke: {len(rows)} cells, {len(rows)} failed"
     assert all(" failed " in line and "asked" in line for line in out[:-1])
-    assert _cli.main(["preflight", "vin", "--profile", "smoke", "--steps", "1"]) == 0
+    assert (
+        _cli.main(["preflight", "hnn_seed_mass_spring", "--profile", "smoke", "--steps", "1"]) == 0
+    )

@@ -153,6 +153,35 @@ def cell_key(cfg) -> str:
     return _hash({a: b for a, b in cfg.to_dict().items() if a != "seed"})
 
 
+_CELL_KEYS: dict[tuple, str] = {}  # row_cell_keys' memo: (columns, values) -> cell key
+_CELL_KEYS_MAX = 1 << 17
+_NAN = object()  # stands for NaN in a memo key, where NaN != NaN would never match
+
+
+def row_cell_keys(runs: pd.DataFrame) -> list[str]:
+    """:func:`cell_key` of every stored row, in order. The verdicts ask it of the same rows
+    many times over, so each distinct row is parsed and hashed once per process (a row with an
+    unhashable cell every time). Raises ValueError as ``RunConfig.from_dict`` does."""
+    from ._config import RunConfig, field_names
+
+    names = tuple(c for c in runs.columns if c in field_names())
+    keys = []
+    for values in runs[list(names)].itertuples(index=False, name=None):
+        memo = (names, tuple(_NAN if isinstance(v, float) and v != v else v for v in values))
+        try:
+            key = _CELL_KEYS.get(memo)
+        except TypeError:  # a list, dict or pd.NA in a cell: computed, not remembered
+            key, memo = None, None
+        if key is None:
+            key = cell_key(RunConfig.from_dict(dict(zip(names, values, strict=True))))
+            if memo is not None:
+                if len(_CELL_KEYS) >= _CELL_KEYS_MAX:
+                    _CELL_KEYS.clear()
+                _CELL_KEYS[memo] = key
+        keys.append(key)
+    return keys
+
+
 def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.DataFrame:
     """The runs of experiment ``name``: every stored run (any seed) whose configuration is one
     of the experiment's cells under ``profile``, shared runs included whichever experiment
@@ -163,15 +192,13 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
         return runs
     if profile is not None:
         try:
-            from ._config import RunConfig
             from ._experiments import expand, get
 
             exp = get(name)
             if exp.profiles is not None and profile not in exp.profiles:
                 return runs.iloc[0:0]  # not run at this profile: no stored row speaks for it
             cells = {cell_key(c) for c in expand(name, profile)}
-            keys = [cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
-            match = pd.Series([k in cells for k in keys], index=runs.index)
+            match = pd.Series([k in cells for k in row_cell_keys(runs)], index=runs.index)
             if "experiment" in runs:  # rows of older declarations of the same experiment
                 match |= runs["experiment"] == name
             return runs[match].reset_index(drop=True)
