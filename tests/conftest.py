@@ -6,6 +6,9 @@ import os
 # compare numbers within one process setting, never with stored runs, so no assertion depends
 # on it. An XLA_FLAGS already set wins.
 os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0")
+# Programs compiled that fast fall under the persistent cache's 0.5 s threshold; kept anyway,
+# the test processes (two workers, the CLI's subprocesses) reuse one another's.
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
 from bench.core._env import setup_process  # noqa: E402
 
