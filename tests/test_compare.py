@@ -154,3 +154,14 @@ def test_a_claim_not_run_in_one_folder_is_listed_not_counted(tmp_path, tables):
     assert row["verdict_a"] != "no runs" and row["verdict_b"] == "no runs"
     assert "8" not in c.claims_differ and c.n_judged == len(c.claims) - 1
     assert f"{c.n_judged} of {c.n_judged} claim verdicts the same" in c.summary
+
+
+def test_row_cell_keys_equal_the_uncached_keys_on_a_second_call(tables):
+    from bench.core._config import RunConfig
+    from bench.core._query import cell_key, row_cell_keys
+
+    runs, _ = tables
+    want = [cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]
+    assert row_cell_keys(runs) == want
+    assert row_cell_keys(runs) == want  # from the memo, NaN cells included
+    assert len(set(want)) < len(want)  # seeds share a cell
