@@ -3,6 +3,7 @@ tables built to pass, to fail and to be undecided (no training)."""
 
 from __future__ import annotations
 
+import pandas as pd
 import pytest
 from _synthetic import cell_tables
 
@@ -39,6 +40,11 @@ def test_declarations():
         800, 5, 8000, 256, 10.0, 20
     )  # fmt: skip
     assert {c.seed for c in expand(R.RIGID_BODIES, "quick")} == {0, 1, 2, 3, 4}
+    # the second learning rate: the three trained models where the NODE leads, paper-core only
+    slow = {(c.system, c.model) for c in runs if c.lr == R.STABLE_LR}
+    assert slow == {(s, m) for s in R.NODE_LEADS for m in R.MODELS}
+    assert {c.lr for c in runs} - {R.STABLE_LR} == {R.PAPER_LR}
+    assert {c.lr for c in expand(R.RIGID_BODIES, "quick")} == {R.PAPER_LR}
 
 
 def test_claim_13_reproduces_on_the_papers_picture():
@@ -82,6 +88,39 @@ def test_claim_13_b_turns_against_the_claim_on_its_own(system):
     v = R.claim_13(cell_tables(R.RIGID_BODIES, errors, spread=0.05))
     assert _status(v)[f"{system}: (b) NODE leads, log(HNN / NODE)"] == "contradicts"
     assert v.verdict == "partly reproduced"
+
+
+def _with_stable_lr(paper_errors, stable_errors, spread=0.05):
+    """Rows at the paper's rate with ``paper_errors`` and, on the systems where the NODE
+    leads, the three models at the stable rate with ``stable_errors``."""
+    paper = cell_tables(R.RIGID_BODIES, paper_errors, spread=spread)
+    both = cell_tables(R.RIGID_BODIES, stable_errors, profile="paper-core", spread=spread)
+    stable = both[(both["lr"] == R.STABLE_LR)]
+    assert len(stable) == 5 * len(R.NODE_LEADS) * len(R.MODELS)
+    return paper, pd.concat([paper, stable], ignore_index=True)
+
+
+@pytest.mark.parametrize(
+    ("stable_errors", "reading"),
+    [(REPRODUCE, "reproduced"), (CONTRADICT, "not reproduced")],
+)
+def test_the_stable_rate_is_a_reading_beside_the_verdict_not_a_part_of_it(stable_errors, reading):
+    # at the paper's rate the HNN did not learn where the NODE leads: those parts not tested
+    lost = {s: dict(m) for s, m in REPRODUCE.items()}
+    for system in R.NODE_LEADS:
+        lost[system]["hnn_so"] = 10.0
+    paper, rows = _with_stable_lr(lost, stable_errors)
+    alone, v = R.claim_13(paper), R.claim_13(rows)
+    assert (v.verdict, _status(v)) == (alone.verdict, _status(alone))
+    assert _status(v)["rotor: (b) NODE leads, log(HNN / NODE)"] == "not tested"
+    assert R.stable_lr_reading(paper) is None
+    stable = R.stable_lr_reading(rows)
+    assert stable.verdict == reading
+    assert f"lr {R.STABLE_LR:g}" in v.detail and f"not judged: {reading} (" in v.detail
+    assert f"lr {R.STABLE_LR:g}" not in alone.detail
+    # the stable reading is undecided on noise like any other
+    _, noisy = _with_stable_lr(lost, stable_errors, spread=3.0)
+    assert R.stable_lr_reading(noisy).verdict == "inconclusive"
 
 
 def test_figure_draws_every_system_and_model(tmp_path):

@@ -19,6 +19,7 @@ from . import policy
 from ._rules import CLAIM_TITLES
 from .kit import (
     Discrimination,
+    at_lr,
     bad_rows,
     gated,
     greater,
@@ -103,13 +104,6 @@ def controlled(runs: pd.DataFrame) -> pd.DataFrame:
         return runs.iloc[0:0]
     rows = runs[runs["system"].isin(TASKS) & runs["model"].isin(MODELS)]
     return rows[declared_options(rows)] if len(rows) else rows
-
-
-def at_lr(rows: pd.DataFrame, lr: float) -> pd.DataFrame:
-    """The rows trained at learning rate ``lr``."""
-    if not len(rows) or "lr" not in rows:
-        return rows
-    return rows[np.isclose(pd.to_numeric(rows["lr"], errors="coerce"), lr, rtol=1e-9)]
 
 
 def code_lr_parts(rows: pd.DataFrame) -> list:

@@ -21,6 +21,7 @@ __all__ = [
     "LINEAR_SLOPE",
     "MIN_SEEDS",
     "WORST_ERROR",
+    "at_lr",
     "bad_rows",
     "cell_rows",
     "curve_slopes",
@@ -100,6 +101,13 @@ def scored(runs: pd.DataFrame, metric: str = "rollout_error") -> pd.Series:
 
 def n_bad(runs: pd.DataFrame) -> int:
     return int(bad_rows(runs).sum()) if len(runs) else 0
+
+
+def at_lr(rows: pd.DataFrame, lr: float) -> pd.DataFrame:
+    """The rows trained at learning rate ``lr`` (all of them where the table has no ``lr``)."""
+    if not len(rows) or "lr" not in rows:
+        return rows
+    return rows[np.isclose(pd.to_numeric(rows["lr"], errors="coerce"), lr, rtol=1e-9)]
 
 
 def cell_rows(runs: pd.DataFrame, cell: Mapping) -> pd.DataFrame:

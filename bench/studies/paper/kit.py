@@ -25,8 +25,9 @@ the one-sided (1 - alpha) t bounds of the mean effect:
 Gates (:mod:`._gates`): ``learned`` (the model beats the best trivial predictor by the learning
 margin), ``condition`` (a stated condition of other parts, "at similar loss"), ``gated``.
 
-Per-seed values (:mod:`._seeds`): ``scored`` (failed runs at the worst error), ``cell_rows``,
-``log_per_seed``, ``paired`` (per seed log(metric A / metric B)), ``curve_slopes``.
+Per-seed values (:mod:`._seeds`): ``at_lr`` (the rows at one learning rate), ``scored`` (failed
+runs at the worst error), ``cell_rows``, ``log_per_seed``, ``paired`` (per seed log(metric A /
+metric B)), ``curve_slopes``.
 
 Verdict (:mod:`._verdict`, :mod:`._holm`): ``verdict`` is *reproduced* when every part holds,
 *partly reproduced* when some hold and some are contradicted, *not reproduced* when some are
@@ -57,6 +58,7 @@ from ._seeds import (
     LINEAR_SLOPE,
     MIN_SEEDS,
     WORST_ERROR,
+    at_lr,
     bad_rows,
     cell_rows,
     curve_slopes,
@@ -121,6 +123,7 @@ __all__ = [
     "LINEAR_SLOPE",
     "MIN_SEEDS",
     "WORST_ERROR",
+    "at_lr",
     "bad_rows",
     "cell_rows",
     "curve_slopes",
