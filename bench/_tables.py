@@ -15,6 +15,7 @@ from .core._query import cell_key, option, params_of, parse_pairs, row_cell_keys
 from .studies._text import fmt as _fmt
 from .studies._text import md_escape as _md_escape
 from .studies.paper import MODEL_LABELS, TRIVIAL_MODELS, discrimination, velocity_scores
+from .studies.paper._discrimination import several_rates
 
 
 def _pm(mean, sem) -> str:
@@ -31,6 +32,7 @@ CELL_COLUMNS = (
     "initial",
     "variant",
     "coordinates",
+    "lr",
     "loss",
     "weight",
     "n_train",
@@ -62,7 +64,9 @@ def _experiment_table(rows: pd.DataFrame) -> list[str]:
     cells = [
         c
         for c in CELL_COLUMNS
-        if c in df and (df[c].astype(str).nunique() > 1 or c in ("variant", "coordinates"))
+        if c in df
+        and (df[c].astype(str).nunique() > 1 or c in ("variant", "coordinates"))
+        and (c != "lr" or several_rates(rows))
     ]
     for c in cells:
         df[c] = df[c].astype(object).where(df[c].notna(), "-")
@@ -165,6 +169,10 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
     missing = [c for k, c in want.items() if k not in have]
     if not missing:
         return []
+    rates: dict[str, set] = {}
+    for c in want.values():
+        rates.setdefault(c.model, set()).add(c.lr)
+    lr_varies = any(len(r) > 1 for r in rates.values())
     labels = sorted(
         {
             f"{MODEL_LABELS.get(c.model, c.model)} on {c.system}"
@@ -174,6 +182,7 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
             + (f" ({c.coordinates})" if c.coordinates != "velocity" else "")
             + (f" noise={c.noise:g}" if c.noise else "")
             + (f" n_train={c.n_train}" if name == "vin" else "")
+            + (f" lr={c.lr:g}" if lr_varies else "")
             for c in missing
         }
     )

@@ -93,9 +93,10 @@ def test_claim_13_b_turns_against_the_claim_on_its_own(system):
 def _with_stable_lr(paper_errors, stable_errors, spread=0.05):
     """Rows at the paper's rate with ``paper_errors`` and, on the systems where the NODE
     leads, the three models at the stable rate with ``stable_errors``."""
-    paper = cell_tables(R.RIGID_BODIES, paper_errors, spread=spread)
+    paper = cell_tables(R.RIGID_BODIES, paper_errors, profile="paper-core", spread=spread)
+    paper = paper[paper["lr"] == R.PAPER_LR].reset_index(drop=True)
     both = cell_tables(R.RIGID_BODIES, stable_errors, profile="paper-core", spread=spread)
-    stable = both[(both["lr"] == R.STABLE_LR)]
+    stable = both[both["lr"] == R.STABLE_LR]
     assert len(stable) == 5 * len(R.NODE_LEADS) * len(R.MODELS)
     return paper, pd.concat([paper, stable], ignore_index=True)
 
@@ -127,3 +128,26 @@ def test_figure_draws_every_system_and_model(tmp_path):
     paths = R.fig_rigid_bodies(cell_tables(R.RIGID_BODIES, REPRODUCE), None, tmp_path)
     assert sorted(p.suffix for p in paths) == [".pdf", ".png"]
     assert all(p.stat().st_size > 0 for p in paths)
+
+
+def test_the_reports_tables_tell_the_two_rates_apart():
+    """The experiment's table, its discrimination lines and its missing cells name the learning
+    rate, since the experiment's cells differ in it (the other experiments' tables do not)."""
+    from bench._tables import _experiment_table, _missing_cells, discrimination_groups
+
+    _, rows = _with_stable_lr(REPRODUCE, CONTRADICT)
+    table = _experiment_table(rows)
+    assert table[0].startswith("| system | variant | coordinates | lr | seeds |")
+    rotor_hnn = [line for line in table if line.startswith("| rotor | hnn_so |")]
+    assert sorted(line.split(" | ")[3] for line in rotor_hnn) == ["0.001", "0.005"]
+    # the stable rate's HNN (CONTRADICT: ahead of the NODE) is the rotor's best variant
+    rotor = next(d for d in discrimination_groups(rows) if d.group == "system=rotor")
+    assert rotor.best == f"hnn_so lr={R.STABLE_LR:g}"
+    paper_only = rows[rows["lr"] == R.PAPER_LR]
+    (line, _) = _missing_cells(paper_only, "rigid_bodies", "paper-core")
+    assert f"NODE on rotor lr={R.STABLE_LR:g}" in line
+    assert f"lr={R.PAPER_LR:g}" not in line
+    # a protocol that gives each model its own rate: the rate names no cell
+    own = paper_only.assign(lr=paper_only["model"].map({"hnn_so": R.STABLE_LR}).fillna(R.PAPER_LR))
+    assert " lr " not in _experiment_table(own)[0]
+    assert all(" lr=" not in d.best for d in discrimination_groups(own))

@@ -35,11 +35,22 @@ __all__ = [
 TRIVIAL_FACTOR = policy.POLICY["learning"].margin
 
 
+def several_rates(runs: pd.DataFrame) -> bool:
+    """Whether some model of ``runs`` was trained at more than one learning rate (then the
+    rate tells cells apart; a protocol that gives each model its own rate does not)."""
+    if not len(runs) or "lr" not in runs:
+        return False
+    lr = pd.to_numeric(runs["lr"], errors="coerce")
+    return bool((lr.groupby(runs["model"]).nunique() > 1).any())
+
+
 def _variant_key(runs: pd.DataFrame) -> pd.Series:
     """A label per row naming its model variant (model, options, dissipation, coordinates,
-    loss, data size and noise where they are not the defaults)."""
+    loss, data size and noise where they are not the defaults, and the learning rate where a
+    model of ``runs`` has more than one: :func:`several_rates`)."""
     if not len(runs):
         return pd.Series(dtype=object)
+    lr_varies = several_rates(runs)
 
     def one(r) -> str:
         s = str(r["model"])
@@ -54,6 +65,8 @@ def _variant_key(runs: pd.DataFrame) -> pd.Series:
             s += " L1"
         if "noise" in r and r.get("noise"):
             s += f" noise={float(r['noise']):g}"
+        if lr_varies:
+            s += f" lr={float(r['lr']):g}"
         return s
 
     return runs.apply(one, axis=1)
