@@ -168,7 +168,7 @@ def test_runs_stored_from_an_accelerator_are_done_but_do_not_calibrate(tmp_path)
     assert df.loc[6, "cpu_hours_done"] == pytest.approx(50.0 / 3600)
 
 
-def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
+def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch):
     """Claim 9 at paper-core: per seed, one dataset of 150,000 ten-second trajectories (shared
     by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at
     the cost lnn_seed.MEASURED records (the rollout-trained scaling said 0.5 h, not 2.6)."""
@@ -192,8 +192,16 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path):
     both = cfgs + E.expand("lnn_seed_notebook", "paper-core")
     assert plan.loc[9, "cpu_hours"] == pytest.approx(total_seconds(both) / 3600)
     assert 2.0 < total_seconds(cfgs) / 3600 < 3.5
-    # a stored run of seed 0 means its dataset was made: the hours left drop its data too
+    # a stored run of seed 0 means its dataset was made, but only a dataset in this machine's
+    # cache is paid: the hours left drop its run, and its data once the file is here
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("DECON_CACHE", str(cache))
     _store.write_row(tmp_path, {**lnn.to_dict(), "config_hash": lnn.config_hash, "status": "ok"})
+    left = C.plan("paper-core", tmp_path, workers=2).set_index("claim").loc[9, "cpu_hours_left"]
+    assert left == pytest.approx((total_seconds(both) - run_seconds(lnn)) / 3600)
+    made = cache / "datasets" / f"{lnn.dataset_config().hash()}.npz"
+    made.parent.mkdir(parents=True)
+    made.write_bytes(b"")
     left = C.plan("paper-core", tmp_path, workers=2).set_index("claim").loc[9, "cpu_hours_left"]
     assert left == pytest.approx(
         (total_seconds(both) - run_seconds(lnn) - data_seconds(lnn)) / 3600

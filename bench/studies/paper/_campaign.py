@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pandas as pd
 
+import systems
+
 from ...core._experiments import available, expand, get, replication_seeds
 from ...core._store import done_hashes, holds_runs, read_rows
 from ._budget import data_seconds, run_seconds, total_seconds
@@ -182,11 +184,16 @@ def plan(
     cpu = _per_run(stored, ("cpu_seconds",))
     table = []
     # a dataset charged apart from its runs (the LNN seed's) is paid by the first claim whose
-    # runs need it, and is left to pay while none of its runs is stored
+    # runs need it, and is left to pay until one of its runs is stored and it is in this
+    # machine's cache (:func:`_cached`)
     charged = set()
     # (only those datasets: a run with its own data, the pixel tasks', need not have a
     # DatasetConfig that describes it)
-    paid = {c.dataset_config() for c in cfgs.values() if c.config_hash in done and data_seconds(c)}
+    paid = {
+        d
+        for c in cfgs.values()
+        if c.config_hash in done and data_seconds(c) and _cached(d := c.dataset_config())
+    }
     for name in campaign_experiments(profile, order, claims):
         cells = expand(name, profile, seeds=seeds)  # every run the claim reads, shared too
         mine = [c for n, c in runs if n == name]  # the runs it brings first
@@ -257,6 +264,13 @@ def plan(
         df["wall_hours_left"] = df["cpu_hours_left"] / max(1, workers)
         df["wall_hours_left_calibrated"] = df["cpu_hours_left_calibrated"] / max(1, workers)
     return df
+
+
+def _cached(d) -> bool:
+    """Whether the dataset ``d`` is in this machine's cache (``systems.make_dataset``'s file).
+    A stored run says that its dataset was made somewhere, not that it is here: a checkout
+    starts with an empty cache, and a dataset made on a GPU machine stays there."""
+    return (Path(systems.cache_root()) / "datasets" / f"{d.hash()}.npz").exists()
 
 
 def _measured_estimate(c, walls: dict, train_eval: dict) -> float:
