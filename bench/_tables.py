@@ -169,10 +169,10 @@ def _missing_cells(rows: pd.DataFrame, name: str, profile: str | None) -> list[s
     missing = [c for k, c in want.items() if k not in have]
     if not missing:
         return []
-    rates: dict[str, set] = {}
-    for c in want.values():
-        rates.setdefault(c.model, set()).add(c.lr)
-    lr_varies = any(len(r) > 1 for r in rates.values())
+    declared = list(want.values())
+    lr_varies = several_rates(
+        pd.DataFrame({"model": [c.model for c in declared], "lr": [c.lr for c in declared]})
+    )
     labels = sorted(
         {
             f"{MODEL_LABELS.get(c.model, c.model)} on {c.system}"
