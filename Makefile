@@ -21,7 +21,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
 .PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean mujoco-data \
-	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report paper-gpu
+	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report paper-gpu gpu-wheels
 
 install: $(STAMP)
 
@@ -182,9 +182,12 @@ paper-core-stop:
 # accelerator). No install: GPU_PY must hold jax, equinox, diffrax, optax, optimistix, pandas,
 # pyarrow, scipy and matplotlib (the device image's python3 does). Resumable (runs are
 # content-addressed); each experiment stops at GPU_SECONDS from the start, its stored rows kept.
-# GPU_OUT (the device's $OUT): the folder's rows packed into GPU_OUT/rows.tgz every 20 s and at
-# the end, so that a call stopped at its limit still brings back every run it stored (the device
-# returns 8 files at most: never the row files themselves). GPU_WORKERS > 1: that many sweep
+# GPU_OUT (the device's $OUT): the rows this call stored packed into GPU_OUT/rows.tgz every 20 s
+# and at the end, so that a call stopped at its limit still brings back every run it stored (the
+# device returns 8 files at most, 16 MiB each: never the row files themselves, nor the rows that
+# travelled). Packages the device's image lacks travel as wheels in .whl/ (ignored; `make
+# gpu-wheels` fetches MuJoCo's, which the MuJoCo runs need to replay their transitions; name
+# .whl in the call's carry): installed into a temporary folder first. GPU_WORKERS > 1: that many sweep
 # processes share the GPU, each with its share of its memory (for runs that train alone:
 # pixels, fresh-state objectives). The campaign's own cells go the same way (GPU_PROFILE=
 # paper-core GPU_DIR=results/reference/paper). The working tree travels to the device (64 MiB
@@ -200,8 +203,12 @@ GPU_SECONDS ?= 540
 GPU_OUT ?=
 GPU_WORKERS ?= 1
 paper-gpu:
-	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); mkdir -p $(GPU_DIR)/.rows; \
-	pack() { [ -z "$(GPU_OUT)" ] || { tar czf $(GPU_OUT)/rows.part -C $(GPU_DIR) .rows && \
+	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); mkdir -p $(GPU_DIR)/.rows; start=$$(mktemp); \
+	if [ -d .whl ]; then site=$$(mktemp -d); $(GPU_PY) -m pip install -q --no-index --no-deps \
+		--no-compile --no-cache-dir --target $$site .whl/*.whl || exit 1; \
+		export PYTHONPATH=$$site$${PYTHONPATH:+:$$PYTHONPATH}; fi; \
+	pack() { [ -z "$(GPU_OUT)" ] || { (cd $(GPU_DIR) && find .rows -type f -newer $$start) > $$start.list && \
+		tar czf $(GPU_OUT)/rows.part -C $(GPU_DIR) -T $$start.list && \
 		mv $(GPU_OUT)/rows.part $(GPU_OUT)/rows.tgz; }; }; \
 	if [ -n "$(GPU_OUT)" ]; then (while sleep 20; do pack; done) & packer=$$!; fi; \
 	if [ $(GPU_WORKERS) -gt 1 ]; then \
@@ -213,7 +220,21 @@ paper-gpu:
 		timeout $$left $(GPU_PY) -m bench --results $(GPU_DIR) sweep $$e --profile $(GPU_PROFILE) \
 			--seeds $(GPU_SEEDS) --workers $(GPU_WORKERS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
 	done; \
-	[ -z "$${packer:-}" ] || kill $$packer; pack; echo "paper-gpu: $$(ls $(GPU_DIR)/.rows | wc -l) rows in $(GPU_DIR)"
+	[ -z "$${packer:-}" ] || kill $$packer; pack; \
+	echo "paper-gpu: $$(find $(GPU_DIR)/.rows -type f -newer $$start | wc -l) new rows, $$(ls $(GPU_DIR)/.rows | wc -l) in $(GPU_DIR)"; \
+	rm -f $$start $$start.list
+
+# The wheels of MuJoCo and its Python dependencies for the device's image (Python 3.12,
+# manylinux x86_64), at the versions of this lock, into .whl/ (ignored; carried by a device call).
+GPU_WHEEL_PYTHON ?= 3.12
+gpu-wheels: $(STAMP)
+	@grep -qs '^/.whl/' $$(git rev-parse --git-dir)/info/exclude || \
+		{ mkdir -p $$(git rev-parse --git-dir)/info; echo /.whl/ >> $$(git rev-parse --git-dir)/info/exclude; }
+	$(PY) -m pip download -q --no-deps --only-binary=:all: --python-version $(GPU_WHEEL_PYTHON) \
+		--implementation cp --platform manylinux_2_28_x86_64 --platform manylinux_2_27_x86_64 \
+		--platform manylinux_2_17_x86_64 --platform manylinux2014_x86_64 -d .whl \
+		$$($(PY) -m pip list --format=freeze 2>/dev/null | grep -iE '^(mujoco|mujoco-core|gymnasium|glfw|imageio|cloudpickle|farama-notifications)==')
+	@ls .whl
 
 # Tables, figures and report of the campaign's stored rows (before committing them).
 paper-core-report: $(STAMP)
