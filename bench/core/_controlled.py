@@ -196,19 +196,31 @@ def train_config(c: RunConfig):
     return dataclasses.replace(tc, lr_floor=min(1.0, LR_END / c.lr))
 
 
+def member_inputs(c: RunConfig, built: Built):
+    """``(model, dataset, objective)``: what the one training loop fits for the run, alone or
+    as an ensemble's member (:class:`bench.core._execute.Member`)."""
+    return built.model, built.windows, CONTROLLED
+
+
+def record(c: RunConfig, res, cache_root) -> dict:
+    """The train step's meta of a :class:`bench.TrainResult` (never cached)."""
+    from ._params import result_meta
+
+    return {**result_meta(res), "train_cached": False}
+
+
 def train(c: RunConfig, built: Built, cache_root, progress: bool):
     """``(model, meta)``: trained (never cached); a trivial predictor untouched."""
     import models
 
     from ._fit import UNTRAINED
-    from ._params import result_meta
     from ._train import train as fit
 
-    model = built.model
+    model, windows, objective = member_inputs(c, built)
     if isinstance(model, models.AbstractTrivialModel):
         return model, dict(UNTRAINED)
-    res = fit(model, built.windows, train_config(c), progress=progress, objective=CONTROLLED)
-    return res.model, {**result_meta(res), "train_cached": False}
+    res = fit(model, windows, train_config(c), progress=progress, objective=objective)
+    return res.model, record(c, res, cache_root)
 
 
 def _predictor(c: RunConfig, model):
