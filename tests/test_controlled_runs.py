@@ -166,8 +166,8 @@ def test_controlled_runs_train_as_an_ensemble_whose_members_are_the_single_runs(
 
     # two seeds at one rate form one ensemble; the paper's rate sets another cosine floor
     # (LR_END / lr), so its run trains alone; the trivial predictor too
-    seeds = [RunConfig(**{**SMOKE, "steps": 6, "seed": s}, model="hnn_force") for s in (0, 1)]
-    other_rate = RunConfig(**{**SMOKE, "steps": 6, "lr": X.LR}, model="hnn_force")
+    seeds = [RunConfig(**{**SMOKE, "steps": 4, "seed": s}, model="node") for s in (0, 1)]
+    other_rate = RunConfig(**{**SMOKE, "steps": 4, "lr": X.LR}, model="node")
     trivial = RunConfig(**SMOKE, model=C.TRIVIAL)
     assert group_key(seeds[0]) == group_key(seeds[1]) != group_key(other_rate)
     groups = plan_groups([*seeds, other_rate, trivial])
