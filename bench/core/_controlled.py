@@ -10,6 +10,7 @@ the other differences: docs/studies/mujoco.md.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -223,21 +224,30 @@ def train(c: RunConfig, built: Built, cache_root, progress: bool):
     return res.model, record(c, res, cache_root)
 
 
-def _predictor(c: RunConfig, model):
-    """f(z0s, ts, u) -> states (N, T, 2d): the rollout under controls u (N, T - 1, nu) with
-    the run's evaluation integrator, or a trivial predictor's closed form."""
+@functools.cache
+def _rollouts(trivial: bool):
+    """The compiled f(m, z0s, ts, u, integ), one per process, so that runs of one architecture
+    (an ensemble's members, a worker's runs) compile their test rollouts once."""
     import equinox as eqx
 
     import models
 
+    if trivial:
+        return eqx.filter_jit(lambda m, z0s, ts, u, integ: m.predict_batch(z0s, ts))
+    return eqx.filter_jit(
+        lambda m, z0s, ts, u, integ: models.rollout_batch(m, z0s, ts, None, integ, controls=u)
+    )
+
+
+def _predictor(c: RunConfig, model):
+    """f(m, z0s, ts, u) -> states (N, T, 2d): the rollout under controls u (N, T - 1, nu) with
+    the run's evaluation integrator, or a trivial predictor's closed form."""
+    import models
+
     from ._evaluate import eval_integrator
 
-    if isinstance(model, models.AbstractTrivialModel):
-        return eqx.filter_jit(lambda m, z0s, ts, u: m.predict_batch(z0s, ts))
-    integ = eval_integrator(c)
-    return eqx.filter_jit(
-        lambda m, z0s, ts, u: models.rollout_batch(m, z0s, ts, None, integ, controls=u)
-    )
+    trivial = isinstance(model, models.AbstractTrivialModel)
+    return functools.partial(_rollouts(trivial), integ=None if trivial else eval_integrator(c))
 
 
 def normalised_mse(zhat: np.ndarray, z: np.ndarray, scale: np.ndarray) -> float:
