@@ -9,7 +9,14 @@ from . import _real_pendulum as real_pendulum
 from ._base import MAX_STEPS, AbstractSystem, reference_masses_lengths
 from ._chain import ChainPendulum
 from ._coordinates import derivatives, to_momentum, to_velocity
-from ._dataset import Dataset, DatasetConfig, cache_root, make_dataset, source_fingerprint
+from ._dataset import (
+    Dataset,
+    DatasetConfig,
+    cache_root,
+    dataset_path,
+    make_dataset,
+    source_fingerprint,
+)
 from ._magnet import MagnetPendulum
 from ._mass_spring import MassSpring
 from ._mujoco import TASKS as MUJOCO_TASKS
@@ -53,6 +60,7 @@ __all__ = [
     "SpringPendulum",
     "available",
     "cache_root",
+    "dataset_path",
     "collect_episodes",
     "derivatives",
     "enable_x64",

@@ -178,14 +178,21 @@ def cache_root() -> Path:
     return Path(os.environ.get("DECON_CACHE") or Path(".cache") / "decon-bench")
 
 
+def dataset_path(config: DatasetConfig, cache_dir=None) -> Path:
+    """The file of ``config``'s dataset in the cache ``cache_dir`` (default :func:`cache_root`),
+    whether or not it has been made."""
+    root = Path(cache_dir if cache_dir is not None else cache_root())
+    return root / "datasets" / f"{config.hash()}.npz"
+
+
 def make_dataset(config: DatasetConfig, cache_dir=None) -> Dataset:
-    """Load the dataset of ``config`` from the cache, or generate and cache it."""
+    """Load the dataset of ``config`` from the cache (:func:`dataset_path`), or generate and
+    cache it."""
     if not isinstance(config, DatasetConfig):
         raise ValueError(f"config must be a DatasetConfig; got {type(config).__name__}")
     require_x64("make_dataset")
     system = make(config.system, **dict(config.system_params))
-    path = Path(cache_dir if cache_dir is not None else cache_root())
-    path = path / "datasets" / f"{config.hash()}.npz"
+    path = dataset_path(config, cache_dir)
     arrays = _load(path, config)
     if arrays is None:
         arrays = _generate(system, config)

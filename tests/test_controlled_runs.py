@@ -159,3 +159,41 @@ def test_the_scene_is_the_raw_state_with_the_tasks_controls():
     assert (s.dof, s.n_controls, any(s.angular)) == (9, 6, False)
     m = models.make("node_so", s, key=jax.random.PRNGKey(0), width=4, depth=1)
     assert models.spec("node_so").controls and m.scene.n_controls == 6
+
+
+def test_controlled_runs_train_as_an_ensemble_whose_members_are_the_single_runs(tmp_path, capsys):
+    from bench.core._ensemble import group_key, plan_groups
+
+    # two seeds at one rate form one ensemble; the paper's rate sets another cosine floor
+    # (LR_END / lr), so its run trains alone; the trivial predictor too
+    seeds = [RunConfig(**{**SMOKE, "steps": 4, "seed": s}, model="node") for s in (0, 1)]
+    other_rate = RunConfig(**{**SMOKE, "steps": 4, "lr": X.LR}, model="node")
+    trivial = RunConfig(**SMOKE, model=C.TRIVIAL)
+    assert group_key(seeds[0]) == group_key(seeds[1]) != group_key(other_rate)
+    groups = plan_groups([*seeds, other_rate, trivial])
+    assert [[c.config_hash for c in g] for g in groups] == [
+        [c.config_hash for c in seeds],
+        [other_rate.config_hash],
+        [trivial.config_hash],
+    ]
+
+    def run(mode):
+        return sweep(
+            seeds,
+            tmp_path / mode,
+            progress=False,
+            cache_root=tmp_path / "cache",
+            ensemble=mode,
+        )
+
+    together, alone = run("on"), run("off")
+    assert "fell back" not in capsys.readouterr().err  # trained as one program
+    assert sorted(r["ensemble_size"] for r in together) == [2, 2]
+    a = load_runs(tmp_path / "on").set_index("config_hash").sort_index()
+    b = load_runs(tmp_path / "off").set_index("config_hash").sort_index()
+    assert list(a.index) == list(b.index) and (a["status"] == "ok").all()
+    for m in ("final_loss", "rollout_error", "test_mse", "train_mse", "n_params"):
+        np.testing.assert_allclose(a[m].to_numpy(float), b[m].to_numpy(float), rtol=1e-4)
+    # the seeds differ: a member is not its neighbour's copy
+    assert a["final_loss"].nunique() == 2
+    assert not any(r["train_cached"] for r in together + alone)

@@ -138,12 +138,17 @@ def test_noise_only_on_training_set(fake, tmp_path):
 def test_default_cache_dir_from_env(fake, tmp_path, monkeypatch):
     monkeypatch.setenv("DECON_CACHE", str(tmp_path / "env"))
     c = _config()
+    assert not systems.dataset_path(c).exists()
     make_dataset(c)
     assert (tmp_path / "env" / "datasets" / f"{c.hash()}.npz").is_file()
+    assert systems.dataset_path(c) == tmp_path / "env" / "datasets" / f"{c.hash()}.npz"
     monkeypatch.delenv("DECON_CACHE")
     monkeypatch.chdir(tmp_path)
     make_dataset(c)
     assert (tmp_path / ".cache" / "decon-bench" / "datasets" / f"{c.hash()}.npz").is_file()
+    assert systems.dataset_path(c).resolve() == (
+        tmp_path / ".cache" / "decon-bench" / "datasets" / f"{c.hash()}.npz"
+    )
 
 
 # ------------------------------------------------------------------------------- caching

@@ -10,6 +10,7 @@ the other differences: docs/studies/mujoco.md.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -196,36 +197,57 @@ def train_config(c: RunConfig):
     return dataclasses.replace(tc, lr_floor=min(1.0, LR_END / c.lr))
 
 
+def member_inputs(c: RunConfig, built: Built):
+    """``(model, dataset, objective)``: what the one training loop fits for the run, alone or
+    as an ensemble's member (:class:`bench.core._execute.Member`)."""
+    return built.model, built.windows, CONTROLLED
+
+
+def record(c: RunConfig, res, cache_root) -> dict:
+    """The train step's meta of a :class:`bench.TrainResult` (never cached)."""
+    from ._params import result_meta
+
+    return {**result_meta(res), "train_cached": False}
+
+
 def train(c: RunConfig, built: Built, cache_root, progress: bool):
     """``(model, meta)``: trained (never cached); a trivial predictor untouched."""
     import models
 
     from ._fit import UNTRAINED
-    from ._params import result_meta
     from ._train import train as fit
 
-    model = built.model
+    model, windows, objective = member_inputs(c, built)
     if isinstance(model, models.AbstractTrivialModel):
         return model, dict(UNTRAINED)
-    res = fit(model, built.windows, train_config(c), progress=progress, objective=CONTROLLED)
-    return res.model, {**result_meta(res), "train_cached": False}
+    res = fit(model, windows, train_config(c), progress=progress, objective=objective)
+    return res.model, record(c, res, cache_root)
 
 
-def _predictor(c: RunConfig, model):
-    """f(z0s, ts, u) -> states (N, T, 2d): the rollout under controls u (N, T - 1, nu) with
-    the run's evaluation integrator, or a trivial predictor's closed form."""
+@functools.cache
+def _rollouts(trivial: bool):
+    """The compiled f(m, z0s, ts, u, integ), one per process, so that runs of one architecture
+    (an ensemble's members, a worker's runs) compile their test rollouts once."""
     import equinox as eqx
 
     import models
 
+    if trivial:
+        return eqx.filter_jit(lambda m, z0s, ts, u, integ: m.predict_batch(z0s, ts))
+    return eqx.filter_jit(
+        lambda m, z0s, ts, u, integ: models.rollout_batch(m, z0s, ts, None, integ, controls=u)
+    )
+
+
+def _predictor(c: RunConfig, model):
+    """f(m, z0s, ts, u) -> states (N, T, 2d): the rollout under controls u (N, T - 1, nu) with
+    the run's evaluation integrator, or a trivial predictor's closed form."""
+    import models
+
     from ._evaluate import eval_integrator
 
-    if isinstance(model, models.AbstractTrivialModel):
-        return eqx.filter_jit(lambda m, z0s, ts, u: m.predict_batch(z0s, ts))
-    integ = eval_integrator(c)
-    return eqx.filter_jit(
-        lambda m, z0s, ts, u: models.rollout_batch(m, z0s, ts, None, integ, controls=u)
-    )
+    trivial = isinstance(model, models.AbstractTrivialModel)
+    return functools.partial(_rollouts(trivial), integ=None if trivial else eval_integrator(c))
 
 
 def normalised_mse(zhat: np.ndarray, z: np.ndarray, scale: np.ndarray) -> float:

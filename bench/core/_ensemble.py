@@ -1,9 +1,11 @@
 """Ensembles: runs that differ only in seed, learning rate or noise train as one program: the
-one training step (:func:`bench.core._train.make_step`) vmapped over members in one
-``lax.scan``. Each member keeps its own batches and divergence flags, so member m is the single
-run of its config up to float32 round-off. An ensemble is a variant of a run's train step
-(:func:`bench.core._execute.ensemble_member`): a member's row is the row of its single run, plus
-``ensemble_size``, with 1/M of the ensemble's ``train_seconds`` and ``compile_seconds``.
+one training step (:func:`bench.core._train.make_step`) of their objective vmapped over members
+in one ``lax.scan``. Each member keeps its own batches and divergence flags, so member m is the
+single run of its config up to float32 round-off. An ensemble is a variant of a run's train
+step (:func:`bench.core._execute.ensemble_member`), for the observation kinds that declare how
+their runs train as members (:class:`bench.core._execute.Member`: state and controlled runs): a
+member's row is the row of its single run, plus ``ensemble_size``, with 1/M of the ensemble's
+``train_seconds`` and ``compile_seconds``.
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ def _member(tree, i):
     return jax.tree.map(lambda x: x[i] if eqx.is_array(x) else x, tree)
 
 
-def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config):
+def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config, objective):
     """``len(idx)`` steps of every member: lax.scan over vmap(make_step) over members."""
     import jax
 
@@ -64,7 +66,7 @@ def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config):
     data, lr, idx, active = inputs
 
     def member_step(carry, xs, data, lr):
-        return make_step(static, config, data, lr)(carry, xs)
+        return make_step(static, config, data, lr, objective=objective)(carry, xs)
 
     vstep = jax.vmap(member_step, in_axes=(0, (0, None), 0, 0))
 
@@ -80,7 +82,7 @@ def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config):
 _COMPILED: dict = {}
 
 
-def _compiled(inputs, params, static, opt_state, dead, good, config):
+def _compiled(inputs, params, static, opt_state, dead, good, config, objective):
     import equinox as eqx
     import jax
 
@@ -89,18 +91,23 @@ def _compiled(inputs, params, static, opt_state, dead, good, config):
         tuple(jax.tree.leaves(static)),
         tuple((x.shape, x.dtype) for x in jax.tree.leaves((inputs, params, opt_state))),
         config,
+        objective,
     )
     hit = _COMPILED.get(key)
     if hit is not None:
         return hit, 0.0
     fn = eqx.filter_jit(_ensemble_block, donate="all-except-first")
     t0 = time.perf_counter()
-    compiled = fn.lower(inputs, params, opt_state, dead, good, static=static, config=config)
+    compiled = fn.lower(
+        inputs, params, opt_state, dead, good, static=static, config=config, objective=objective
+    )
     compiled = compiled.compile()
     seconds = time.perf_counter() - t0
 
     def run(inputs, params, opt_state, dead, good):
-        return compiled(inputs, params, opt_state, dead, good, static=static, config=config)
+        return compiled(
+            inputs, params, opt_state, dead, good, static=static, config=config, objective=objective
+        )
 
     _COMPILED[key] = run
     return run, seconds
@@ -123,8 +130,9 @@ def _common_config(configs):
     return keys[0]
 
 
-def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
-    """Train ``models[m]`` on ``datasets[m]`` with ``configs[m]`` as one program.
+def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence, objective=None):
+    """Train ``models[m]`` on ``datasets[m]`` with ``configs[m]`` as one program, each fitting
+    ``objective`` (default :data:`bench.core._train.STATES`, the datasets' chunks of states).
 
     Returns one :class:`bench.TrainResult` per member, each as :func:`bench.train` would
     return it for that member alone (``train_seconds``, ``compile_seconds``: 1/M of the
@@ -136,13 +144,14 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     import jax.numpy as jnp
 
     from ._optim import optimizer
-    from ._train import Batches, Snapshot, TrainResult, prepare
+    from ._train import STATES, Snapshot, TrainResult
 
     m_count = len(models)
     if not (m_count == len(datasets) == len(configs)):
         raise ValueError("train_ensemble needs as many datasets and configs as models")
     cfg = _common_config(configs)
-    data = [prepare(m, d, c) for m, d, c in zip(models, datasets, configs, strict=True)]
+    objective = STATES if objective is None else objective
+    data = [objective.data(m, d, c) for m, d, c in zip(models, datasets, configs, strict=True)]
     parts = [eqx.partition(m, eqx.is_inexact_array) for m in models]
     static = parts[0][1]
     for i in range(1, m_count):
@@ -162,9 +171,8 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
     dead = jnp.zeros(m_count, bool)
     stacked = tuple(jnp.stack(x) for x in zip(*data, strict=True))
     lr = jnp.asarray([c.lr for c in configs], jnp.dtype(cfg.dtype))
-    n = stacked[0].shape[1]
     k = min(cfg.steps_per_call, cfg.steps)
-    batches = [Batches(n, cfg.batch, c.seed) for c in configs]
+    batches = [objective.batches(d, c) for d, c in zip(data, configs, strict=True)]
 
     def inputs(start):
         idx = np.stack([b.take(k) for b in batches], axis=1)  # (k, M, B)
@@ -173,7 +181,9 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
 
     block_in = inputs(0)
     program_cfg = dataclasses.replace(cfg, checkpoints=())  # snapshots are taken outside it
-    run, compile_seconds = _compiled(block_in, params, static, opt_state, dead, good, program_cfg)
+    run, compile_seconds = _compiled(
+        block_in, params, static, opt_state, dead, good, program_cfg, objective
+    )
 
     losses: list[list[np.ndarray]] = [[] for _ in range(m_count)]
     diverged: list[int | None] = [None] * m_count
@@ -228,13 +238,26 @@ def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence):
 
 
 # ------------------------------------------------------------------------------ grouping
+def _kind(config: RunConfig):
+    """How runs of ``config``'s observation kind train as members
+    (:class:`bench.core._execute.Member`), or None where they train alone."""
+    from ._execute import steps_of
+
+    return steps_of(config).member
+
+
 def group_key(config: RunConfig) -> str:
-    """The fields an ensemble's members share: all but ``ENSEMBLE_FIELDS`` and ``eval_*``."""
+    """The fields an ensemble's members share: all but ``ENSEMBLE_FIELDS`` and ``eval_*``, and
+    the training configuration their kind gives the one loop, up to seed and learning rate (so
+    that a setting derived from the rate, such as a schedule's floor, parts the groups)."""
     d = {
         a: b
         for a, b in config.to_dict().items()
         if a not in ENSEMBLE_FIELDS and not a.startswith("eval_")
     }
+    member = _kind(config)
+    if member is not None:
+        d["train_config"] = repr(_common_config([member.train_config(config)]))
     return json.dumps(d, sort_keys=True, default=str)
 
 
@@ -249,11 +272,12 @@ def plan_groups(
 ) -> list[list[RunConfig]]:
     """Cut pending runs into ensembles (lists of >= 1 run), order kept within each group.
 
-    Runs whose every field except ``ENSEMBLE_FIELDS`` and ``eval_*`` agree form one group (cut
-    into groups of at most ``max_size``). Runs whose parameters are cached under ``cache_root``,
-    second runs of one ``train_hash`` (they differ only in evaluation), trivial predictors
-    (nothing to train), pixel runs and runs with fresh states of a ``train_box`` (objectives of
-    their own) come last, alone. Not grouped: ``loss`` (a static choice
+    Runs with one :func:`group_key` form one group (cut into groups of at most ``max_size``).
+    Runs whose parameters are cached under ``cache_root``, second runs of one ``train_hash``
+    (they differ only in evaluation), trivial predictors (nothing to train), runs of a kind
+    that declares no :class:`bench.core._execute.Member` (pixels, frames, measured) and runs
+    with fresh states of a ``train_box`` (objectives of their own) come last, alone. Not
+    grouped: ``loss`` (a static choice
     of the loss function) and options held by the model (e.g. a regulariser weight inside
     ``model_options``, a static field of the model).
     """
@@ -267,9 +291,9 @@ def plan_groups(
             cache_root is not None
             and cached_params_meta(params_dir(cache_root, c.train_hash)) is not None
         )
-        # pixel and train_box runs fit objectives of their own (bench.core._train): alone
-        pixels = c.observation != "state" or bool(c.train_box)
-        if cached or c.train_hash in trains or c.model in _trivial_names() or pixels:
+        # train_box runs fit fresh states of their own (bench.core._box): alone
+        own = _kind(c) is None or bool(c.train_box)
+        if cached or c.train_hash in trains or c.model in _trivial_names() or own:
             alone.append([c])
             continue
         trains.add(c.train_hash)
@@ -328,33 +352,38 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
 
 # ---------------------------------------------------------------------------- execution
 def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
-    """Train ``configs`` as one ensemble, then evaluate each member; one row per run.
+    """Train ``configs`` (runs of one :func:`group_key`) as one ensemble, then evaluate each
+    member with its kind's steps; one row per run.
 
     Never raises for a run's failure: when the ensemble cannot be built or trained (a bad
     config, a failed dataset), every member runs alone and records its own outcome; when the
     vmapped test rollouts fail, each member rolls out alone. A storage error (full disk)
     propagates, as in :func:`bench.core._execute.execute_run`.
     """
-    from ._build import build_run
-    from ._execute import ensemble_member, execute_run, run_steps
-    from ._fit import train_config
-    from ._params import store_trained
+    from ._execute import ensemble_member, execute_run, run_steps, steps_of
 
     cache_root = Path(cache_root or systems.cache_root())
     configs = list(configs)
+    steps = steps_of(configs[0]) if configs else None
+    member = steps.member if steps else None
+    built: list = [None] * len(configs)
     trained: list = [None] * len(configs)
     rolled: list = [None] * len(configs)
     c_start = time.process_time()
-    if len(configs) > 1:
+    if len(configs) > 1 and member is not None:
         try:
-            models, datasets = [], []
-            for c in configs:
-                _, data, _, model = build_run(c, cache_root)
-                models.append(model)
-                datasets.append(data)
-            results = train_ensemble(models, datasets, [train_config(c) for c in configs])
+            built = [steps.build(c, cache_root) for c in configs]
+            fits = [member.inputs(c, b) for c, b in zip(configs, built, strict=True)]
+            if len({objective for _, _, objective in fits}) != 1:
+                raise ValueError("ensemble members must fit one objective")
+            results = train_ensemble(
+                [model for model, _, _ in fits],
+                [data for _, data, _ in fits],
+                [member.train_config(c) for c in configs],
+                fits[0][2],
+            )
             trained = [
-                (res.model, store_trained(c, res, cache_root, train_config(c).checkpoints))
+                (res.model, member.record(c, res, cache_root))
                 for c, res in zip(configs, results, strict=True)
             ]
         except Exception as e:
@@ -365,9 +394,9 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
                 file=sys.stderr,
             )
             trained = [None] * len(configs)
-        if trained[0] is not None:
+        if trained[0] is not None and member.rollouts:
             try:
-                rolled = rollout_members(configs, datasets, [t[0] for t in trained])
+                rolled = rollout_members(configs, [d for _, d, _ in fits], [t[0] for t in trained])
             except Exception as e:
                 if storage_error(e):
                     raise
@@ -377,11 +406,11 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
                 )
     shared = (time.process_time() - c_start) / len(configs)  # training and rollouts, split
     rows = []
-    for c, t, r in zip(configs, trained, rolled, strict=True):
+    for c, b, t, r in zip(configs, built, trained, rolled, strict=True):
         if t is None:  # trained alone
             row = execute_run(c, cache_root=cache_root)
-        else:  # the train step (and the test rollouts) done by the ensemble
-            row = run_steps(c, ensemble_member(t, r), cache_root)
+        else:  # built and trained (and the state runs' test rollouts done) by the ensemble
+            row = run_steps(c, ensemble_member(steps, b, t, r), cache_root)
         row["ensemble_size"] = 1 if t is None else len(configs)
         row["cpu_seconds"] = row.get("cpu_seconds", 0.0) + shared
         rows.append(row)

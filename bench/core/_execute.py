@@ -5,7 +5,8 @@ outcome is a row with ``status`` ``ok``, ``diverged`` (training went non-finite 
 ``diverged_step``) or ``failed`` (``error`` holds the message, the traceback is in the run's
 artifact folder). The observation kinds, state, pixels, frames, measured and controlled, are
 variants of the build, train and evaluate steps (:class:`Steps`); an ensemble's member is a
-variant of the train step.
+variant of the train step, for the kinds that say how their runs train as members
+(:class:`Member`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from ._build import build_run
 from ._config import RunConfig
 from ._errors import storage_error
 from ._evaluate import evaluate_state
-from ._fit import train_cached
+from ._fit import objective, train_cached, train_config
 from ._record import (
     artifact_dir,
     base_row,
@@ -50,6 +51,27 @@ class Steps:
     build: Callable
     train: Callable
     evaluate: Callable
+    member: Member | None = None  # how its runs train as an ensemble's members; None: alone
+
+
+@dataclasses.dataclass(frozen=True)
+class Member:
+    """How the runs of one kind train as members of an ensemble (:mod:`bench.core._ensemble`),
+    one program for runs that differ only in seed, learning rate or noise:
+
+    - ``train_config(config) -> TrainConfig``: what its train step gives the one training loop
+      (members share it up to ``seed`` and ``lr``);
+    - ``inputs(config, built) -> (model, dataset, objective)``: what its train step fits;
+    - ``record(config, result, cache_root) -> meta``: a member's :class:`bench.TrainResult` as
+      its train step's meta (stored in the parameter cache where the kind caches);
+    - ``rollouts``: its test rollouts run vmapped over the members
+      (:func:`bench.core._ensemble.rollout_members`, state runs), else each member's own.
+    """
+
+    train_config: Callable
+    inputs: Callable
+    record: Callable
+    rollouts: bool = False
 
 
 def _build_state(config: RunConfig, cache_root: Path):
@@ -103,26 +125,51 @@ def _evaluate_frames(config: RunConfig, built, model, meta: dict, cache_root: Pa
     return {**metrics, "curves": curves}, {}
 
 
-def _module_steps(module: str) -> Steps:
+def _module_steps(module: str, members: bool = False) -> Steps:
     """The steps of a kind whose module (imported at the first run, it pulls in its own
     libraries) defines ``build(config)``, ``train(config, built, cache_root, progress)`` and
-    ``evaluate(config, built, model, meta, cache_root)``."""
+    ``evaluate(config, built, model, meta, cache_root)``; with ``members``, also
+    ``train_config``, ``member_inputs`` and ``record``, as :class:`Member` names them."""
 
     def load():
         return importlib.import_module(f".{module}", __package__)
 
+    member = None
+    if members:
+        member = Member(
+            train_config=lambda *a: load().train_config(*a),
+            inputs=lambda *a: load().member_inputs(*a),
+            record=lambda *a: load().record(*a),
+        )
     return Steps(
         build=lambda config, cache_root: load().build(config),
         train=lambda *a: load().train(*a),
         evaluate=lambda *a: load().evaluate(*a),
+        member=member,
     )
 
 
-STATE = Steps(build=_build_state, train=_train_state, evaluate=evaluate_state)
+def _record_state(config: RunConfig, result, cache_root: Path) -> dict:
+    from ._params import store_trained
+
+    return store_trained(config, result, cache_root, train_config(config).checkpoints)
+
+
+STATE = Steps(
+    build=_build_state,
+    train=_train_state,
+    evaluate=evaluate_state,
+    member=Member(
+        train_config=train_config,
+        inputs=lambda config, built: (built[3], built[1], objective(config)),
+        record=_record_state,
+        rollouts=True,
+    ),
+)
 PIXELS = Steps(build=_build_pixels, train=_train_pixels, evaluate=_evaluate_pixels)
 FRAMES = Steps(build=_build_frames, train=_train_frames, evaluate=_evaluate_frames)
 MEASURED = _module_steps("_measured")
-CONTROLLED = _module_steps("_controlled")
+CONTROLLED = _module_steps("_controlled", members=True)
 # RunConfig.observation -> its steps
 OBSERVATIONS = {
     "state": STATE,
@@ -133,14 +180,21 @@ OBSERVATIONS = {
 }
 
 
-def ensemble_member(trained: tuple, rolled=None) -> Steps:
-    """The state steps of an ensemble's member, trained by the ensemble: ``trained`` is its
-    ``(model, meta)`` (meta as :func:`bench.core._params.store_trained` returns it),
-    ``rolled`` its test rollouts when the ensemble did them (:mod:`bench.core._ensemble`)."""
+def steps_of(config: RunConfig) -> Steps:
+    """The steps of ``config``'s observation kind."""
+    return OBSERVATIONS.get(config.observation, STATE)  # an unknown one fails validation
+
+
+def ensemble_member(steps: Steps, built, trained: tuple, rolled=None) -> Steps:
+    """``steps`` of an ensemble's member, built and trained by the ensemble: ``built`` as its
+    build step made it, ``trained`` its ``(model, meta)`` (meta as :attr:`Member.record`
+    returns it), ``rolled`` its test rollouts when the ensemble did them (state runs,
+    :mod:`bench.core._ensemble`)."""
+    evaluate = steps.evaluate
+    if rolled is not None:
+        evaluate = functools.partial(evaluate_state, rolled=rolled)
     return dataclasses.replace(
-        STATE,
-        train=lambda *_: trained,
-        evaluate=functools.partial(evaluate_state, rolled=rolled),
+        steps, build=lambda *_: built, train=lambda *_: trained, evaluate=evaluate
     )
 
 
@@ -176,5 +230,4 @@ def execute_run(config: RunConfig, cache_root=None, progress=False) -> dict:
     ``eval_checkpoints``, ``checkpoints`` (its learning curve, expanded into
     checkpoints.parquet) with ``checkpoint_seconds``, the time they took.
     """
-    steps = OBSERVATIONS.get(config.observation, STATE)  # an unknown one fails validation
-    return run_steps(config, steps, cache_root, progress)
+    return run_steps(config, steps_of(config), cache_root, progress)

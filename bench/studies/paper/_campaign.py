@@ -267,10 +267,10 @@ def plan(
 
 
 def _cached(d) -> bool:
-    """Whether the dataset ``d`` is in this machine's cache (``systems.make_dataset``'s file).
-    A stored run says that its dataset was made somewhere, not that it is here: a checkout
+    """Whether the dataset ``d`` is in this machine's cache (``systems.dataset_path``). A
+    stored run says that its dataset was made somewhere, not that it is here: a checkout
     starts with an empty cache, and a dataset made on a GPU machine stays there."""
-    return (Path(systems.cache_root()) / "datasets" / f"{d.hash()}.npz").exists()
+    return systems.dataset_path(d).exists()
 
 
 def _measured_estimate(c, walls: dict, train_eval: dict) -> float:
