@@ -248,12 +248,14 @@ def _runs(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
 
 def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
     from .studies.paper._replication import judge
+    from .studies.paper._rules import restrict_all
 
-    ja = judge(ra, ca, pa)
-    jb = judge(rb, cb, pb)
+    rows_a, rows_b = restrict_all(ra, pa), restrict_all(rb, pb)
+    ja = judge(ra, ca, pa, restricted=rows_a)
+    jb = judge(rb, cb, pb, restricted=rows_b)
     # a claim none of whose experiments ran in a folder has no verdict there ("no runs"), not an
     # inconclusive one: `make bench` runs one paper's claims, the reference every paper's
-    ran_a, ran_b = _claims_with_runs(ra, pa), _claims_with_runs(rb, pb)
+    ran_a, ran_b = _claims_with_runs(rows_a), _claims_with_runs(rows_b)
     fa = {v.key: v for v in ja.final if v.claim in ran_a}
     fb = {v.key: v for v in jb.final if v.claim in ran_b}
     rows = []
@@ -283,11 +285,10 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=cols)
 
 
-def _claims_with_runs(runs: pd.DataFrame, profile) -> set[int]:
-    """The claims with at least one stored row of their experiments."""
-    from .studies.paper._rules import claim_studies, restrict
-
-    return {s.claim for s in claim_studies() if len(restrict(runs, s, profile))}
+def _claims_with_runs(restricted: dict[int, pd.DataFrame]) -> set[int]:
+    """The claims with at least one stored row of their experiments (``restricted``: each
+    claim's rows, :func:`~bench.studies.paper._rules.restrict_all`)."""
+    return {claim for claim, rows in restricted.items() if len(rows)}
 
 
 def compare(a, b) -> Comparison:

@@ -52,24 +52,26 @@ def _variant_key(runs: pd.DataFrame) -> pd.Series:
         return pd.Series(dtype=object)
     lr_varies = several_rates(runs)
 
-    def one(r) -> str:
-        s = str(r["model"])
-        if r.get("dissipation") is True or r.get("dissipation") == 1.0:
+    def one(model, dissipation, options, coordinates, loss, noise, lr) -> str:
+        s = str(model)
+        if dissipation is True or dissipation == 1.0:
             s += "+rayleigh"
-        opts = parse_pairs(r.get("model_options"))
+        opts = parse_pairs(options)
         if opts:
             s += "[" + ",".join(f"{a}={b}" for a, b in sorted(opts.items())) + "]"
-        if r.get("coordinates") == "momentum":
+        if coordinates == "momentum":
             s += " (q,p)"
-        if r.get("loss") == "l1":
+        if loss == "l1":
             s += " L1"
-        if "noise" in r and r.get("noise"):
-            s += f" noise={float(r['noise']):g}"
+        if noise:
+            s += f" noise={float(noise):g}"
         if lr_varies:
-            s += f" lr={float(r['lr']):g}"
+            s += f" lr={float(lr):g}"
         return s
 
-    return runs.apply(one, axis=1)
+    fields = ("model", "dissipation", "model_options", "coordinates", "loss", "noise", "lr")
+    columns = [runs[f].to_numpy() if f in runs else [None] * len(runs) for f in fields]
+    return pd.Series([one(*row) for row in zip(*columns, strict=True)], index=runs.index)
 
 
 @dataclass
@@ -94,11 +96,13 @@ class Discrimination:
 
 def trivial_log(rows: pd.DataFrame, metric: str = "rollout_error") -> pd.Series:
     """Per-seed log error of the best finished trivial predictor among ``rows``."""
-    t = rows[rows["model"].isin(TRIVIAL_MODELS) & ~bad_rows(rows, metric)] if len(rows) else rows
-    if not len(t):
+    if not len(rows):
         return pd.Series(dtype=float)
-    s = np.log(scored(t, metric))
-    return s.groupby([t["seed"], t["model"]]).mean().groupby(level=0).min()
+    t = rows["model"].isin(TRIVIAL_MODELS).to_numpy() & ~bad_rows(rows, metric).to_numpy()
+    if not t.any():
+        return pd.Series(dtype=float)
+    s = np.log(scored(rows, metric)[t])  # finished rows: their own values
+    return s.groupby([rows["seed"][t], rows["model"][t]]).mean().groupby(level=0).min()
 
 
 def succeeds(model_log: pd.Series, trivial_log: pd.Series) -> tuple[bool | None, float]:
@@ -137,14 +141,15 @@ def discrimination(
     if not len(rows):
         return Discrimination(group, "unknown")
     sc = scores.reindex(rows.index) if scores is not None else scored(rows, metric)
+    trivial = rows["model"].isin(TRIVIAL_MODELS).to_numpy()
     # a trivial predictor that failed says nothing about the test set: only finished ones count
-    finished = ~bad_rows(rows, metric if scores is None else "rollout_error")
-    is_t = rows["model"].isin(TRIVIAL_MODELS) & finished
+    finished = ~bad_rows(rows, metric if scores is None else "rollout_error").to_numpy()
+    is_t = trivial & finished
     if not is_t.any():
         return Discrimination(group, "unknown")
     lt = np.log(sc[is_t]).groupby([rows["seed"][is_t], rows["model"][is_t]]).mean()
     triv = lt.groupby(level=0).min()
-    m = rows[~rows["model"].isin(TRIVIAL_MODELS)]
+    m = rows[~trivial]
     if not len(m):
         return Discrimination(group, "unknown")
     key = _variant_key(m)

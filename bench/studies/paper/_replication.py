@@ -17,6 +17,7 @@ seed set, pooled where the two agree, and without each seed.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import pandas as pd
@@ -120,18 +121,21 @@ def judge(
     profile: str | None = None,
     *,
     loso: bool = True,
+    restricted: Mapping[int, pd.DataFrame] | None = None,
 ) -> Judgement:
     """Judge every claim on the primary seeds, the replication seeds (where stored), both
     pooled (where they agree) and without each seed of the final reading (``loso``;
     ``loso=False`` skips that check and its demotion). Runs of other seeds are ignored; a
-    folder whose profile is unknown is judged on all its seeds, without replication."""
+    folder whose profile is unknown is judged on all its seeds, without replication.
+    ``restricted``: each claim's rows of ``runs`` already restricted (:func:`restrict_all`), for
+    callers that need them too."""
     declared, rep_seeds = seed_sets(profile)
     stored = sorted(int(s) for s in runs["seed"].unique()) if len(runs) and "seed" in runs else []
     if len(declared) >= required_seeds():
         primary_seeds = declared
     else:
         primary_seeds = tuple(s for s in stored if s not in rep_seeds)
-    cache = restrict_all(runs, profile)
+    cache = restrict_all(runs, profile) if restricted is None else restricted
 
     def evaluate(seeds):
         return evaluate_claims(runs, curves, profile, seeds=seeds, restricted=cache)

@@ -75,28 +75,43 @@ def paper_spring(runs: pd.DataFrame) -> pd.DataFrame:
     return runs
 
 
+def _values(runs: pd.DataFrame, metric: str) -> np.ndarray | None:
+    """``metric`` per row as floats (NaN where it is not a number); None without the column."""
+    if metric not in runs:
+        return None
+    return pd.to_numeric(runs[metric], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+
+
+def _bad(runs: pd.DataFrame, x: np.ndarray | None) -> np.ndarray:
+    """:func:`bad_rows` as an array, given the metric's values ``x`` (:func:`_values`)."""
+    bad = np.ones(len(runs), dtype=bool) if x is None else ~(np.isfinite(x) & (x > 0))
+    if "status" in runs:
+        bad |= (runs["status"] != "ok").to_numpy(dtype=bool)
+    return bad
+
+
 def bad_rows(runs: pd.DataFrame, metric: str = "rollout_error") -> pd.Series:
     """Rows that did not finish or whose ``metric`` is not a finite positive number."""
-    x = pd.to_numeric(runs[metric], errors="coerce") if metric in runs else None
-    bad = pd.Series(True, index=runs.index) if x is None else ~(np.isfinite(x) & (x > 0))
-    if "status" in runs:
-        bad |= runs["status"] != "ok"
-    return bad
+    x = _values(runs, metric)
+    return pd.Series(_bad(runs, x), index=runs.index, name=None if x is None else metric)
+
+
+def _worst(metric: str, good: np.ndarray) -> float:
+    """The score of a failed run: 1 for the relative rollout errors, else the worst of the
+    finite ``good`` values (at least 1)."""
+    if metric.startswith("rollout_error"):
+        return WORST_ERROR
+    return max(1.0, float(good.max())) if len(good) else 1.0
 
 
 def scored(runs: pd.DataFrame, metric: str = "rollout_error") -> pd.Series:
     """``metric`` per row, failed and diverged rows (and non-finite values) set to the worst
     error: 1 for the relative rollout errors, else the worst finite value of the table (>= 1)."""
-    if metric not in runs:
+    x = _values(runs, metric)
+    if x is None:
         return pd.Series(np.nan, index=runs.index)
-    x = pd.to_numeric(runs[metric], errors="coerce").astype(float)
-    bad = bad_rows(runs, metric)
-    if metric.startswith("rollout_error"):
-        worst = WORST_ERROR
-    else:
-        good = x[~bad]
-        worst = max(1.0, float(good.max())) if len(good) else 1.0
-    return x.where(~bad, worst)
+    bad = _bad(runs, x)
+    return pd.Series(np.where(bad, _worst(metric, x[~bad]), x), index=runs.index, name=metric)
 
 
 def n_bad(runs: pd.DataFrame) -> int:
@@ -150,6 +165,7 @@ def curve_slopes(runs: pd.DataFrame, curves: pd.DataFrame | None, t_min_frac: fl
     if curves is None or not len(curves) or not len(runs):
         return pd.DataFrame(columns=cols)
     c = curves[curves["config_hash"].isin(runs["config_hash"])]
+    run = runs.drop_duplicates("config_hash").set_index("config_hash")  # one row per run
     rows = []
     for h, g in c.groupby("config_hash"):
         t = g["t"].to_numpy(float)
@@ -158,8 +174,8 @@ def curve_slopes(runs: pd.DataFrame, curves: pd.DataFrame | None, t_min_frac: fl
         if keep.sum() < 3:
             continue
         slope = np.polyfit(np.log(t[keep]), np.log(ev[keep]), 1)[0]
-        r = runs[runs["config_hash"] == h].iloc[0]
-        rows.append({"config_hash": h, "seed": r["seed"], "model": r["model"], "slope": slope})
+        seed, model = run.at[h, "seed"], run.at[h, "model"]
+        rows.append({"config_hash": h, "seed": seed, "model": model, "slope": slope})
     return pd.DataFrame(rows, columns=cols)
 
 
