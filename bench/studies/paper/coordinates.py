@@ -137,7 +137,8 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
             hp, hl, hh = t_bounds(diff)
             head = Part("spring edge - chain edge", "", hp, hl, hh, len(diff))
             group = pd.concat([chain, spring])
-            disc_chain = disc_chain or discrimination(chain, "chain_pendulum", metric)
+            if disc_chain is None:  # one chain per metric, shared by both spring starts
+                disc_chain = discrimination(chain, "chain_pendulum", metric)
             discs = [disc_chain, discrimination(spring, f"spring_pendulum ({state})", metric)]
             models = non_trivial(group)
             out.append(
