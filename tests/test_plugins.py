@@ -167,3 +167,27 @@ def test_a_registered_plugin_is_swept_beside_the_trivial_predictor(
     assert main(["--results", str(tmp_path), *argv]) == 0
     runs = pd.read_parquet(tmp_path / "runs.parquet")
     assert set(runs["model"]) == {"drag_so", "constant_velocity"}
+
+
+def test_expansions_follow_a_model_registered_again_as_first_order(clean_registry):
+    """:func:`expand` is memoised; what it reads from the model registry (whether a model is
+    second order, which decides its leapfrog runs) is part of the memo's key."""
+    from bench.core._experiments import Experiment, expand
+
+    cls = _example_class()  # registers drag_so, second order
+    exp = Experiment(
+        name="memo_probe",
+        title="t",
+        axes={"model": ["drag_so", "node"], "eval_integrator": ["rk4", "leapfrog"]},
+        fixed={"system": "chain_pendulum", "k": 1},
+    )
+    first = expand(exp, "smoke")
+    assert {(r.model, r.eval_integrator) for r in first} >= {("drag_so", "leapfrog")}
+    again = expand(exp, "smoke")
+    assert again == first and again is not first  # a fresh list: callers may change it
+    again.clear()
+    assert expand(exp, "smoke") == first
+    models.register("drag_so", type("FirstOrder", (cls,), {"second_order": False}))
+    assert not models.spec("drag_so").second_order
+    combos = {(r.model, r.eval_integrator) for r in expand(exp, "smoke")}
+    assert ("drag_so", "rk4") in combos and ("drag_so", "leapfrog") not in combos

@@ -202,10 +202,34 @@ def expand(
     ``seeds`` replaces whatever seeds the profile and the experiment give (a replication on
     another seed set, :data:`REPLICATION_SEEDS`). ``models`` replaces the experiment's trained
     models (``--models``, e.g. a plug-in beside the built-ins); its trivial predictors stay.
+
+    Expansions are memoised per process on what they are computed from (the experiment, its
+    merged fields and axes, and the registered models' facts that :func:`valid` reads): the
+    campaign's plans and the verdicts expand the same experiments many times.
     """
     exp = get(exp) if isinstance(exp, str) else exp
-    if exp.profiles is not None and profile not in exp.profiles:
+    merged = _merged(exp, profile, seeds, models)
+    if merged is None:
         return []
+    base, axes = merged
+    names = axes.get("model", (base.get("model"),))
+    key = (id(exp), repr((base, axes)), tuple((m, _second_order(m)) for m in names))
+    hit = _EXPANDED.get(key)
+    if hit is None or hit[0] is not exp:
+        hit = _EXPANDED[key] = (exp, tuple(_product(exp, profile, base, axes)))
+    return list(hit[1])
+
+
+# expand's memo: key -> (the experiment, its runs); the experiment is held, so its id is not
+# reused while the entry lives
+_EXPANDED: dict = {}
+
+
+def _merged(exp, profile, seeds, models) -> tuple[dict, dict] | None:
+    """(fixed fields, axes) of ``exp`` under ``profile`` (:func:`expand`), or None where it
+    has no runs there."""
+    if exp.profiles is not None and profile not in exp.profiles:
+        return None
     replace_seeds = seeds
     base, seeds = profile_defaults(profile)
     base.update(exp.fixed)
@@ -213,7 +237,7 @@ def expand(
     overrides = dict(exp.profile_overrides.get(profile, {}))
     if profile in SELECTIONS:  # a selection: only the experiments that declare it
         if profile not in exp.profile_overrides:
-            return []
+            return None
         overrides = {**exp.profile_overrides.get(SELECTIONS[profile], {}), **overrides}
     for key, value in overrides.items():
         if key == "seeds":
@@ -234,9 +258,13 @@ def expand(
         axes["seed"] = tuple(int(x) for x in replace_seeds)
     elif "seed" not in axes:
         axes["seed"] = seeds
+    return base, {k: list(v) for k, v in axes.items()}
+
+
+def _product(exp, profile, base, axes) -> list[RunConfig]:
     keys = list(axes)
     out, seen = [], set()
-    for combo in itertools.product(*(list(axes[k]) for k in keys)):
+    for combo in itertools.product(*(axes[k] for k in keys)):
         fields = {**base, **dict(zip(keys, combo, strict=True))}
         cand = RunConfig._candidate(**fields)
         if not valid(cand) or (exp.include is not None and not exp.include(cand)):
