@@ -170,8 +170,10 @@ def test_a_registered_plugin_is_swept_beside_the_trivial_predictor(
 
 
 def test_expansions_follow_a_model_registered_again_as_first_order(clean_registry):
-    """:func:`expand` is memoised; what it reads from the model registry (whether a model is
-    second order, which decides its leapfrog runs) is part of the memo's key."""
+    """:func:`expand` builds an experiment's configurations once per process; what it reads
+    from the model registry (whether a model is second order, which decides its leapfrog runs)
+    is asked again at every call. (An ``include`` that asks whether a data file is there:
+    tests/test_real_pendulum.py, tests/test_mujoco_study.py.)"""
     from bench.core._experiments import Experiment, expand
 
     cls = _example_class()  # registers drag_so, second order

@@ -203,26 +203,50 @@ def expand(
     another seed set, :data:`REPLICATION_SEEDS`). ``models`` replaces the experiment's trained
     models (``--models``, e.g. a plug-in beside the built-ins); its trivial predictors stay.
 
-    Expansions are memoised per process on what they are computed from (the experiment, its
-    merged fields and axes, and the registered models' facts that :func:`valid` reads): the
-    campaign's plans and the verdicts expand the same experiments many times.
+    The configurations of an experiment's product are built once per process (:func:`_combos`):
+    the campaign's plans and the verdicts expand the same experiments many times. What decides
+    which of them run (``include``, which may ask whether a data file is there, and
+    :func:`valid`) is asked at every call.
     """
     exp = get(exp) if isinstance(exp, str) else exp
     merged = _merged(exp, profile, seeds, models)
     if merged is None:
         return []
-    base, axes = merged
-    names = axes.get("model", (base.get("model"),))
-    key = (id(exp), repr((base, axes)), tuple((m, _second_order(m)) for m in names))
-    hit = _EXPANDED.get(key)
-    if hit is None or hit[0] is not exp:
-        hit = _EXPANDED[key] = (exp, tuple(_product(exp, profile, base, axes)))
-    return list(hit[1])
+    out, seen = [], set()
+    for cand, config_hash, error in _combos(*merged):
+        if not valid(cand) or (exp.include is not None and not exp.include(cand)):
+            continue
+        if config_hash in seen:
+            continue
+        seen.add(config_hash)
+        if error is not None:
+            raise ValueError(f"experiment {exp.name!r} at {profile}: {error}")
+        out.append(cand)
+    return out
 
 
-# expand's memo: key -> (the experiment, its runs); the experiment is held, so its id is not
-# reused while the entry lives
-_EXPANDED: dict = {}
+# _combos' memo: repr of (fields, axes) -> the product's (configuration, hash, error)
+_COMBOS: dict[str, tuple] = {}
+
+
+def _combos(base: dict, axes: dict) -> tuple:
+    """``(configuration, its config_hash, its check's error or None)`` for every combination
+    of ``axes`` over the fields ``base``, in product order; memoised on their repr."""
+    key = repr((base, axes))
+    hit = _COMBOS.get(key)
+    if hit is None:
+        keys = list(axes)
+        hit = []
+        for combo in itertools.product(*(axes[k] for k in keys)):
+            cand = RunConfig._candidate(**{**base, **dict(zip(keys, combo, strict=True))})
+            try:
+                cand._check()  # a candidate that passes is the RunConfig of its fields
+                error = None
+            except ValueError as e:
+                error = str(e)
+            hit.append((cand, cand.config_hash, error))
+        hit = _COMBOS[key] = tuple(hit)
+    return hit
 
 
 def _merged(exp, profile, seeds, models) -> tuple[dict, dict] | None:
@@ -259,24 +283,6 @@ def _merged(exp, profile, seeds, models) -> tuple[dict, dict] | None:
     elif "seed" not in axes:
         axes["seed"] = seeds
     return base, {k: list(v) for k, v in axes.items()}
-
-
-def _product(exp, profile, base, axes) -> list[RunConfig]:
-    keys = list(axes)
-    out, seen = [], set()
-    for combo in itertools.product(*(axes[k] for k in keys)):
-        fields = {**base, **dict(zip(keys, combo, strict=True))}
-        cand = RunConfig._candidate(**fields)
-        if not valid(cand) or (exp.include is not None and not exp.include(cand)):
-            continue
-        if cand.config_hash in seen:
-            continue
-        seen.add(cand.config_hash)
-        try:
-            out.append(RunConfig(**fields))
-        except ValueError as e:
-            raise ValueError(f"experiment {exp.name!r} at {profile}: {e}") from None
-    return out
 
 
 def valid(cfg: RunConfig) -> bool:
