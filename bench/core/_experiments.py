@@ -213,9 +213,11 @@ def expand(
     if merged is None:
         return []
     out, seen = [], set()
-    for cand, config_hash, error in _combos(*merged):
+    for combo in _combos(*merged):
+        cand = combo.config
         if not valid(cand) or (exp.include is not None and not exp.include(cand)):
             continue
+        config_hash, error = combo.checked()
         if config_hash in seen:
             continue
         seen.add(config_hash)
@@ -225,27 +227,41 @@ def expand(
     return out
 
 
-# _combos' memo: repr of (fields, axes) -> the product's (configuration, hash, error)
-_COMBOS: dict[str, tuple] = {}
+class _Combo:
+    """A combination of an experiment's axes: its configuration (canonical, unchecked) and,
+    computed once when an expansion keeps it, its config_hash and its check's error."""
+
+    __slots__ = ("config", "_checked")
+
+    def __init__(self, config: RunConfig):
+        self.config, self._checked = config, None
+
+    def checked(self) -> tuple[str, str | None]:
+        if self._checked is None:
+            try:
+                self.config._check()  # one that passes is the RunConfig of its fields
+                error = None
+            except ValueError as e:
+                error = str(e)
+            self._checked = (self.config.config_hash, error)
+        return self._checked
 
 
-def _combos(base: dict, axes: dict) -> tuple:
-    """``(configuration, its config_hash, its check's error or None)`` for every combination
-    of ``axes`` over the fields ``base``, in product order; memoised on their repr."""
+# _combos' memo: repr of (fields, axes) -> the product's combinations
+_COMBOS: dict[str, tuple[_Combo, ...]] = {}
+
+
+def _combos(base: dict, axes: dict) -> tuple[_Combo, ...]:
+    """Every combination of ``axes`` over the fields ``base``, in product order; memoised on
+    their repr."""
     key = repr((base, axes))
     hit = _COMBOS.get(key)
     if hit is None:
         keys = list(axes)
-        hit = []
-        for combo in itertools.product(*(axes[k] for k in keys)):
-            cand = RunConfig._candidate(**{**base, **dict(zip(keys, combo, strict=True))})
-            try:
-                cand._check()  # a candidate that passes is the RunConfig of its fields
-                error = None
-            except ValueError as e:
-                error = str(e)
-            hit.append((cand, cand.config_hash, error))
-        hit = _COMBOS[key] = tuple(hit)
+        hit = _COMBOS[key] = tuple(
+            _Combo(RunConfig._candidate(**{**base, **dict(zip(keys, combo, strict=True))}))
+            for combo in itertools.product(*(axes[k] for k in keys))
+        )
     return hit
 
 
