@@ -40,6 +40,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._base import MAX_STEPS
 from ._coordinates import to_momentum
 from ._precision import require_x64
 from ._registry import make
@@ -238,6 +239,13 @@ def _generate(system, config: DatasetConfig) -> dict[str, np.ndarray]:
         ts,
         np.concatenate([args_train, args_test]),
     )
+    bad = np.flatnonzero(~np.isfinite(traj).all(axis=(1, 2)))
+    if bad.size:
+        raise RuntimeError(
+            f"{system.name} seed {config.seed}: the ground truth of {bad.size} of {len(traj)} "
+            f"trajectories is not finite (first {bad[:5].tolist()}): the solve ran out of its "
+            f"{MAX_STEPS} steps or diverged; nothing was cached"
+        )
     z_train = _windows(traj[: config.n_train], k_start, config.chunk)
     z_test = _windows(traj[config.n_train :], k_start_test, config.test_chunks * config.chunk)
 

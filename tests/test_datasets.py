@@ -163,6 +163,22 @@ def test_cache_hit_does_not_simulate(tmp_path, monkeypatch, fake):
     assert [p.name for p in (tmp_path / "datasets").iterdir()] == [f"{c.hash()}.npz"]
 
 
+def test_a_failed_ground_truth_raises_and_caches_nothing(tmp_path, monkeypatch):
+    """A solve that runs out of steps is not finite from there on (``simulate_batch``)."""
+    calls = []
+    fake = _fake_simulate(calls)
+
+    def failing(system, z0s, ts, args):
+        out = fake(system, z0s, ts, args)
+        out[2, 5:] = np.inf
+        return out
+
+    monkeypatch.setattr(_dataset, "_simulate", failing)
+    with pytest.raises(RuntimeError, match=r"1 of 8 trajectories is not finite \(first \[2\]\)"):
+        make_dataset(_config(), cache_dir=tmp_path)
+    assert not (tmp_path / "datasets").exists() or not any((tmp_path / "datasets").iterdir())
+
+
 @pytest.mark.parametrize("damage", ["truncate", "flip", "tamper", "empty"])
 def test_corrupt_cache_is_rebuilt(tmp_path, fake, damage):
     c = _config()
