@@ -134,8 +134,8 @@ CAMPAIGN_PID := .cache/paper-core.pid
 CAMPAIGN_LOG := .cache/paper-core.log
 CAMPAIGN_DRAIN := $(abspath .cache/paper-core.drain)
 CAMPAIGN_WORKERS ?= 2
-# claims whose seeds 0-4 run before the three phases (e.g. CAMPAIGN_FIRST=9: the runs an open
-# piece of work waits for); empty: the phases alone
+# claims whose seeds 0-4 and then 5-9 run before the three phases (e.g. CAMPAIGN_FIRST=9: the
+# runs an open piece of work waits for, to a replicated verdict); empty: the phases alone
 CAMPAIGN_FIRST ?=
 campaign_pid = $$(cat $(CAMPAIGN_PID) 2>/dev/null)
 campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
@@ -145,7 +145,8 @@ paper-core: $(STAMP)
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
 	else rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) FIRST="$(CAMPAIGN_FIRST)" \
 		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
-		{ [ -z "$$FIRST" ] || nice -n 19 "$$@" --claims "$$FIRST"; } && \
+		{ [ -z "$$FIRST" ] || { nice -n 19 "$$@" --claims "$$FIRST" && \
+			nice -n 19 "$$@" --replication --claims "$$FIRST"; }; } && \
 		nice -n 19 "$$@" --replication --signed && nice -n 19 "$$@" && \
 		exec nice -n 19 "$$@" --replication' sh \
 		$(PY) -m bench --results $(CAMPAIGN_DIR) campaign \
