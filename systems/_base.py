@@ -13,9 +13,12 @@ exactly, whatever the coordinates.
 
 Ground truth is integrated in float64 by diffrax (8th-order Dormand-Prince, PID step control at
 rtol = atol = 1e-11, or the tighter ``ground_truth_tol`` of a system that sets one), saved at
-the requested times. The batched solver is one module-level ``eqx.filter_jit`` function
-taking the system as an argument, so it is traced once per system type, state size and number
-of save times (array fields such as masses are traced, not baked in).
+the requested times, in groups of :data:`TRUTH_GROUP` trajectories. A system may integrate
+another form of its motion and map it back to (q, qdot) (``_truth_state``, ``_truth_field``,
+``_truth_to_z``): the rotor integrates its frame, where its Euler angles are singular. The
+batched solver is one module-level ``eqx.filter_jit`` function taking the system as an
+argument, so it is traced once per system type, state size and number of save times (array
+fields such as masses are traced, not baked in).
 """
 
 from __future__ import annotations

@@ -148,8 +148,9 @@ def _euler_equations(inertia, torque):
 
 
 def _compare_rotation(system, z0, ang, inertia, torque):
-    """Our Lagrangian truth against R and omega integrated by scipy (DOP853) from the same
-    start: the rotation matrices and body angular velocities along the trajectory."""
+    """Our truth (the gyroscope's Euler-Lagrange solve, the rotor's frame) against R and omega
+    integrated by scipy (DOP853) from the same start: the rotation matrices and body angular
+    velocities along the trajectory."""
     zs = np.asarray(system.simulate(z0, TS))
     d = system.dof
     r0 = np.asarray(rotation_matrix(z0[ang]))
