@@ -191,8 +191,9 @@ paper-core-stop:
 # .whl in the call's carry): installed into a temporary folder first. GPU_WORKERS > 1: that many sweep
 # processes share the GPU, each with its share of its memory (for runs that train alone:
 # pixels, fresh-state objectives). The campaign's own cells go the same way (GPU_PROFILE=
-# paper-core GPU_DIR=results/reference/paper). The working tree travels to the device (64 MiB
-# at most): move results/reference/quick out of it for the call.
+# paper-core GPU_DIR=results/reference/paper). GPU_MODELS: only these trained models (sweep's
+# --models). The working tree travels to the device (64 MiB at most): move results/reference
+# out of it for the call (docs/studies/campaign.md, "The MuJoCo call, prepared").
 # On the device: make paper-gpu GPU_OUT=$OUT
 # Here: tar xzf <files_at>/rows.tgz --skip-old-files -C $(GPU_DIR), then figures and report.
 GPU_PY ?= python3
@@ -203,6 +204,7 @@ GPU_EXPERIMENTS ?= coordinates energy second_order symplectic loss damped relati
 GPU_SECONDS ?= 540
 GPU_OUT ?=
 GPU_WORKERS ?= 1
+GPU_MODELS ?=
 paper-gpu:
 	@end=$$(( $$(date +%s) + $(GPU_SECONDS) )); mkdir -p $(GPU_DIR)/.rows; start=$$(mktemp); \
 	if [ -d .whl ]; then site=$$(mktemp -d); $(GPU_PY) -m pip install -q --no-index --no-deps \
@@ -219,7 +221,7 @@ paper-gpu:
 		if [ $$left -le 20 ]; then echo "paper-gpu: $(GPU_SECONDS) s spent; $$e and after not started"; break; fi; \
 		echo "paper-gpu: $$e ($$left s left)"; \
 		timeout $$left $(GPU_PY) -m bench --results $(GPU_DIR) sweep $$e --profile $(GPU_PROFILE) \
-			--seeds $(GPU_SEEDS) --workers $(GPU_WORKERS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
+			--seeds $(GPU_SEEDS) $(if $(GPU_MODELS),--models $(GPU_MODELS)) --workers $(GPU_WORKERS) --no-progress || echo "paper-gpu: $$e stopped (exit $$?)"; \
 	done; \
 	[ -z "$${packer:-}" ] || kill $$packer; pack; \
 	echo "paper-gpu: $$(find $(GPU_DIR)/.rows -type f -newer $$start | wc -l) new rows, $$(ls $(GPU_DIR)/.rows | wc -l) in $(GPU_DIR)"; \
