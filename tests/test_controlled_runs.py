@@ -189,6 +189,9 @@ def test_controlled_runs_train_as_an_ensemble_whose_members_are_the_single_runs(
     together, alone = run("on"), run("off")
     assert "fell back" not in capsys.readouterr().err  # trained as one program
     assert sorted(r["ensemble_size"] for r in together) == [2, 2]
+    # a member's wall time holds its share of the ensemble's training, as the schema says
+    for r in together:
+        assert r["wall_seconds"] >= r["train_seconds"] + r["compile_seconds"] > 0
     a = load_runs(tmp_path / "on").set_index("config_hash").sort_index()
     b = load_runs(tmp_path / "off").set_index("config_hash").sort_index()
     assert list(a.index) == list(b.index) and (a["status"] == "ok").all()

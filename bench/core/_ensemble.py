@@ -369,7 +369,7 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
     built: list = [None] * len(configs)
     trained: list = [None] * len(configs)
     rolled: list = [None] * len(configs)
-    c_start = time.process_time()
+    c_start, t_start = time.process_time(), time.perf_counter()
     if len(configs) > 1 and member is not None:
         try:
             built = [steps.build(c, cache_root) for c in configs]
@@ -404,7 +404,9 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
                     f"ensemble rollouts fell back to single ones: {one_line(e, 300)}",
                     file=sys.stderr,
                 )
-    shared = (time.process_time() - c_start) / len(configs)  # training and rollouts, split
+    # training and rollouts, split among the members
+    shared = (time.process_time() - c_start) / len(configs)
+    shared_wall = (time.perf_counter() - t_start) / len(configs)
     rows = []
     for c, b, t, r in zip(configs, built, trained, rolled, strict=True):
         if t is None:  # trained alone
@@ -413,6 +415,7 @@ def execute_group(configs: Sequence[RunConfig], cache_root=None) -> list[dict]:
             row = run_steps(c, ensemble_member(steps, b, t, r), cache_root)
         row["ensemble_size"] = 1 if t is None else len(configs)
         row["cpu_seconds"] = row.get("cpu_seconds", 0.0) + shared
+        row["wall_seconds"] = row.get("wall_seconds", 0.0) + shared_wall
         rows.append(row)
     return rows
 

@@ -211,7 +211,12 @@ _RUN = {
     "rollout_seconds": ("s", "wall time of all test rollouts (compiled)"),
     "rollout_seconds_per_traj": ("s", "rollout_seconds / n_test"),
     "checkpoint_seconds": ("s", "wall time of scoring the learning-curve checkpoints"),
-    "wall_seconds": ("s", "wall time of the whole run: data, compile, training, evaluation"),
+    "wall_seconds": (
+        "s",
+        "wall time of the whole run: data, compile, training, evaluation (an ensemble member: "
+        "its own evaluation plus its share of the ensemble's; rows stored before the share was "
+        "added hold only their own part)",
+    ),
     "cpu_seconds": (
         "s (CPU)",
         "CPU time of the run's process over the run, every thread (an ensemble member: its "
