@@ -107,7 +107,11 @@ def _meta(results_dir: Path, runs: pd.DataFrame) -> list[str]:
 
 def compute_lines(runs: pd.DataFrame) -> list[str]:
     """The compute the stored runs took, per device: each run's wall time (one worker each)
-    and, where the rows record it, the CPU time measured by the run's process."""
+    and, where the rows record it, the CPU time measured by the run's process.
+
+    An ensemble member stored before its row carried its share of the ensemble's wall time
+    holds only its own evaluation's; its ``train_seconds + compile_seconds`` (its share of
+    the ensemble's) is added to the total and named beside it."""
     if "wall_seconds" not in runs or not len(runs):
         return []
     devices = (
@@ -116,13 +120,30 @@ def compute_lines(runs: pd.DataFrame) -> list[str]:
     out = []
     for device, rows in runs.groupby(devices, sort=True):
         wall = float(np.nansum(rows["wall_seconds"].to_numpy(float)))
+        short, added = _missing_ensemble_share(rows)
         n = f"{len(rows)} run" + ("s" if len(rows) != 1 else "")
-        line = f"- compute on {device}: {n}, {_hours(wall)} run wall time"
+        line = f"- compute on {device}: {n}, {_hours(wall + added)} run wall time"
+        if short:
+            whose = f"{short} rows'" if short != 1 else "1 row's"
+            line += (
+                f" (with {_hours(added)} of ensemble training that {whose} stored wall time lacks)"
+            )
         if "cpu_seconds" in rows and rows["cpu_seconds"].notna().any():
             cpu = rows["cpu_seconds"].dropna()
             line += f", {_hours(float(cpu.sum()))} CPU time (measured by {len(cpu)})"
         out.append(line)
     return out
+
+
+def _missing_ensemble_share(rows: pd.DataFrame) -> tuple[int, float]:
+    """How many ensemble members' stored wall time is below their own share of the
+    ensemble's training (``train_seconds + compile_seconds``), and that share's sum."""
+    need = ("ensemble_size", "train_seconds", "compile_seconds")
+    if not all(c in rows for c in need):
+        return 0, 0.0
+    share = rows["train_seconds"].fillna(0.0) + rows["compile_seconds"].fillna(0.0)
+    short = (rows["ensemble_size"].fillna(1) > 1) & (rows["wall_seconds"] < share)
+    return int(short.sum()), float(share[short].sum())
 
 
 def _hours(seconds: float) -> str:

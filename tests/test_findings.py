@@ -157,6 +157,31 @@ def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
     assert "paper_gpu on gpu B: 1 run" in sentence
 
 
+def test_an_ensemble_member_without_its_share_of_wall_time_is_counted_and_named():
+    import pandas as pd
+
+    from bench._report import compute_lines
+
+    runs = pd.DataFrame(
+        {
+            "device": ["gpu"] * 4,
+            "ensemble_size": [10, 10, 10, 1],
+            # first member: stored before the share; second: with it; fourth: trained alone
+            "wall_seconds": [0.5, 61.0, 0.5, 30.0],
+            "train_seconds": [50.0, 50.0, 50.0, 20.0],
+            "compile_seconds": [10.0, 10.0, 10.0, 5.0],
+        }
+    )
+    runs.loc[2, "ensemble_size"] = 1  # alone and fast: its wall is what it is
+    assert compute_lines(runs) == [
+        "- compute on gpu: 4 runs, 2.5 min run wall time"
+        " (with 1.0 min of ensemble training that 1 row's stored wall time lacks)"
+    ]
+    assert compute_lines(runs.assign(ensemble_size=1)) == [
+        "- compute on gpu: 4 runs, 1.5 min run wall time"
+    ]
+
+
 def test_a_protocols_verdict_cell_is_read_per_seed_set():
     from bench.findings import _short
 
