@@ -200,3 +200,60 @@ def test_controlled_runs_train_as_an_ensemble_whose_members_are_the_single_runs(
     # the seeds differ: a member is not its neighbour's copy
     assert a["final_loss"].nunique() == 2
     assert not any(r["train_cached"] for r in together + alone)
+
+
+class _Killed(Exception):
+    """Stands for a kill: raised right after a training's second save."""
+
+
+def test_a_killed_controlled_training_resumes_for_the_same_data_only(tmp_path, monkeypatch):
+    import dataclasses
+    import shutil
+
+    from bench.core import _params
+    from bench.core._resume import RECORD
+
+    c = RunConfig(**{**SMOKE, "steps": 23}, model="node")
+    real_config, real_point = C.train_config, _params.resume_point
+    monkeypatch.setattr(
+        C, "train_config", lambda c: dataclasses.replace(real_config(c), steps_per_call=5)
+    )
+    built = C.build(c)
+    whole, whole_meta = C.train(c, built, tmp_path / "whole", False)
+    assert whole_meta["resumed_step"] == 0
+
+    def killing(config, cache_root, data=""):
+        point = real_point(config, cache_root, data)
+        point.every, save, saves = 0.0, point.save, []
+
+        def save_then_die(*state):
+            save(*state)
+            saves.append(state[0])
+            if len(saves) == 2:
+                raise _Killed
+
+        point.save = save_then_die
+        return point
+
+    monkeypatch.setattr(_params, "resume_point", killing)
+    with pytest.raises(_Killed):
+        C.train(c, built, tmp_path / "cache", False)
+    monkeypatch.setattr(_params, "resume_point", real_point)
+    folder = _params.params_dir(tmp_path / "cache", c.train_hash) / _params.RESUME
+    assert json.loads((folder / RECORD).read_text())["done"] == 10
+    # the same configuration on other data (another file's sha256) starts afresh
+    shutil.copytree(tmp_path / "cache", tmp_path / "other")
+    _, meta = C.train(c, dataclasses.replace(built, sha256="other"), tmp_path / "other", False)
+    assert meta["resumed_step"] == 0
+    again, meta = C.train(c, built, tmp_path / "cache", False)
+    assert meta["resumed_step"] == 10 and not folder.exists()
+    for x, y in zip(
+        jax.tree.leaves(eqx_params(again)), jax.tree.leaves(eqx_params(whole)), strict=True
+    ):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+
+
+def eqx_params(model):
+    import equinox as eqx
+
+    return eqx.filter(model, eqx.is_inexact_array)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -211,16 +212,23 @@ def record(c: RunConfig, res, cache_root) -> dict:
 
 
 def train(c: RunConfig, built: Built, cache_root, progress: bool):
-    """``(model, meta)``: trained (never cached); a trivial predictor untouched."""
+    """``(model, meta)``: trained (never cached, but a killed training resumes from its last
+    saved state, for the same code and data file); a trivial predictor untouched."""
     import models
 
     from ._fit import UNTRAINED
+    from ._params import resumable_training
     from ._train import train as fit
 
     model, windows, objective = member_inputs(c, built)
     if isinstance(model, models.AbstractTrivialModel):
         return model, dict(UNTRAINED)
-    res = fit(model, windows, train_config(c), progress=progress, objective=objective)
+    tc = train_config(c)
+
+    def fit_from(resume):
+        return fit(model, windows, tc, progress=progress, objective=objective, resume=resume)
+
+    res = resumable_training(c, Path(cache_root), fit_from, data=built.sha256)
     return res.model, record(c, res, cache_root)
 
 

@@ -167,8 +167,27 @@ def cached_training(
             return loaded, meta
         except Exception:  # a corrupt cache entry, or one without these checkpoints: retrain
             pass
-    resume = ResumePoint(pdir / RESUME, code=code_fingerprint())
+    resume = resume_point(config, cache_root)
     res = fit(resume)
     meta = store_trained(config, res, cache_root, checkpoints)
     resume.clear()
     return res.model, meta
+
+
+def resume_point(config: RunConfig, cache_root: Path, data: str = "") -> ResumePoint:
+    """Where the training of ``config`` keeps its state while it runs
+    (``params/<train_hash>/resume/``), for this code and, where the configuration does not
+    name its data, for the data of sha256 ``data``: a state saved for other code or data is
+    ignored."""
+    code = code_fingerprint() + (f"+data:{data}" if data else "")
+    return ResumePoint(params_dir(cache_root, config.train_hash) / RESUME, code=code)
+
+
+def resumable_training(config: RunConfig, cache_root: Path, fit: Callable, data: str = ""):
+    """``fit(resume)`` (a :class:`bench.TrainResult`) for a training that is not cached: a
+    killed one goes on from its last saved state (:func:`resume_point`), and the state is
+    removed once it ends."""
+    resume = resume_point(config, cache_root, data)
+    res = fit(resume)
+    resume.clear()
+    return res
