@@ -363,24 +363,36 @@ def test_status_names_the_trainings_saved_mid_way(tmp_path):
     as restarting where other code saved it; stored runs and unsaved ones are not listed."""
     import json
 
-    from bench.core._params import RESUME, code_fingerprint, params_dir
+    from bench.core._params import DATA_TAG, RESUME, code_fingerprint, params_dir
 
-    (name, first), (_, second) = C.campaign_runs("paper-core")[:2]
-    for cfg, code in ((first, code_fingerprint()), (second, "other code")):
+    runs = C.campaign_runs("paper-core")
+    (name, first), (_, second) = runs[:2]
+    # a controlled run's state names its data file beside the code
+    controlled = next(
+        c for _, c in runs if c.observation == "controlled" and c.model != "constant_velocity"
+    )
+    saved = (
+        (first, code_fingerprint()),
+        (second, "other code"),
+        (controlled, f"{code_fingerprint()}{DATA_TAG}abc"),
+    )
+    for cfg, code in saved:
         folder = params_dir(tmp_path, cfg.train_hash) / RESUME
         folder.mkdir(parents=True)
         record = {"done": 300, "train_seconds": 7200.0, "code": code}
         (folder / "resume.json").write_text(json.dumps(record))
     lines = C.saved_trainings("paper-core", None, cache_root=tmp_path)
-    assert len(lines) == 2, lines
+    assert len(lines) == 3, lines
     assert f"seed {first.seed}: step 300 of {first.steps:,} (2.00 h trained; resumes)" in lines[0]
     assert lines[0].startswith(f"claim {E.get(name).claim}, {name}, {first.model}")
     assert lines[1].endswith("restarts: saved by other code)")
+    assert f"mujoco, {controlled.model} seed {controlled.seed}:" in lines[2]
+    assert lines[2].endswith("resumes)")
     # a stored run is not listed
     results = tmp_path / "results"
     row = {"config_hash": first.config_hash, "status": "ok", "system": first.system}
     _store.write_row(results, {**row, "model": first.model, "seed": first.seed})
-    assert len(C.saved_trainings("paper-core", results, cache_root=tmp_path)) == 1
+    assert len(C.saved_trainings("paper-core", results, cache_root=tmp_path)) == 2
 
 
 def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):

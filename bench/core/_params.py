@@ -24,6 +24,7 @@ from ._resume import ResumePoint
 # any of their files changed since.
 TRAIN_CODE = ("models", "systems", "bench.core")
 RESUME = "resume"  # under an entry: the state of its training while it runs (bench.core._resume)
+DATA_TAG = "+data:"  # joins a resume state's code fingerprint to its data's sha256
 
 
 def code_fingerprint() -> str:
@@ -179,8 +180,14 @@ def resume_point(config: RunConfig, cache_root: Path, data: str = "") -> ResumeP
     (``params/<train_hash>/resume/``), for this code and, where the configuration does not
     name its data, for the data of sha256 ``data``: a state saved for other code or data is
     ignored."""
-    code = code_fingerprint() + (f"+data:{data}" if data else "")
+    code = code_fingerprint() + (f"{DATA_TAG}{data}" if data else "")
     return ResumePoint(params_dir(cache_root, config.train_hash) / RESUME, code=code)
+
+
+def saved_by_this_code(saved: str) -> bool:
+    """Whether a state saved with ``code`` ``saved`` (:func:`resume_point`) was saved by the
+    code that runs now, whatever data it names."""
+    return str(saved).partition(DATA_TAG)[0] == code_fingerprint()
 
 
 def resumable_training(config: RunConfig, cache_root: Path, fit: Callable, data: str = ""):

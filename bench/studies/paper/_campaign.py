@@ -346,12 +346,11 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
 
     import systems
 
-    from ...core._params import RESUME, code_fingerprint, params_dir
+    from ...core._params import RESUME, params_dir, saved_by_this_code
     from ...core._resume import RECORD
 
     cache_root = Path(cache_root or systems.cache_root())
     done = done_hashes(Path(results_dir)) if results_dir and Path(results_dir).exists() else set()
-    code = code_fingerprint()
     lines, seen = [], set()
     for seeds in (None, replication_seeds(profile)):
         for name, c in campaign_runs(profile, seeds):
@@ -363,7 +362,11 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
                 rec = json.loads(record.read_text())
             except (OSError, ValueError):
                 continue
-            state = "resumes" if rec.get("code") == code else "restarts: saved by other code"
+            state = (
+                "resumes"
+                if saved_by_this_code(rec.get("code"))
+                else "restarts: saved by other code"
+            )
             lines.append(
                 f"claim {get(name).claim}, {name}, {c.model} seed {c.seed}: step "
                 f"{rec['done']:,} of {c.steps:,} ({rec['train_seconds'] / 3600:.2f} h trained; "
