@@ -115,7 +115,8 @@ def test_disagreeing_seed_sets_do_not_replicate(
     assert j.primary["3"].verdict == primary and j.replication["3"].verdict == replication
     assert final["3"].verdict == DOES_NOT_REPLICATE and not settled(final["3"].verdict)
     assert j.replicates("3") is False
-    assert final["3"].detail.startswith(f"seeds 0-4: {primary}; seeds 5-9: {replication}. ")
+    assert final["3"].detail.startswith(f"seeds 0-4: {primary}; seeds 5-9: {replication}; ")
+    assert "reverses" in final["3"].detail.split(". ")[0]
     assert final["3"].detail.endswith(j.primary["3"].detail)
     # the demoted reading and the readings behind it, for the report's causes
     assert final["3"].primary == primary
@@ -252,26 +253,74 @@ def test_losing_significance_without_a_seed_does_not_demote(reproduce_primary, f
     assert v.verdict == R.REPRODUCED and v.primary is None and v.readings == ""
 
 
-def test_a_part_left_undecided_on_the_other_set_does_not_replicate_without_a_reversal(
+def _replication_gains(runs, gains):
+    runs = runs.copy()
+    node = runs.loc[_chain(runs, "node")].set_index("seed")["rollout_error"]
+    so = _chain(runs, "node_so") & runs["seed"].isin(list(gains))
+    seeds = runs.loc[so, "seed"]
+    runs.loc[so, "rollout_error"] = (seeds.map(node) / seeds.map(gains)).values
+    return runs
+
+
+def test_a_part_left_undecided_on_the_other_set_adds_evidence(
     reproduce_primary, reproduce_replication
 ):
     """Seeds 5-9 leave undecided a part seeds 0-4 sign (SO gains 3.3x on four of them, loses 3x
-    on one): the claim does not replicate, and the report says no part reverses."""
+    on one). No part reverses and the estimates do not differ beyond chance: the sets add up,
+    and the final reading is the ten seeds pooled, each set's reading kept beside it."""
     runs, curves = _join(reproduce_primary, reproduce_replication)
-    runs = runs.copy()
-    gains = {5: 3.3, 6: 3.3, 7: 1 / 3, 8: 3.3, 9: 3.3}
-    node = runs.loc[_chain(runs, "node")].set_index("seed")["rollout_error"]
-    so = _chain(runs, "node_so") & runs["seed"].isin(REPLICATION)
-    seeds = runs.loc[so, "seed"]
-    runs.loc[so, "rollout_error"] = (seeds.map(node) / seeds.map(gains)).values
+    runs = _replication_gains(runs, {5: 3.3, 6: 3.3, 7: 1 / 3, 8: 3.3, 9: 3.3})
     j = judge(runs, curves, PROFILE, loso=False)
     assert j.primary["3"].verdict == R.REPRODUCED
     assert j.replication["3"].verdict == R.INCONCLUSIVE
-    assert _final(j)["3"].verdict == DOES_NOT_REPLICATE
+    assert j.replicates("3") is True and why_not_replicated(j, "3") is None
+    assert _final(j)["3"] is j.pooled["3"] and j.pooled["3"].n_seeds == 10
+    said = pooled_moves(j, "3")
+    assert said.startswith(f"seeds 0-4 read {R.REPRODUCED}, seeds 5-9 {R.INCONCLUSIVE}"), said
+
+
+def test_estimates_that_differ_beyond_chance_do_not_replicate(
+    reproduce_primary, reproduce_replication
+):
+    """Both sets sign SO's gain on the chain, but one at 30x and the other at 3x on every seed:
+    no part reverses, yet the two estimates differ far beyond their spread (Welch's test), so
+    the sets cannot be pooled: *does not replicate*, with the reason named."""
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    jitter = (1.0, 1.05, 0.95, 1.1, 0.9)
+    runs = _replication_gains(runs, {s: 30.0 * j for s, j in zip(PRIMARY, jitter)})
+    runs = _replication_gains(runs, {s: 3.0 * j for s, j in zip(REPLICATION, jitter)})
+    j = judge(runs, curves, PROFILE, loso=False)
+    name = "chain_pendulum: (a) log(NODE / NODE+SO)"
+    statuses = [
+        {q.name: q.status for q in v.parts}[name] for v in (j.primary["3"], j.replication["3"])
+    ]
+    assert statuses == ["holds", "holds"]
+    final = _final(j)["3"]
+    assert final.verdict == DOES_NOT_REPLICATE and j.replicates("3") is False
+    assert f"{name}: the seed sets' estimates differ (Welch p = " in final.detail
     why = why_not_replicated(j, "3")
-    assert why.startswith("no part reverses"), why
-    assert "chain_pendulum: (a) log(NODE / NODE+SO): holds on seeds 0-4" in why
-    assert "undecided on seeds 5-9" in why
+    assert why.startswith("no part reverses (holds <-> contradicts), but "), why
+
+
+@pytest.mark.parametrize("stronger", [1.0, 2.0, 4.0])
+def test_stronger_evidence_in_one_set_never_weakens_the_verdict(
+    reproduce_primary, reproduce_replication, stronger
+):
+    """Monotone in the evidence: the replication set's SO gain moved further in the claim's
+    favour (a modest 2.5x, then 5x, then 10x, each with the same spread) never turns a signed
+    verdict inconclusive; with the modest gain, which one set alone may leave undecided, the
+    pooled reading already signs the part."""
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    jitter = (1.0, 1.2, 0.8, 1.3, 0.7)
+    base = {s: 2.5 * stronger * j for s, j in zip(REPLICATION, jitter)}
+    primary_gain = {s: 2.5 * stronger * j for s, j in zip(PRIMARY, jitter[::-1])}
+    runs = _replication_gains(_replication_gains(runs, primary_gain), base)
+    j = judge(runs, curves, PROFILE, loso=False)
+    assert j.replicates("3") is True
+    part = {q.name: q.status for q in j.pooled["3"].parts}[
+        "chain_pendulum: (a) log(NODE / NODE+SO)"
+    ]
+    assert part == "holds"
 
 
 def test_pooling_that_resolves_a_part_is_said(
@@ -304,8 +353,11 @@ def test_pooling_that_resolves_a_part_is_said(
     assert _final(j)["3"].verdict == R.REPRODUCED and j.replicates("3") is True
     said = pooled_moves(j, "3")
     name = j.pooled["3"].parts[0].name
-    assert said.startswith(f"both seed sets read {R.INCONCLUSIVE}, pooled {R.REPRODUCED}: ")
-    assert f"{name}: holds on 0-9 (" in said and "undecided on each set alone" in said
+    assert said.startswith(
+        f"seeds 0-4 read {R.INCONCLUSIVE}, seeds 5-9 {R.INCONCLUSIVE}; they add up, pooled "
+        f"{R.REPRODUCED}: "
+    ), said
+    assert f"{name}: holds on 0-9 (" in said and "undecided on 0-4, undecided on 5-9" in said
     assert pooled_moves(j, "5") is None and why_not_replicated(j, "3") is None
 
 

@@ -151,3 +151,16 @@ def test_the_reports_tables_tell_the_two_rates_apart():
     own = paper_only.assign(lr=paper_only["model"].map({"hnn_so": R.STABLE_LR}).fillna(R.PAPER_LR))
     assert " lr " not in _experiment_table(own)[0]
     assert all(" lr=" not in d.best for d in discrimination_groups(own))
+
+
+def test_a_diverged_run_is_scored_and_counted_not_dropped():
+    """Every run counts: a diverged HNN run on the gyroscope scores the worst error and is
+    counted, so the seed stays in the paired comparison instead of leaving it."""
+    runs = cell_tables(R.RIGID_BODIES, REPRODUCE, spread=0.05)
+    hit = (runs["system"] == "gyroscope") & (runs["model"] == "hnn_so") & (runs["seed"] == 2)
+    assert hit.sum() == 1
+    runs.loc[hit, ["status", "rollout_error"]] = ["diverged", float("nan")]
+    v = R.claim_13(runs)
+    assert v.n_failed == 1, v.detail
+    share = next(p for p in v.parts if p.name == f"gyroscope: {SHARE}")
+    assert share.n == 5, share.text()

@@ -71,14 +71,32 @@ PROFILES: dict[str, dict[str, object]] = {
 }
 # Selections: name -> the profile whose runs they select from (see the module docstring).
 # paper-core: the paper's per-run budget and seeds on the cells each verdict needs at k = 2,
-# what a 2-core CPU can finish in a background campaign (`make paper-core`).
-SELECTIONS: dict[str, str] = {"paper-core": "paper"}
+# what a 2-core CPU can finish in a background campaign (`make paper-core`). paper-k: the same
+# budget on the paper's other numbers of links (k = 1, 3, 4) of the experiments that sweep k
+# (Figs. 2-5), the background campaign after paper-core (`make paper-k`).
+SELECTIONS: dict[str, str] = {"paper-core": "paper", "paper-k": "paper"}
 for _sel, _base in SELECTIONS.items():
     PROFILES[_sel] = dict(PROFILES[_base])
 # A verdict counts when it replicates: each profile's claims are judged again on a
 # disjoint seed set, stored beside the profile's own runs (`make replicate` at quick; the
 # paper-core campaign runs them after its own seeds). A selection has its base profile's.
 REPLICATION_SEEDS: dict[str, tuple[int, ...]] = {"quick": (5, 6, 7, 8, 9), "paper": (5, 6, 7, 8, 9)}
+
+
+def base_profile(profile: str | None) -> str | None:
+    """The profile whose runs ``profile`` selects from: a selection's base, else itself."""
+    return SELECTIONS.get(profile, profile) if profile is not None else None
+
+
+def speaking_profiles(profile: str | None) -> frozenset:
+    """The row labels whose tagged rows speak for ``profile`` (rows of older declarations,
+    matched by experiment name rather than by cell): the profile itself and, for a base profile
+    (``paper``), its selections (``paper-core``, ``paper-k``), whose cells are its own. A
+    selection reads its own label only, so that ``paper-core``'s k = 2 verdicts never take in
+    ``paper-k``'s other links."""
+    if profile is None:
+        return frozenset()
+    return frozenset({profile, *(s for s, b in SELECTIONS.items() if b == profile)})
 
 
 def replication_seeds(profile: str | None) -> tuple[int, ...]:

@@ -127,6 +127,17 @@ def initial_state(runs: pd.DataFrame) -> pd.Series:
     return params_of(runs).map(lambda p: p.get("initial", "equilibrium"))
 
 
+def labelled(runs: pd.DataFrame, profile: str | None) -> pd.Series:
+    """Whether each row's ``profile`` label speaks for ``profile`` (``speaking_profiles``;
+    unlabelled rows always do)."""
+    from ._experiments import speaking_profiles
+
+    if "profile" not in runs or profile is None:
+        return pd.Series(True, index=runs.index)
+    col = runs["profile"]
+    return col.isna() | col.isin(list(speaking_profiles(profile)))
+
+
 def pick_profile(runs: pd.DataFrame) -> str | None:
     """The profile whose runs the figures show: the one with the most rows (None if untagged)."""
     if "profile" not in runs or not len(runs) or runs["profile"].isna().all():
@@ -135,12 +146,17 @@ def pick_profile(runs: pd.DataFrame) -> str | None:
 
 
 def load_tables(results_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
-    """(runs, curves, profile) restricted to the chosen profile."""
+    """(runs, curves, profile): the chosen profile (:func:`pick_profile`) and the rows of its
+    family, every profile with the same base (``paper-core`` beside ``paper-k`` and ``paper``:
+    the same budget on other cells, which a claim's rule reaches by cell, never by label)."""
+    from ._experiments import base_profile
+
     runs = _store.load_runs(results_dir)
     curves = _store.load_curves(results_dir)
     profile = pick_profile(runs)
     if profile is not None:
-        runs = runs[runs["profile"] == profile].reset_index(drop=True)
+        family = runs["profile"].map(base_profile) == base_profile(profile)
+        runs = runs[family].reset_index(drop=True)
     if len(curves) and len(runs):
         curves = curves[curves["config_hash"].isin(runs["config_hash"])]
     return runs, curves, profile
@@ -200,7 +216,7 @@ def experiment_rows(runs: pd.DataFrame, name: str, profile: str | None) -> pd.Da
             cells = {cell_key(c) for c in expand(name, profile)}
             match = pd.Series([k in cells for k in row_cell_keys(runs)], index=runs.index)
             if "experiment" in runs:  # rows of older declarations of the same experiment
-                match |= runs["experiment"] == name
+                match |= (runs["experiment"] == name) & labelled(runs, profile)
             return runs[match].reset_index(drop=True)
         except ValueError:
             pass

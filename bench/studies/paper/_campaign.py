@@ -119,21 +119,29 @@ def campaign_runs(
     for name in campaign_experiments(profile, order, claims):
         cfgs = [c for c in expand(name, profile, seeds=seeds) if c.config_hash not in seen]
         seen.update(c.config_hash for c in cfgs)
-        cfgs.sort(key=run_seconds, reverse=True)
+        cfgs.sort(key=lambda c: (-_links(c), run_seconds(c)), reverse=True)
         out += [(name, c) for c in cfgs]
     return out
 
 
+def _links(c) -> int:
+    """A run's number of links (0 where the system has none): within a claim the campaign
+    finishes the cheaper k first, so that each k is judged as soon as it can be (paper-k
+    sweeps k = 1, 3, 4; a claim of one k keeps its longest-first order)."""
+    return int(c.k or 0)
+
+
 def priority(profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS, claims=None):
     """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
-    first): earlier claims first (``order``), longest runs first within a claim."""
+    first): earlier claims first (``order``), then fewer links (k) first, then longest runs
+    first."""
     rank = {}
     for i, name in enumerate(campaign_experiments(profile, order, claims)):
         for c in expand(name, profile, seeds=seeds):
             rank.setdefault(c.config_hash, i)
 
     def key(c):
-        return (-rank.get(c.config_hash, len(rank)), run_seconds(c))
+        return (-rank.get(c.config_hash, len(rank)), -_links(c), run_seconds(c))
 
     return key
 

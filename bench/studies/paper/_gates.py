@@ -14,7 +14,7 @@ import pandas as pd
 from . import policy
 from ._stats import Part
 
-__all__ = ["Gate", "apply_gates", "condition", "gated", "learned"]
+__all__ = ["Gate", "apply_gates", "condition", "gated", "learned", "similar_fit"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,25 @@ def condition(part: Part) -> Gate:
     part becomes a *condition*: shown, never a finding of its own."""
     part.role = "condition"
     return Gate(part.name, part.status == "holds", f"condition {part.name}: {part.status}")
+
+
+def similar_fit(name: str, fit_edge, mg) -> tuple[Part, Gate]:
+    """ "At similar loss", a stated condition that can only confound, read the same way in every
+    claim that quotes one. ``fit_edge``: per seed ``log(loss of the other model / loss of the
+    favoured one)``, how much better the model the claim favours fits. An *at most* part at the
+    loss margin ``mg`` (a *condition*: shown, never a finding of its own), and its gate: closed
+    only where the part is contradicted, i.e. the favoured model is shown to fit better by more
+    than the margin, so that fit could explain its advantage. Where it fits no better, or worse,
+    or the data cannot tell, fit cannot explain the advantage and the comparison is judged."""
+    from ._stats import at_most
+
+    part = at_most(name, fit_edge, mg)
+    part.role = "condition"
+    shut = part.status == "contradicts"
+    text = f"condition {part.name}: {part.status}" + (
+        " (the favoured model fits better beyond the margin)" if shut else ""
+    )
+    return part, Gate(part.name, not shut, text)
 
 
 def gated(part: Part, *gates: Gate) -> Part:

@@ -3,11 +3,14 @@ seed set, pooled where the two agree, and without each seed.
 
 - *Primary*: the profile's own seeds (``quick`` and ``paper``: 0-4; for a profile that declares
   fewer than a verdict needs, ``smoke``, every stored seed outside the replication set).
-- *Replication*: the replication seeds (5-9). Where both sets read the same verdict, the final
-  reading is the *pooled* ten seeds: two disjoint sets that agree add evidence. Where they
-  differ, the claim is *inconclusive (does not replicate)*, both readings shown. A claim whose
-  replication runs are partly stored (a campaign under way) reads *pending* and keeps its
-  primary reading.
+- *Replication*: the replication seeds (5-9). Replication adds evidence: the final reading is
+  the *pooled* ten seeds, unless the sets disagree (:func:`disagreement`): a part reverses
+  (holds on one set, contradicted on the other) or its two estimates differ beyond chance
+  (Welch's test, Holm's step-down across the claim's parts). Then the claim is *inconclusive
+  (does not replicate)*, both readings shown. One set signing a part that the other leaves
+  undecided is no disagreement: more seeds that agree can never weaken a verdict. Each set's
+  own reading stays in the report. A claim whose replication runs are partly stored (a
+  campaign under way) reads *pending* and keeps its primary reading.
 - *Leave one seed out*: the final reading's seeds without each one in turn (one seed fewer
   required). It flags an influential seed, and demotes the verdict to *inconclusive (changes
   without a seed)* only where dropping that seed reverses a part (holds <-> contradicts); a
@@ -17,6 +20,7 @@ seed set, pooled where the two agree, and without each seed.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -25,6 +29,7 @@ import pandas as pd
 from ...core._experiments import PROFILES, expand
 from ._rules import claim_studies, evaluate_claims, restrict_all
 from ._seeds import seed_sets, seed_span
+from ._stats import ALPHA
 from .kit import INCONCLUSIVE, Verdict, min_seeds, required_seeds
 
 DOES_NOT_REPLICATE = "inconclusive (does not replicate)"
@@ -53,10 +58,12 @@ class Judgement:
     pooled_any: dict[str, Verdict] = field(default_factory=dict)
 
     def replicates(self, key: str) -> bool | None:
+        """Whether the seed sets add up (:func:`disagreement` finds nothing); None where the
+        replication is not judged."""
         r = self.replication.get(key)
-        if r is None or r.n_seeds == 0:
+        if r is None or r.n_seeds == 0 or key not in self.pooled_any:
             return None
-        return r.verdict == self.primary[key].verdict
+        return key in self.pooled
 
     def reading(self, key: str) -> Verdict:
         """The reading the final verdict rests on: pooled where the seed sets agree, else the
@@ -90,10 +97,60 @@ def reversed_parts(a: Verdict, b: Verdict) -> list[str]:
     return [q.name for q in a.parts if (q.status, other.get(q.name)) in flip]
 
 
-def stored_counts(runs: pd.DataFrame, profile: str | None, seeds=None) -> dict[int, tuple]:
+def heterogeneity_p(a, b) -> float:
+    """The two-sided p-value of Welch's test that two seed sets' estimates of one part differ
+    (``scipy.stats.ttest_ind_from_stats``), from each set's mean and its one-sided (1 - ALPHA)
+    t bounds (the standard error is the bounds' half-width over the t quantile); NaN where a
+    set has fewer than two seeds or no finite bounds."""
+    from scipy import stats
+
+    sds = []
+    for q in (a, b):
+        ok = q.n >= 2 and all(math.isfinite(x) for x in (q.point, q.lo, q.hi))
+        if not ok:
+            return math.nan
+        se = (q.hi - q.lo) / (2 * stats.t.ppf(1 - ALPHA, q.n - 1))
+        sds.append(se * math.sqrt(q.n))
+    if sds[0] == 0 and sds[1] == 0:
+        return 0.0 if a.point != b.point else 1.0
+    res = stats.ttest_ind_from_stats(
+        a.point, sds[0], a.n, b.point, sds[1], b.n, equal_var=False, alternative="two-sided"
+    )
+    return float(res.pvalue)
+
+
+def disagreement(a: Verdict, b: Verdict, alpha: float = ALPHA) -> list[str]:
+    """Why two seed sets' readings of a claim cannot be pooled, one line per reason (empty: they
+    add up). A part *reverses* (holds on one set, contradicted on the other), or its estimates
+    differ beyond chance: Welch's test (:func:`heterogeneity_p`) with Holm's step-down across
+    the claim's parts tested on both sets, at ``alpha``. A part that one set signs and the
+    other leaves undecided is no disagreement: the pooled seeds decide it."""
+    out = [f"{name} reverses" for name in reversed_parts(a, b)]
+    theirs = {q.name: q for q in b.parts}
+    tested = ("holds", "contradicts", "undecided")
+    ps = sorted(
+        (pv, q.name)
+        for q in a.parts
+        if q.role == "part"
+        and (o := theirs.get(q.name)) is not None
+        and q.status in tested
+        and o.status in tested
+        and math.isfinite(pv := heterogeneity_p(q, o))
+    )
+    for i, (pv, name) in enumerate(ps):  # Holm's step-down
+        if pv > alpha / (len(ps) - i):
+            break
+        if f"{name} reverses" not in out:
+            out.append(f"{name}: the seed sets' estimates differ (Welch p = {pv:.2g})")
+    return out
+
+
+def stored_counts(
+    runs: pd.DataFrame, profile: str | None, seeds=None, keep=None
+) -> dict[int, tuple]:
     """``{claim: (stored, declared)}``: how many of the runs each claim's experiments declare
-    at ``profile`` (on ``seeds`` instead of its own) are in ``runs``; {} for an unknown
-    profile."""
+    at ``profile`` (on ``seeds`` instead of its own; only the cells ``keep(config)`` accepts
+    where given) are in ``runs``; {} for an unknown profile."""
     if profile not in PROFILES:
         return {}
     from ...core._studies import studies
@@ -104,7 +161,10 @@ def stored_counts(runs: pd.DataFrame, profile: str | None, seeds=None) -> dict[i
     for study in studies():  # a claim's experiments may be declared by several studies
         if study.claim in judged:
             declared.setdefault(study.claim, set()).update(
-                c.config_hash for e in study.experiments for c in expand(e, profile, seeds=seeds)
+                c.config_hash
+                for e in study.experiments
+                for c in expand(e, profile, seeds=seeds)
+                if keep is None or keep(c)
             )
     return {n: (len(hashes & done), len(hashes)) for n, hashes in sorted(declared.items())}
 
@@ -122,13 +182,16 @@ def judge(
     *,
     loso: bool = True,
     restricted: Mapping[int, pd.DataFrame] | None = None,
+    claims=None,
+    keep=None,
 ) -> Judgement:
     """Judge every claim on the primary seeds, the replication seeds (where stored), both
     pooled (where they agree) and without each seed of the final reading (``loso``;
     ``loso=False`` skips that check and its demotion). Runs of other seeds are ignored; a
     folder whose profile is unknown is judged on all its seeds, without replication.
     ``restricted``: each claim's rows of ``runs`` already restricted (:func:`restrict_all`), for
-    callers that need them too."""
+    callers that need them too. ``claims``: only these claims; ``keep``: only the declared cells
+    it accepts count as the replication's (a reading of some cells, e.g. one number of links)."""
     declared, rep_seeds = seed_sets(profile)
     stored = sorted(int(s) for s in runs["seed"].unique()) if len(runs) and "seed" in runs else []
     if len(declared) >= required_seeds():
@@ -138,26 +201,29 @@ def judge(
     cache = restrict_all(runs, profile) if restricted is None else restricted
 
     def evaluate(seeds):
-        return evaluate_claims(runs, curves, profile, seeds=seeds, restricted=cache)
+        return evaluate_claims(runs, curves, profile, claims=claims, seeds=seeds, restricted=cache)
 
     prim = evaluate(primary_seeds)
     primary = {v.key: v for v in prim}
     replication, rep_pending, pooled, pooled_any = {}, {}, {}, {}
     if rep_seeds and len(_on(runs, rep_seeds)):
         replication = {v.key: v for v in evaluate(rep_seeds)}
-        counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds)
+        counts = stored_counts(_on(runs, rep_seeds), profile, rep_seeds, keep)
         for key, r in list(replication.items()):
             n, m = counts.get(r.claim, (0, 0))
             if 0 < n < m:
                 rep_pending[key] = (n, m)
             if 0 < n < m or r.n_seeds == 0:
                 del replication[key]
-        agree = [k for k, r in replication.items() if r.verdict == primary[k].verdict]
         if replication:
             both = tuple(sorted({*primary_seeds, *rep_seeds}))
             every = {v.key: v for v in evaluate(both)}
-            pooled = {k: every[k] for k in agree if k in every}
             pooled_any = {k: every[k] for k in replication if k in every}
+            # the seed sets add up unless they disagree: a part reverses, or its estimates
+            # differ beyond chance (:func:`disagreement`)
+            pooled = {
+                k: v for k, v in pooled_any.items() if not disagreement(primary[k], replication[k])
+            }
     out_loso: dict[str, list[tuple[int, Verdict]]] = {}
     if loso:
         groups: dict[tuple[int, ...], list[str]] = {}
@@ -178,7 +244,7 @@ def judge(
     j.pooled, j.pooled_any = pooled, pooled_any
     for v in prim:
         r = replication.get(v.key)
-        if r is not None and r.n_seeds > 0 and r.verdict != v.verdict:
+        if r is not None and v.key not in pooled and v.key in pooled_any:
             readings = (
                 f"seeds {seed_span(primary_seeds)}: {v.verdict}; seeds {seed_span(rep_seeds)}: "
                 + (r.verdict)
@@ -186,7 +252,7 @@ def judge(
             v = dataclasses.replace(
                 v,
                 verdict=DOES_NOT_REPLICATE,
-                detail=f"{readings}. {v.detail}",
+                detail=f"{readings}; {'; '.join(disagreement(v, r))}. {v.detail}",
                 primary=v.verdict,
                 readings=readings,
             )
@@ -221,7 +287,7 @@ def why_not_replicated(j: Judgement, key: str) -> str | None:
     what the other signs); and the pooled reading, which decides nothing here. None where the
     claim replicates or is not judged."""
     p, r = j.primary.get(key), j.replication.get(key)
-    if p is None or r is None or r.n_seeds == 0 or r.verdict == p.verdict:
+    if p is None or r is None or r.n_seeds == 0 or j.replicates(key) is not False:
         return None
     ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
     theirs = {q.name: q for q in r.parts}
@@ -236,8 +302,7 @@ def why_not_replicated(j: Judgement, key: str) -> str | None:
     lead = (
         f"**{n} part{'s reverse' if n > 1 else ' reverses'}** (the seed sets disagree)"
         if flipped
-        else "no part reverses (holds <-> contradicts): the sets differ only in what reaches "
-        "significance or gets tested"
+        else "no part reverses (holds <-> contradicts), but " + "; ".join(disagreement(p, r))
     )
     if not moved:  # the same statuses, a different verdict: a gate or the discrimination check
         moved = [f"seeds {ps}: {p.verdict}; seeds {rs}: {r.verdict} ({r.detail[:160]})"]
@@ -252,21 +317,29 @@ def why_not_replicated(j: Judgement, key: str) -> str | None:
 
 
 def pooled_moves(j: Judgement, key: str) -> str | None:
-    """Where two seed sets agree and their pooled reading (the final one) differs from what
-    both read: the parts whose pooled status differs from the one both sets gave it, with the
-    pooled effect and interval (ten seeds resolve what five left undecided). None elsewhere."""
+    """Where the seed sets add up and their pooled reading (the final one) differs from what
+    either set read alone: the parts whose pooled status differs from a set's, with the pooled
+    effect and interval and each set's status (ten seeds resolve what five left undecided).
+    None elsewhere."""
     p, r, pooled = j.primary.get(key), j.replication.get(key), j.pooled.get(key)
-    if pooled is None or p is None or r is None or pooled.verdict == p.verdict:
+    if pooled is None or p is None or r is None:
+        return None
+    if pooled.verdict == p.verdict and pooled.verdict == r.verdict:
         return None
     first, second = ({q.name: q.status for q in v.parts} for v in (p, r))
     both = seed_span({*j.primary_seeds, *j.replication_seeds})
+    ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
     moved = [
-        f"{q.name}: {q.status} on {both} ({_effect(q)}), {first[q.name]} on each set alone"
+        f"{q.name}: {q.status} on {both} ({_effect(q)}); {first.get(q.name, '-')} on {ps}, "
+        f"{second.get(q.name, '-')} on {rs}"
         for q in pooled.parts
-        if first.get(q.name) == second.get(q.name) and q.status != first.get(q.name)
+        if q.status != first.get(q.name) or q.status != second.get(q.name)
     ]
     text = "; ".join(moved) or pooled.detail[:160]
-    return f"both seed sets read {p.verdict}, pooled {pooled.verdict}: {text}"
+    return (
+        f"seeds {ps} read {p.verdict}, seeds {rs} {r.verdict}; they add up, pooled "
+        f"{pooled.verdict}: {text}"
+    )
 
 
 def settled(verdict: str) -> bool:

@@ -11,7 +11,7 @@ from collections.abc import Iterable, Mapping
 
 import pandas as pd
 
-from ...core._query import experiment_rows
+from ...core._query import experiment_rows, labelled
 from ...core._studies import studies
 from ._verdict import INCONCLUSIVE, Verdict
 
@@ -48,7 +48,7 @@ def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
         return runs
     parts = [experiment_rows(runs, exp.name, profile) for exp in study.experiments]
     if "experiment" in runs:
-        parts.append(runs[runs["experiment"].isin(study.reads)])
+        parts.append(runs[runs["experiment"].isin(study.reads) & labelled(runs, profile)])
     # ignore_index: experiment_rows resets its index and the tagged rows keep the store's, so
     # labels would repeat (and a rule that aligns on the index would fail)
     return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs

@@ -99,17 +99,17 @@ def _why_not_replicated(j) -> list[str]:
     out = []
     if lines:
         out += [
-            "Why a claim does not replicate (effect [90% CI] on each seed set). A part one set "
-            "signs and the other leaves undecided is no contradiction, but the rule counts only "
-            "a verdict both sets read:",
+            "Why a claim does not replicate (effect [90% CI] on each seed set): a part reverses, "
+            "or its two estimates differ beyond chance (Welch's test, Holm's step-down across "
+            "the claim's parts):",
             "",
             *lines,
             "",
         ]
     if pooled:
         out += [
-            "Where both seed sets read one verdict and the pooled ten seeds another (the final "
-            "reading: ten seeds resolve a part that five leave undecided):",
+            "Where the seed sets add up and the pooled ten seeds (the final reading) read "
+            "otherwise than a set alone (ten seeds resolve a part that five leave undecided):",
             "",
             *pooled,
             "",
@@ -270,9 +270,12 @@ def claims_section(ctx: ReportContext) -> list[str]:
         f"trivial predictor by {TRIVIAL_FACTOR:g}x on every seed). Failed and diverged runs "
         "score the worst error, 1, and are counted.",
         "",
-        "Replication: every claim is judged on the profile's seeds and again on a disjoint set. "
-        "Where both read the same verdict, the final reading is the pooled seeds; where they "
-        "differ, the claim is *inconclusive (does not replicate)*. *Leave one seed out* judges "
+        "Replication adds evidence: every claim is judged on the profile's seeds, again on a "
+        "disjoint set, and on both pooled, which is the final reading unless the sets disagree: "
+        "a part holds on one set and is contradicted on the other, or its two estimates differ "
+        "beyond chance (Welch's test, Holm's step-down across the claim's parts). Then the "
+        "claim is *inconclusive (does not replicate)*. One set signing what the other leaves "
+        "undecided is no disagreement. *Leave one seed out* judges "
         "the final reading's seeds without each one in turn; it demotes a verdict to "
         "*inconclusive (changes without a seed)* only where dropping a seed reverses a part "
         "(holds <-> contradicts).",

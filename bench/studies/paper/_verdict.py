@@ -90,6 +90,32 @@ class Verdict:
         }
 
 
+def _stems(group: str) -> tuple[str, ...]:
+    """The prefixes by which a part names the system or cell of a discrimination group:
+    ``"spring_pendulum (paper)"`` -> ``spring_pendulum``, ``spring``."""
+    name = group.split(" (")[0].strip()
+    return tuple(dict.fromkeys(x for x in (name, name.split("_")[0]) if x))
+
+
+def _void_undiscriminating(parts: list[Part], not_disc: list[Discrimination]) -> bool:
+    """Discrimination per system or cell: a group whose best model does not beat the trivial
+    predictors voids only its own parts (those whose name starts with the group's system,
+    :func:`_stems`), which read *not tested* with the reason. True where a group names no part
+    (the parts pool its system with others): then nothing the claim tests can be read, and the
+    whole claim is inconclusive."""
+    void_all = False
+    for d in not_disc:
+        stems = _stems(d.group)
+        mine = [p for p in parts if p.name.startswith(stems)]
+        if not mine:
+            void_all = True
+        for p in mine:
+            p.status = "not tested"
+            reason = f"not discriminating on {d.group}"
+            p.note = f"{reason}; {p.note}" if p.note else reason
+    return void_all
+
+
 def verdict(
     claim: int,
     title: str,
@@ -120,18 +146,19 @@ def verdict(
             p.note = (p.note + "; " if p.note else "") + f"{p.status} on {p.n} < {need} seeds"
             p.status = "undecided"
             p.decide = None
+    not_disc = [d for d in discs if d.status == "no"]
+    void_all = _void_undiscriminating(parts, not_disc)
     apply_gates(parts)
     holm(parts)
     claim_parts = [p for p in parts if p.role == "part"]
     statuses = [p.status for p in claim_parts]
-    not_disc = [d for d in discs if d.status == "no"]
     if discs and all(d.status == "yes" for d in discs):
         discriminating = True
     elif not_disc:
         discriminating = False
     else:
         discriminating = None
-    if n_seeds < need or not claim_parts or not_disc:
+    if n_seeds < need or not claim_parts or void_all:
         reading = INCONCLUSIVE
     elif all(s == "holds" for s in statuses):
         reading = REPRODUCED
@@ -140,10 +167,13 @@ def verdict(
     else:
         reading = INCONCLUSIVE
     detail = "; ".join(p.text() for p in parts) or "no runs"
-    if not_disc:
+    if void_all:
         detail = f"NOT DISCRIMINATING ({'; '.join(d.text() for d in not_disc)}); {detail}"
     elif discs:
         detail = f"{detail}; " + "; ".join(d.text() for d in discs)
+    if not_disc and not void_all:
+        groups = ", ".join(d.group for d in not_disc)
+        detail = f"not discriminating on {groups}: its parts not tested; {detail}"
     if n_seeds < need and parts:
         detail = f"fewer than {need} paired seeds or a missing cell; {detail}"
     if n_failed:

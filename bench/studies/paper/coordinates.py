@@ -59,7 +59,9 @@ COORDINATES = Experiment(
         "model": ("node_so", "hnn_so", "constant_velocity"),
         "system_params": (SPRING_EQUILIBRIUM, SPRING_PAPER),
     },
-    profile_overrides=shared_overrides({"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}}),
+    profile_overrides=shared_overrides(
+        {"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}, "paper-k": {"k": (1, 3, 4)}}
+    ),
     include=_coordinates_include,
     claim=4,
 )

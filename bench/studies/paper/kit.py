@@ -23,7 +23,9 @@ the one-sided (1 - alpha) t bounds of the mean effect:
 - ``undecided``: a part with nothing to test.
 
 Gates (:mod:`._gates`): ``learned`` (the model beats the best trivial predictor by the learning
-margin), ``condition`` (a stated condition of other parts, "at similar loss"), ``gated``.
+margin), ``condition`` (a stated condition of other parts that must hold), ``similar_fit``
+("at similar loss": a condition that can only confound, closed only where the favoured model
+fits better beyond the loss margin), ``gated``.
 
 Per-seed values (:mod:`._seeds`): ``at_lr`` (the rows at one learning rate), ``scored`` (failed
 runs at the worst error), ``cell_rows``, ``log_per_seed``, ``paired`` (per seed log(metric A /
@@ -50,7 +52,7 @@ from ._discrimination import (
     succeeds,
     trivial_log,
 )
-from ._gates import Gate, apply_gates, condition, gated, learned
+from ._gates import Gate, apply_gates, condition, gated, learned, similar_fit
 from ._holm import holm, margin_ranges
 from ._protocols import Protocol, protocol_table
 from ._seeds import (
@@ -115,6 +117,7 @@ __all__ = [
     "Gate",
     "apply_gates",
     "condition",
+    "similar_fit",
     "gated",
     "learned",
     "learned_cell",

@@ -126,7 +126,7 @@ def stable_lr_reading(runs: pd.DataFrame):
     """Claim 13's parts on the systems of :data:`NODE_LEADS` with NODE, NODE+SO and the HNN
     trained at :data:`STABLE_LR` (the constant-velocity predictor's rows as they are), combined
     as a verdict of their own: a sensitivity reading, not the claim's. None without such runs."""
-    p = select(plain(runs), system=list(NODE_LEADS))
+    p = select(plain(runs), ok=False, system=list(NODE_LEADS))
     if not len(p) or "lr" not in p:
         return None
     trained = at_lr(p[p["model"].isin(MODELS)], STABLE_LR)
@@ -167,7 +167,7 @@ def claim_13(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     same parts at :data:`STABLE_LR` (:func:`stable_lr_reading`), not judged, where those runs
     exist.
     """
-    p = at_lr(select(plain(runs), system=list(SYSTEMS)), PAPER_LR)
+    p = at_lr(select(plain(runs), ok=False, system=list(SYSTEMS)), PAPER_LR)
     parts, head, discs, seeds, n_failed = _parts(p, SYSTEMS)
     title = CLAIM_TITLES[13]
     if not parts:

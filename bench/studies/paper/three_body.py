@@ -101,8 +101,10 @@ def claim_14(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     the HNN over the baseline model. However, both models struggled" (line 136).
 
     One part, (a): a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the
-    policy's energy margin squared (an MSE; the seed states no number), judged where both models
-    learned (the fit gate: rollout error on (q, qdot) against the trivial predictor). "Both
+    policy's energy margin squared (an MSE; the seed states no number), judged where the HNN
+    learned (the fit gate: rollout error on (q, qdot) against the trivial predictor). Gates by
+    role: the MLP baseline is the foil the seed says "struggled", so its failure is the claim's
+    content and it is never gated. "Both
     struggle" is no comparison and is reported beside, not tested: each model's rollout error
     and the test losses. Failed runs score the worst value.
     """
@@ -121,7 +123,6 @@ def claim_14(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
             policy.margin("energy", squared=True),
         ),
         learned_cell(r, HNN, "HNN on three_body", "rollout_error_any"),
-        learned_cell(r, BASELINE, "MLP on three_body", "rollout_error_any"),
     )
     n_failed = int(bad_rows(models, "energy_mse").sum())
     return verdict(

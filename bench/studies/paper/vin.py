@@ -87,8 +87,10 @@ VIN = Experiment(
 def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """Claim 8 (VIN seed): VIN vs ResNet on the pendulum (chain, k = 1) over a long horizon.
 
-    Parts on paired per-seed values, each judged where the models it compares learned (the
-    test set is noise-free: every cell is gated against the same trivial predictor): (a)
+    Parts on paired per-seed values, each judged where the VIN learned (gates by role: the
+    ResNet is the claim's foil, whose failure on few or noisy data is the claim's content, so it
+    is never gated; the test set is noise-free: every cell is gated against the same trivial
+    predictor): (a)
     *greater* at the error margin, ``log(err ResNet / err VIN)`` at the smallest ``n_train``,
     one part per noise level (the noisy cells are the "noisier data" half); (b) *greater* at the
     energy margin, ``log(EV ResNet / EV VIN)`` at the same cells; (c) bounded energy: the
@@ -111,11 +113,11 @@ def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     err, energy = policy.margin("error"), policy.margin("energy")
 
     def gates(rows, label):
-        # the test set is noise-free whatever the training noise: the trivial rows are shared
-        return [
-            learned_cell(rows, {"model": m}, f"{m} {label}", trivial=trivial)
-            for m in ("vin", "resnet")
-        ]
+        # gates by role: the VIN is the model the claim expects to succeed; the ResNet is its
+        # foil, whose failure (to learn from few or noisy data) is the claim's content, so it is
+        # never gated. The test set is noise-free whatever the training noise: the trivial rows
+        # are shared.
+        return [learned_cell(rows, {"model": "vin"}, f"vin {label}", trivial=trivial)]
 
     vin_gate = None
     for noise, g in non_trivial(at_min).groupby("noise"):
@@ -152,7 +154,6 @@ def claim_8(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
             gated(
                 at_most(name, d.to_numpy(), err),
                 learned_cell(clean, vin_n, f"vin n_train={n}", trivial=trivial),
-                learned_cell(clean, res_m, f"resnet n_train={m}", trivial=trivial),
             )
         )
     rows = (
