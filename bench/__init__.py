@@ -8,6 +8,12 @@ studies and changes nothing in the process: the entry points set threads and the
 cache up (``bench.core._env.setup_process``).
 """
 
+from ._shadow import check as _check_shadowing
+
+# before the suite's packages are imported: a models.py or systems.py of the folder Python
+# started in would hide them, and their first import would fail far from the cause
+_check_shadowing()
+
 from . import (
     experiments,
     metrics,

@@ -75,7 +75,8 @@ def _parser() -> argparse.ArgumentParser:
         "--seeds",
         default=None,
         metavar="5,6,7",
-        help="these seeds instead of the profile's (e.g. quick's replication seeds 5-9)",
+        help="these seeds instead of the profile's: integers and ranges, comma-separated "
+        "(e.g. quick's replication seeds 5-9, or 0-4,7)",
     )
 
     pf = sub.add_parser(
@@ -111,7 +112,9 @@ def _parser() -> argparse.ArgumentParser:
     de.add_argument("system", help="a system name (python -m bench list)")
     de.add_argument("--k", type=int_arg("k"), default=None, help="only this k (links/masses)")
     de.add_argument("--profile", default="quick", help=f"one of {', '.join(PROFILES)}")
-    de.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
+    de.add_argument(
+        "--seeds", default=None, metavar="0,1", help="only these seeds (0,1 or 0-4 or 0-4,7)"
+    )
     de.add_argument("--format", default="npz", help="npz (default) or hdf5")
     de.add_argument("--out", required=True, help="the folder to write (new or empty)")
     de.add_argument("--force", action="store_true", help="write into a non-empty folder")
@@ -370,12 +373,7 @@ def _cmd_data(args) -> int:
     if args.data_verb == "mujoco":
         return _data_mujoco(args)
     check_choice("profile", args.profile, list(PROFILES))
-    seeds = None
-    if args.seeds is not None:
-        try:
-            seeds = [int(x) for x in args.seeds.split(",") if x.strip()]
-        except ValueError:
-            raise ValueError(f"--seeds must be integers like 0,1; got {args.seeds!r}") from None
+    seeds = seed_list(args.seeds)
     card = _data.export(
         args.system,
         args.out,

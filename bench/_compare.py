@@ -59,19 +59,16 @@ class Comparison:
 
     @property
     def n_judged(self) -> int:
-        """Claims with runs in both folders (the others are listed, not compared)."""
-        if not len(self.claims):
-            return 0
-        c = self.claims
-        return int(((c["verdict_a"] != "no runs") & (c["verdict_b"] != "no runs")).sum())
+        """Claims with runs in both folders (the others are listed, not compared: their
+        ``same`` is None)."""
+        return int(self.claims["same"].notna().sum()) if len(self.claims) else 0
 
     @property
     def claims_differ(self) -> list[str]:
+        """Claims judged in both folders whose verdicts differ."""
         if not len(self.claims):
             return []
-        c = self.claims
-        both = (c["verdict_a"] != "no runs") & (c["verdict_b"] != "no runs")
-        return list(c.loc[both & ~c["same"], "claim"])
+        return list(self.claims.loc[self.claims["same"].eq(False), "claim"])
 
     @property
     def summary(self) -> str:
@@ -85,6 +82,9 @@ class Comparison:
         claims = f"{self.n_judged - len(moved)} of {self.n_judged} claim verdicts the same" + (
             f" (differ: {', '.join(moved)})" if moved else ""
         )
+        lone_claims = self.n_claims - self.n_judged
+        if lone_claims:
+            claims += f", {lone_claims} with no runs in one folder (not compared)"
         n_spread = int(c["spread"].sum()) if len(c) else 0
         lone = f" ({len(c) - n_spread} one-seed cells have no spread)" if len(c) > n_spread else ""
         return (
@@ -109,8 +109,9 @@ class Comparison:
             "## Claims",
             "",
             "Each claim judged in both folders with the report's rules on the profile's seeds "
-            "(*same* compares these); the last two columns are the folders' final verdicts, "
-            "which also weigh the replication seeds where a folder stores them.",
+            "(*same* compares these; *no runs* where a folder has none of the claim's runs: "
+            "neither the same nor a difference); the last two columns are the folders' final "
+            "verdicts, which also weigh the replication seeds where a folder stores them.",
             "",
             "| claim | verdict A | verdict B | same | parts that moved (A -> B) | final A | "
             "final B |",
@@ -119,7 +120,7 @@ class Comparison:
         for row in self.claims.itertuples():
             lines.append(
                 f"| {row.claim} | {row.verdict_a} | {row.verdict_b} | "
-                f"{'yes' if row.same else '**no**'} | {row.moved or '-'} | {row.final_a} | "
+                f"{_same_text(row.same)} | {row.moved or '-'} | {row.final_a} | "
                 f"{row.final_b} |"
             )
         c = self.cells
@@ -170,6 +171,13 @@ class Comparison:
         else:
             lines.append("No run is in both folders.")
         return "\n".join(lines) + "\n"
+
+
+def _same_text(same) -> str:
+    """The *same* cell of a claim: yes, **no**, or *no runs* (not compared: None)."""
+    if same is None or same is pd.NA or (isinstance(same, float) and np.isnan(same)):
+        return "no runs"
+    return "yes" if same else "**no**"
 
 
 def _cell_label(row: pd.Series) -> str:
@@ -256,12 +264,14 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
     # a claim none of whose experiments ran in a folder has no verdict there ("no runs"), not an
     # inconclusive one: `make bench` runs one paper's claims, the reference every paper's
     ran_a, ran_b = _claims_with_runs(rows_a), _claims_with_runs(rows_b)
-    fa = {v.key: v for v in ja.final if v.claim in ran_a}
-    fb = {v.key: v for v in jb.final if v.claim in ran_b}
+    # (and a claim whose verdict read none of its cells: the judge's detail "no runs")
+    fa = {v.key: v for v in ja.final if v.claim in ran_a and not _absent(v)}
+    fb = {v.key: v for v in jb.final if v.claim in ran_b and not _absent(v)}
     rows = []
     for key in list(dict.fromkeys([*fa, *fb])):
         va, vb = ja.primary.get(key), jb.primary.get(key)
-        va, vb = (va if key in fa else None), (vb if key in fb else None)
+        va = None if key not in fa or _absent(va) else va
+        vb = None if key not in fb or _absent(vb) else vb
         moved = []
         if va is not None and vb is not None:
             pa_parts = {q.name: q.status for q in va.parts}
@@ -275,7 +285,8 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
                 "claim": key,
                 "verdict_a": va.verdict if va else "no runs",
                 "verdict_b": vb.verdict if vb else "no runs",
-                "same": (va.verdict if va else None) == (vb.verdict if vb else None),
+                # None: no runs on a side, so neither the same nor a difference
+                "same": None if va is None or vb is None else va.verdict == vb.verdict,
                 "moved": "; ".join(moved),
                 "final_a": fa[key].verdict if key in fa else "no runs",
                 "final_b": fb[key].verdict if key in fb else "no runs",
@@ -283,6 +294,12 @@ def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
         )
     cols = ["claim", "verdict_a", "verdict_b", "same", "moved", "final_a", "final_b"]
     return pd.DataFrame(rows, columns=cols)
+
+
+def _absent(v) -> bool:
+    """No runs behind verdict ``v``: none at all (None), or none of the cells its parts read
+    (the judge's detail is then "no runs")."""
+    return v is None or v.detail == "no runs"
 
 
 def _claims_with_runs(restricted: dict[int, pd.DataFrame]) -> set[int]:

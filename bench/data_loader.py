@@ -159,9 +159,19 @@ def _problem(e: dict, x: np.ndarray) -> str | None:
 def verify(folder) -> list[str]:
     """Every disagreement between a folder and its card, one line each (empty: all match):
     a missing or unreadable file, a missing key, a shape, dtype or sha256 that differs, and a
-    data file the card does not name."""
+    data file the card does not name. A folder in format hdf5 needs h5py: without it, one
+    ImportError naming the missing dependency, not every array reported unreadable."""
     folder = Path(folder)
     card = read_card(folder)
+    h5 = sorted({e["file"] for e in card["arrays"] if not str(e["file"]).endswith(".npz")})
+    if h5:
+        try:
+            _h5py()
+        except ImportError:
+            raise ImportError(
+                f"{folder}: {', '.join(h5)} cannot be checked: hdf5 files need h5py, which is "
+                "not installed (pip install h5py)"
+            ) from None
     problems, named = [], set()
     for e in card["arrays"]:
         named.add(e["file"])
@@ -207,10 +217,25 @@ class Trajectories:
         return self.z[i], self.args[i]
 
 
-def TorchDataset(folder, dataset: str | None = None, split: str = "train", check=True):  # noqa: N802 - a class factory
-    """A ``torch.utils.data.Dataset`` over :class:`Trajectories`: item ``i`` is
-    ``(z, args)`` as float64 tensors, ``.ts`` the times (a tensor). Imports torch only here
-    (``pip install 'decon-bench[torch]'`` or torch itself)."""
+TORCH_DTYPES = ("float64", "float32")  # what TorchDataset's tensors may hold
+
+
+def TorchDataset(  # noqa: N802 - a factory named as the class it returns
+    folder, dataset: str | None = None, split: str = "train", check=True, dtype="float64"
+):
+    """A ``torch.utils.data.Dataset`` over :class:`Trajectories`: item ``i`` is ``(z, args)``
+    as tensors of ``dtype`` (one of :data:`TORCH_DTYPES`; the files hold float64, float32
+    halves the memory of a batch), ``.ts`` the times (a tensor of ``dtype``). It pickles (its
+    arrays and dtype), so a ``DataLoader`` with ``num_workers`` > 0 works under the spawn and
+    forkserver start methods too. Imports torch only here (``pip install
+    'decon-bench[torch]'`` or torch itself)."""
+    _torch()  # before reading any file: a missing torch is the first thing said
+    if dtype not in TORCH_DTYPES:
+        raise ValueError(f"dtype {dtype!r}: allowed {', '.join(TORCH_DTYPES)}")
+    return _torch_dataset(Trajectories(folder, dataset, split, check), dtype)
+
+
+def _torch():
     try:
         import torch
         from torch.utils.data import Dataset
@@ -219,22 +244,38 @@ def TorchDataset(folder, dataset: str | None = None, split: str = "train", check
             "TorchDataset needs torch: pip install torch (or the suite's extra: "
             "pip install 'decon-bench[torch]')"
         ) from e
+    return torch, Dataset
 
-    class _TrajectoryDataset(Dataset):
-        def __init__(self, base: Trajectories):
-            self.base = base
-            self.ts = torch.from_numpy(base.ts)
 
-        def __len__(self):
-            return len(self.base)
+_TORCH_CLASS: list = []  # the Dataset subclass, made once, when torch is first needed
 
-        def __getitem__(self, i):
-            z, args = self.base[i]
-            return torch.from_numpy(np.ascontiguousarray(z)), torch.from_numpy(
-                np.ascontiguousarray(args)
-            )
 
-    return _TrajectoryDataset(Trajectories(folder, dataset, split, check))
+def _torch_dataset(base: Trajectories, dtype: str):
+    """The :func:`TorchDataset` over ``base``; what its pickle calls to rebuild it (a
+    module-level name, which a worker process finds by importing this module)."""
+    if not _TORCH_CLASS:
+        torch, Dataset = _torch()
+
+        class _TrajectoryDataset(Dataset):
+            def __init__(self, base: Trajectories, dtype: str):
+                self.base, self.dtype = base, dtype
+                self.ts = torch.from_numpy(np.array(base.ts, dtype=dtype))
+
+            def __len__(self):
+                return len(self.base)
+
+            def __getitem__(self, i):
+                z, args = self.base[i]
+                return (
+                    torch.from_numpy(np.array(z, dtype=self.dtype)),
+                    torch.from_numpy(np.array(args, dtype=self.dtype)),
+                )
+
+            def __reduce__(self):  # the class is local to this function: rebuild it by name
+                return _torch_dataset, (self.base, self.dtype)
+
+        _TORCH_CLASS.append(_TrajectoryDataset)
+    return _TORCH_CLASS[0](base, dtype)
 
 
 def _h5py():
@@ -246,14 +287,16 @@ def _h5py():
 
 
 def main(argv=None) -> int:
-    """``python decon_data.py verify DIR``: exit 0 when every array matches the card."""
+    """``python decon_data.py verify DIR``: exit 0 when every array matches the card, 1 when
+    some do not (each named on a line), 2 when the folder cannot be checked (no card, or h5py
+    missing for an hdf5 folder: one line)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if len(argv) != 2 or argv[0] != "verify":
         print("usage: python decon_data.py verify DIR", file=sys.stderr)
         return 2
     try:
         problems = verify(argv[1])
-    except ValueError as e:
+    except (ValueError, ImportError) as e:  # no card, or a missing dependency: one line
         print(f"error: {e}", file=sys.stderr)
         return 2
     for p in problems:

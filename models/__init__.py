@@ -6,7 +6,7 @@ Public names: :class:`Scene` (with its optional :class:`Standardisation`), :func
 parameter-free reference predictors), :func:`coordinates` (what a model accepts),
 :func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
 :func:`load_plugins` (models from outside the suite: entry-point group ``decon_bench.models``,
-``$DECON_MODEL_MODULES``),
+``$DECON_MODEL_MODULES``), :func:`plugin_fingerprint` (what a plug-in's source hashes to),
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve) and
 :func:`velocity_hessian`, the :class:`MLP` every model is built from, :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
@@ -37,6 +37,7 @@ from ._registry import (
     load_plugins,
     make,
     n_parameters,
+    plugin_fingerprint,
     register,
     trivial_models,
 )
@@ -74,6 +75,7 @@ __all__ = [
     "load_plugins",
     "make",
     "n_parameters",
+    "plugin_fingerprint",
     "register",
     "spec",
     "symplectic_error",

@@ -207,6 +207,50 @@ BUILT_IN = tuple(_REGISTRY)
 ENTRY_POINT_GROUP = "decon_bench.models"
 MODULES_ENV = "DECON_MODEL_MODULES"  # comma-separated plug-in modules (--model-module)
 _PLUGINS: set[str] = set()  # plug-in sources already loaded ("ep:<name>", "module:<name>")
+_SOURCES: dict[str, str] = {}  # plug-in name -> fingerprint of its source when registered
+# The suite's own top-level packages: the parameter cache fingerprints their source already.
+_OWN_PACKAGES = ("models", "systems", "bench")
+
+
+def _plugin_source(module_names, objects) -> str:
+    """A short sha256 of the source a plug-in's model comes from: for each module in
+    ``module_names`` outside the suite, every ``.py`` file of its top-level package (a
+    plug-in's helpers count: ``mylab.nets`` reads the whole of ``mylab``), or its one file; a
+    module without a file (defined in a notebook) gives the source of ``objects`` instead."""
+    import hashlib
+    import inspect
+    import sys
+    from pathlib import Path
+
+    h = hashlib.sha256()
+    tops = sorted({str(m).partition(".")[0] for m in module_names if m} - set(_OWN_PACKAGES))
+    for top in tops:
+        module = sys.modules.get(top)
+        roots = list(getattr(module, "__path__", None) or [])  # a package's folders
+        files = [(Path(r), f) for r in roots for f in sorted(Path(r).rglob("*.py"))]
+        if not roots and getattr(module, "__file__", None):
+            files = [(Path(module.__file__).parent, Path(module.__file__))]
+        for root, f in files:
+            h.update(f"{top}/{f.relative_to(root)}\0".encode())
+            h.update(f.read_bytes())
+        if not files:
+            for obj in objects:
+                try:
+                    h.update(inspect.getsource(obj).encode())
+                except (OSError, TypeError):  # no source to be had: the name at least
+                    h.update(f"{top}:{getattr(obj, '__qualname__', obj)}".encode())
+    return h.hexdigest()[:16]
+
+
+def plugin_fingerprint(name: str) -> str | None:
+    """The fingerprint of the source of plug-in model ``name`` as it was registered (its
+    class's, its builder's and the registering module's top-level packages, read when
+    :func:`register` ran: the code this process runs), or None for a built-in (or unknown)
+    model. The parameter cache and the stored rows of a plug-in model record it, so that a
+    run whose plug-in was edited since is trained anew; the suite's own source is the
+    parameter cache's code fingerprint."""
+    load_plugins()
+    return _SOURCES.get(name) if name in _REGISTRY else None
 
 
 def register(
@@ -234,6 +278,7 @@ def register(
     same plug-in name replaces it; a built-in name cannot be taken.
     """
     import inspect
+    import sys
 
     def bad(what: str):
         raise ValueError(f"model plug-in {name!r}: {what}")
@@ -287,7 +332,13 @@ def register(
         )
     except ValueError:  # no signature available: trust it
         pass
+    caller = sys._getframe(1).f_globals.get("__name__")  # the module that registers it
+    source = _plugin_source(
+        [getattr(cls, "__module__", None), getattr(build, "__module__", None), caller],
+        [cls, build],
+    )
     _REGISTRY[name] = _Entry(cls, build, options, bool(takes_dissipation), coordinates, activation)
+    _SOURCES[name] = source
     from ._spec import spec
 
     spec.cache_clear()

@@ -152,8 +152,48 @@ def test_a_claim_not_run_in_one_folder_is_listed_not_counted(tmp_path, tables):
     c = compare(both, _folder(tmp_path / "b", runs, curves))
     row = c.claims.set_index("claim").loc["8"]
     assert row["verdict_a"] != "no runs" and row["verdict_b"] == "no runs"
+    assert row["same"] is None  # neither the same nor a difference
     assert "8" not in c.claims_differ and c.n_judged == len(c.claims) - 1
     assert f"{c.n_judged} of {c.n_judged} claim verdicts the same" in c.summary
+    assert "1 with no runs in one folder (not compared)" in c.summary
+    claims = c.markdown().split("\n## Claims\n")[1].split("\n## ")[0]
+    line = next(x for x in claims.splitlines() if x.startswith("| 8 |"))
+    assert line.split(" | ")[3] == "no runs" and "**no**" not in line
+    judged = [x for x in claims.splitlines() if x.startswith("| ") and "| 8 |" not in x][2:]
+    assert judged and all(x.split(" | ")[3] == "yes" for x in judged)
+
+
+def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):
+    """A folder with rows of a claim's experiments but none of the cells its parts read: the
+    judge's verdict says "no runs" in its detail; compare reads it as no runs, not as an
+    inconclusive verdict to count as the same as (or other than) the reference's."""
+    from types import SimpleNamespace
+
+    import bench._compare as C
+    import bench.studies.paper._replication as replication
+    import bench.studies.paper._rules as rules
+
+    def verdict(key, text, detail):
+        return SimpleNamespace(key=key, claim=int(key), verdict=text, detail=detail, parts=[])
+
+    sides = {
+        "a": {"1": verdict("1", "inconclusive", "part: undecided"), "2": verdict("2", "x", "d")},
+        "b": {"1": verdict("1", "inconclusive", "no runs"), "2": verdict("2", "y", "d")},
+    }
+    monkeypatch.setattr(rules, "restrict_all", lambda runs, profile: {1: runs, 2: runs})
+    monkeypatch.setattr(
+        replication,
+        "judge",
+        lambda runs, curves, profile, restricted: SimpleNamespace(
+            final=list(sides[profile].values()), primary=sides[profile]
+        ),
+    )
+    one = pd.DataFrame({"config_hash": ["h"]})
+    claims = C._claims(one, None, "a", one, None, "b").set_index("claim")
+    assert claims.loc["1", "verdict_b"] == claims.loc["1", "final_b"] == "no runs"
+    assert claims.loc["1", "same"] is None and claims.loc["2", "same"] is False
+    assert C._same_text(claims.loc["1", "same"]) == "no runs"
+    assert C._same_text(False) == "**no**" and C._same_text(True) == "yes"
 
 
 def test_row_cell_keys_equal_the_uncached_keys_on_a_second_call(tables):

@@ -7,6 +7,7 @@ a missing file, a file the card does not name) in both formats. The loader copie
 folder runs in an isolated interpreter that cannot import the suite."""
 
 import hashlib
+import importlib.util
 import json
 import shutil
 import subprocess
@@ -124,6 +125,48 @@ def test_verify_names_a_missing_file_and_an_unknown_one(exported, tmp_path):
     ]
 
 
+def test_verify_without_h5py_says_so_in_one_line(tmp_path, monkeypatch, capsys):
+    """An hdf5 folder checked where h5py is not installed: one line naming the dependency and
+    how to install it (exit code 2), not every array of the card reported damaged."""
+    names = [f"velocity_n{n}_seed{s}" for n in (10, 20, 40, 80, 160) for s in range(6)]
+    card = {name: {a: np.zeros(2) for a in data_loader.ARRAYS} for name in names}
+    folder = tmp_path / "h5"
+    monkeypatch.setattr(data_loader, "_h5py", lambda: _FakeH5)  # a writer that needs no h5py
+    data_loader.write(folder, card, {"system": SYSTEM}, "hdf5")
+    monkeypatch.undo()
+    assert len(data_loader.read_card(folder)["arrays"]) == 180
+    monkeypatch.setitem(sys.modules, "h5py", None)  # import h5py: ImportError
+    for main, argv in ((data_loader.main, ["verify"]), (_cli.main, ["data", "verify"])):
+        assert main([*argv, str(folder)]) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.count("\n") == 1, (out[:300], err[:300])
+        assert err.startswith("error: ") and "data.h5" in err
+        assert "need h5py" in err and "pip install h5py" in err
+    with pytest.raises(ImportError, match="pip install h5py"):
+        data_loader.verify(folder)
+
+
+class _FakeH5:
+    """Just enough of ``h5py.File`` for :func:`data_loader.write` to leave a ``data.h5``."""
+
+    class File:
+        def __init__(self, path, mode):
+            self.path = path
+
+        def __enter__(self):
+            open(self.path, "wb").close()
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def create_group(self, name):
+            return self
+
+        def create_dataset(self, name, data):
+            pass
+
+
 def test_loader_in_the_folder_runs_without_the_suite(exported, tmp_path):
     folder = _copy(exported, "npz", tmp_path)
     code = (
@@ -189,6 +232,65 @@ def test_torch_dataset_batches_the_arrays(exported):
     z, a = next(iter(torch.utils.data.DataLoader(ds, batch_size=len(ds))))
     np.testing.assert_array_equal(z.numpy(), arrays["z_test"])
     assert z.dtype == torch.float64 and tuple(ds.ts.shape) == arrays["ts_test"].shape
+
+
+def _tiny(folder):
+    """An npz folder of one dataset of 3 chunks and 2 test windows (made-up numbers)."""
+    rng = np.random.default_rng(0)
+    shapes = {"ts_train": (4,), "z_train": (3, 4, 2), "args_train": (3, 1), "ts_test": (5,)}
+    shapes.update(z_test=(2, 5, 2), args_test=(2, 1))
+    arrays = {a: rng.normal(size=shape) for a, shape in shapes.items()}
+    data_loader.write(folder, {"tiny": arrays}, {"system": SYSTEM}, "npz")
+    return arrays
+
+
+def _stub_torch(monkeypatch):
+    """Just enough of torch (``from_numpy``, ``utils.data.Dataset``) for the adapter, where
+    torch is not installed; the adapter's class is made afresh over it and dropped after."""
+    import types
+
+    torch = types.ModuleType("torch")
+    torch.from_numpy = lambda a: ("tensor", a)
+    utils, data = types.ModuleType("torch.utils"), types.ModuleType("torch.utils.data")
+    data.Dataset = type("Dataset", (), {})
+    torch.utils, utils.data = utils, data
+    for name, module in (("torch", torch), ("torch.utils", utils), ("torch.utils.data", data)):
+        monkeypatch.setitem(sys.modules, name, module)
+    monkeypatch.setattr(data_loader, "_TORCH_CLASS", [])
+
+
+@pytest.mark.parametrize("dtype", data_loader.TORCH_DTYPES)
+def test_torch_dataset_pickles_and_takes_a_dtype(tmp_path, monkeypatch, dtype):
+    """A spawned DataLoader worker gets the dataset by pickle: the round trip gives the same
+    items, in the dtype asked for (torch stubbed where it is not installed)."""
+    import pickle
+
+    if importlib.util.find_spec("torch") is None:
+        _stub_torch(monkeypatch)
+    arrays = _tiny(tmp_path)
+    ds = data_loader.TorchDataset(tmp_path, split="test", dtype=dtype)
+    again = pickle.loads(pickle.dumps(ds))
+    assert type(again) is type(ds) and len(again) == len(ds) == 2
+    assert again.dtype == dtype
+    for i in range(len(ds)):
+        for x, want in zip(again[i], (arrays["z_test"][i], arrays["args_test"][i]), strict=True):
+            x = np.asarray(x[1] if isinstance(x, tuple) else x)  # the stub's ("tensor", a)
+            assert x.dtype == np.dtype(dtype)
+            np.testing.assert_array_equal(x, want.astype(dtype))
+    with pytest.raises(ValueError, match="dtype 'float16': allowed float64, float32"):
+        data_loader.TorchDataset(tmp_path, dtype="float16")
+
+
+def test_torch_dataset_in_spawned_workers(tmp_path):
+    torch = pytest.importorskip("torch")
+    arrays = _tiny(tmp_path)
+    ds = data_loader.TorchDataset(tmp_path, split="train", dtype="float32")
+    loader = torch.utils.data.DataLoader(
+        ds, batch_size=3, num_workers=1, multiprocessing_context="spawn"
+    )
+    (z, args), *rest = list(loader)
+    assert not rest and z.dtype == torch.float32 and ds.ts.dtype == torch.float32
+    np.testing.assert_array_equal(z.numpy(), arrays["z_train"].astype("float32"))
 
 
 @pytest.mark.parametrize(

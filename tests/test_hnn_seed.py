@@ -97,8 +97,18 @@ def test_equal_energy_error_is_not_reproduced():
     assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"contradicts"}
 
 
-def test_energy_bought_with_a_worse_fit_is_not_tested():
+def test_an_energy_edge_with_a_worse_fit_is_judged():
+    # "at similar loss" can only confound: the HNN fits 30x worse, so its fit cannot explain
+    # its energy advantage, and the comparison is judged (the condition is shown, and holds)
     v = H.claim_10(_tables(energy_ratio=1000.0, loss_ratio=30.0, spread=0.1))
+    assert v.verdict == "reproduced", v.detail
+    assert {p.status for p in v.parts if p.name.startswith("(b)")} == {"holds"}
+    assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"holds"}
+
+
+def test_an_energy_edge_bought_with_a_better_fit_is_not_tested():
+    # the HNN fits 30x better: fit could explain its energy advantage, so (a) is not tested
+    v = H.claim_10(_tables(energy_ratio=1000.0, loss_ratio=1 / 30.0, spread=0.1))
     assert v.verdict == "inconclusive", v.detail
     assert {p.status for p in v.parts if p.name.startswith("(b)")} == {"contradicts"}
     assert {p.status for p in v.parts if p.name.startswith("(a)")} == {"not tested"}

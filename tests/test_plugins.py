@@ -94,10 +94,12 @@ def test_model_module_option_loads_a_module_without_an_entry_point(tmp_path):
 
 @pytest.fixture
 def clean_registry():
-    before = dict(registry._REGISTRY)
+    before, sources = dict(registry._REGISTRY), dict(registry._SOURCES)
     yield
     registry._REGISTRY.clear()
     registry._REGISTRY.update(before)
+    registry._SOURCES.clear()
+    registry._SOURCES.update(sources)
     models.spec.cache_clear()
 
 

@@ -27,6 +27,7 @@ OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
 # tests/test_pixels.py, tests/test_vin_blog.py, tests/test_real_pendulum.py and
 # tests/test_controlled_runs.py.
 OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS) | set(METRIC_COLUMNS) | set(CONTROLLED_COLUMNS)
+OPTIONAL.add("plugin_source")  # plug-in models' rows only: tests/test_plugin_source.py
 
 
 @pytest.fixture(scope="module")

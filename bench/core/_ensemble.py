@@ -23,7 +23,7 @@ import systems
 
 from ._config import RunConfig, check_choice
 from ._errors import one_line, storage_error
-from ._params import cached_params_meta, params_dir
+from ._params import cache_key, cached_params_meta, params_dir
 
 MODES = ("auto", "on", "off")
 # RunConfig fields that may differ between the members of one ensemble (no shape changes).
@@ -289,7 +289,7 @@ def plan_groups(
     for c in configs:
         cached = (
             cache_root is not None
-            and cached_params_meta(params_dir(cache_root, c.train_hash)) is not None
+            and cached_params_meta(params_dir(cache_root, cache_key(c))) is not None
         )
         # train_box runs fit fresh states of their own (bench.core._box): alone
         own = _kind(c) is None or bool(c.train_box)

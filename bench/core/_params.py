@@ -1,8 +1,13 @@
-"""The parameter cache, shared by state and pixel runs: ``<cache>/params/<train_hash>/`` holds a
+"""The parameter cache, shared by state and pixel runs: ``<cache>/params/<key>/`` holds a
 trained model (``model.eqx``), its record (``train.json``: the training's outcome, the sha256 of
 ``model.eqx``, the fingerprint of the code that trained it), the losses and the checkpoint
 snapshots. Runs that differ only in evaluation train once; an entry whose checksum fails, or
-that other code trained (``train_hash`` covers the configuration, not the code), is retrained."""
+that other code trained (``train_hash`` covers the configuration, not the code), is retrained.
+
+The key (:func:`cache_key`) is the configuration's ``train_hash``; a plug-in model's adds the
+fingerprint of the plug-in's source (:func:`models.plugin_fingerprint`), which the suite's
+code fingerprint does not cover: parameters trained before a plug-in was edited are never
+loaded into the edited code."""
 
 from __future__ import annotations
 
@@ -13,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+import models
 from systems import source_fingerprint
 
 from ._atomic import atomic_write, write_json
@@ -37,8 +43,17 @@ def sha256_file(path: Path) -> str:
 
 
 def params_dir(cache_root, train_hash: str) -> Path:
-    """``<cache_root>/params/<train_hash>/``."""
+    """``<cache_root>/params/<train_hash>/`` (``train_hash``: a :func:`cache_key`)."""
     return Path(cache_root) / "params" / train_hash
+
+
+def cache_key(config: RunConfig) -> str:
+    """The key of ``config``'s parameters in the cache: its ``train_hash`` for a built-in
+    model; ``<train_hash>-<fingerprint>`` for a plug-in model, the fingerprint that of the
+    plug-in's source as this process imported it (:func:`models.plugin_fingerprint`), so that
+    an edited plug-in trains anew and its earlier parameters stay under their own key."""
+    source = models.plugin_fingerprint(config.model)
+    return config.train_hash if source is None else f"{config.train_hash}-{source}"
 
 
 def cached_params_meta(pdir: Path) -> dict | None:
@@ -124,10 +139,11 @@ def result_meta(res) -> dict:
 
 def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple = ()) -> dict:
     """Write a :class:`bench.TrainResult` (trained keeping ``checkpoints``) to
-    ``params/<train_hash>/``; return its meta, as :func:`cached_training` returns it."""
+    ``params/<key>/`` (:func:`cache_key`); return its meta, as :func:`cached_training` returns
+    it."""
     import equinox as eqx
 
-    pdir = params_dir(cache_root, config.train_hash)
+    pdir = params_dir(cache_root, cache_key(config))
     losses = np.asarray(res.losses, dtype=np.float64)
     meta = {**result_meta(res), "code": code_fingerprint()}
     atomic_write(pdir / "model.eqx", lambda tmp: eqx.tree_serialise_leaves(tmp, res.model))
@@ -150,7 +166,7 @@ def store_trained(config: RunConfig, res, cache_root: Path, checkpoints: tuple =
 def cached_training(
     config: RunConfig, like, cache_root: Path, fit: Callable, checkpoints: tuple = ()
 ) -> tuple:
-    """``(model, meta)``: the parameters cached under ``config.train_hash`` (with the snapshots
+    """``(model, meta)``: the parameters cached under :func:`cache_key` (with the snapshots
     of ``checkpoints``; ``like`` gives their structure) where they hold, else those of
     ``fit(resume)`` (a :class:`bench.TrainResult`; ``resume``, the entry's
     :class:`bench.core._resume.ResumePoint`, goes to :func:`bench.train`, so that a killed
@@ -158,7 +174,7 @@ def cached_training(
     ``meta["_snapshots"]`` holds the checkpoint snapshots."""
     import equinox as eqx
 
-    pdir = params_dir(cache_root, config.train_hash)
+    pdir = params_dir(cache_root, cache_key(config))
     meta = cached_params_meta(pdir)
     if meta is not None:
         try:
@@ -177,11 +193,11 @@ def cached_training(
 
 def resume_point(config: RunConfig, cache_root: Path, data: str = "") -> ResumePoint:
     """Where the training of ``config`` keeps its state while it runs
-    (``params/<train_hash>/resume/``), for this code and, where the configuration does not
-    name its data, for the data of sha256 ``data``: a state saved for other code or data is
-    ignored."""
+    (``params/<key>/resume/``, :func:`cache_key`), for this code and, where the configuration
+    does not name its data, for the data of sha256 ``data``: a state saved for other code or
+    data is ignored."""
     code = code_fingerprint() + (f"{DATA_TAG}{data}" if data else "")
-    return ResumePoint(params_dir(cache_root, config.train_hash) / RESUME, code=code)
+    return ResumePoint(params_dir(cache_root, cache_key(config)) / RESUME, code=code)
 
 
 def saved_by_this_code(saved: str) -> bool:

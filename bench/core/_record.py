@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+import models
 import systems
 
 from ._atomic import atomic_write, write_json
@@ -28,7 +29,9 @@ def artifact_dir(config_hash: str, cache_root=None) -> Path:
 
 
 def base_row(config: RunConfig) -> dict:
-    """The row fields every run has, before any computation."""
+    """The row fields every run has, before any computation; a plug-in model's row also
+    records the fingerprint of the plug-in's source (``plugin_source``,
+    :func:`models.plugin_fingerprint`), which its ``config_hash`` does not cover."""
     row = config.to_dict()
     row.update(
         config_hash=config.config_hash,
@@ -37,6 +40,9 @@ def base_row(config: RunConfig) -> dict:
         diverged_step=None,
         error=None,
     )
+    source = models.plugin_fingerprint(config.model)
+    if source is not None:  # built-in rows keep their columns
+        row["plugin_source"] = source
     return row
 
 

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+import models
 import systems
 
 from . import _store
@@ -89,6 +90,31 @@ def _schedule(todo: list[RunConfig], order: Callable[[RunConfig], float]) -> lis
     return [c for _, c in ranked]
 
 
+def _edited_plugin_runs(results_dir: Path, configs: Sequence[RunConfig]) -> set[str]:
+    """config_hash of the stored runs of ``configs`` whose model is a plug-in edited since:
+    their row records another fingerprint of the plug-in's source (``plugin_source``, none in
+    a row stored without it) than the one this process imported. They are run again (the
+    parameter cache keys their training by that source too) and their rows replaced; a note
+    on stderr names them. Without plug-in models in ``configs`` no row is read."""
+    now = {c.config_hash: models.plugin_fingerprint(c.model) for c in configs}
+    now = {h: source for h, source in now.items() if source is not None}
+    if not now:
+        return set()
+    stale = {
+        r["config_hash"]: r["model"]
+        for r in _store.read_rows(results_dir)
+        if r["config_hash"] in now and r.get("plugin_source") != now[r["config_hash"]]
+    }
+    if stale:
+        names = ", ".join(sorted(set(stale.values())))
+        print(
+            f"{len(stale)} stored run(s) of plug-in model(s) {names} ran other source of the "
+            "plug-in than the one loaded now: running them again, their rows replaced",
+            file=sys.stderr,
+        )
+    return set(stale)
+
+
 def sweep(
     configs: Sequence[RunConfig],
     results_dir="results",
@@ -115,7 +141,8 @@ def sweep(
     A write that fails for want of space or permission (in a run or when storing its row)
     stops the sweep with :class:`bench.core._errors.StorageError`; the rows stored so far are
     whole and the next sweep resumes. A damaged row file counts as not done (see
-    :func:`bench.core._store.scan_rows`): its run is executed again.
+    :func:`bench.core._store.scan_rows`): its run is executed again, as is a stored run of a
+    plug-in model whose source changed since (:func:`_edited_plugin_runs`).
 
     ``ensemble`` (``auto``, ``on``, ``off``; ``auto``: on when jax's default backend is an
     accelerator): train runs that differ only in seed, lr or noise as ensembles of at most
@@ -139,7 +166,7 @@ def sweep(
     # ValueError: a file, under a file, not writable; a missing folder is made further down
     results_dir = _store.check_results_dir(results_dir, create=False)
     cache_root = Path(cache_root or systems.cache_root()).resolve()
-    done = _store.done_hashes(results_dir)
+    done = _store.done_hashes(results_dir) - _edited_plugin_runs(results_dir, configs)
     todo, seen = [], set()
     for c in configs:
         if c.config_hash not in done and c.config_hash not in seen:

@@ -113,6 +113,11 @@ _CONFIG = {
 _RUN = {
     "config_hash": ("-", "content address of the run: sha256 of its configuration, 16 hex"),
     "train_hash": ("-", "content address of its training (the configuration without eval_*)"),
+    "plugin_source": (
+        "-",
+        "a plug-in model's run: fingerprint of the plug-in's source that ran it (an edited "
+        "plug-in's runs are rerun); empty for the built-in models",
+    ),
     "experiment": ("-", "the experiment that first stored the run (runs are shared)"),
     "profile": ("-", "the profile it was expanded under (smoke, quick, paper)"),
     "status": ("-", "ok, diverged (non-finite loss; step in diverged_step) or failed (error)"),

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 
 from ..core._config import check_choice
 from ..core._experiments import PROFILES
 
 __all__ = [
+    "SEEDS_FORMS",
     "check_sweep_args",
     "float_arg",
     "int_arg",
@@ -95,17 +97,24 @@ def usable_results(args) -> Path:
     return check_results_dir(args.results, create=True)
 
 
+_SEED_ITEM = re.compile(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", re.ASCII)  # 7 or 0-4
+SEEDS_FORMS = "integers >= 0 or ranges a-b (a <= b), comma-separated: 5,6,7 or 0-4 or 0-4,7"
+
+
 def seed_list(given: str | None) -> tuple[int, ...] | None:
-    """``--seeds 5,6,7`` as a tuple of integers >= 0 (ValueError in one line otherwise)."""
+    """``--seeds`` as a tuple of distinct integers >= 0, in the order given: ``5,6,7``, a range
+    ``0-4`` (both ends included, as the docs write seeds) or a mix ``0-4,7``. ValueError in
+    one line naming the allowed forms (:data:`SEEDS_FORMS`) otherwise."""
     if given is None:
         return None
-    try:
-        seeds = tuple(int(x) for x in given.split(","))
-    except ValueError:
-        seeds = ()
-    if not seeds or any(x < 0 for x in seeds):
-        raise ValueError(f"--seeds must be comma-separated integers >= 0, got {given!r}")
-    return seeds
+    seeds: list[int] = []
+    for item in str(given).split(","):
+        match = _SEED_ITEM.fullmatch(item)
+        first, last = (int(match[1]), int(match[2] or match[1])) if match else (0, -1)
+        if first > last:  # not an integer or a range, or a range that runs backwards
+            raise ValueError(f"--seeds must be {SEEDS_FORMS}; got {given!r}")
+        seeds.extend(range(first, last + 1))
+    return tuple(dict.fromkeys(seeds))
 
 
 def model_list(args) -> list[str] | None:

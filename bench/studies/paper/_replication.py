@@ -198,7 +198,7 @@ def judge(
         primary_seeds = declared
     else:
         primary_seeds = tuple(s for s in stored if s not in rep_seeds)
-    cache = restrict_all(runs, profile) if restricted is None else restricted
+    cache = restrict_all(runs, profile, claims) if restricted is None else restricted
 
     def evaluate(seeds):
         return evaluate_claims(runs, curves, profile, claims=claims, seeds=seeds, restricted=cache)

@@ -54,10 +54,18 @@ def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
 
 
-def restrict_all(runs: pd.DataFrame, profile: str | None) -> dict[int, pd.DataFrame]:
-    """``{claim: the rows it reads}`` for every claim study (:func:`restrict`): the rows a
-    claim reads do not depend on the seed, so one restriction serves every seed set."""
-    return {s.claim: _plain_columns(restrict(runs, s, profile)) for s in claim_studies()}
+def restrict_all(
+    runs: pd.DataFrame, profile: str | None, claims: Iterable[int] | None = None
+) -> dict[int, pd.DataFrame]:
+    """``{claim: the rows it reads}`` for every claim study (only ``claims`` where given;
+    :func:`restrict`): the rows a claim reads do not depend on the seed, so one restriction
+    serves every seed set."""
+    wanted = None if claims is None else set(claims)
+    return {
+        s.claim: _plain_columns(restrict(runs, s, profile))
+        for s in claim_studies()
+        if wanted is None or s.claim in wanted
+    }
 
 
 def _plain_columns(df: pd.DataFrame) -> pd.DataFrame:

@@ -23,6 +23,7 @@ from ._common import (
     initial_ok,
     shared_overrides,
 )
+from ._links import fig_links
 from ._plot import (
     _model_bars,
 )
@@ -173,6 +174,7 @@ STUDY = register_study(
         rule=claim_4,
         reads=("energy", "second_order", "coordinates", "loss"),
         figure=fig_coordinates,
+        results_figure=fig_links,
         stem="fig5_coordinates",
     )
 )

@@ -1,0 +1,80 @@
+"""The claims at every number of links (bench.studies.paper._links) on synthetic stored runs of
+the paper profile's Fig. 5 cells at k = 1..4, seeds 0-9 (no training)."""
+
+import pandas as pd
+import pytest
+from _synthetic import synthetic_tables
+
+from bench.core._experiments import expand
+from bench.studies.paper import _links as L
+from bench.studies.paper import evaluate_claims
+from bench.studies.paper import kit as R
+
+
+@pytest.fixture(scope="module")
+def fig5():
+    a = synthetic_tables("paper", experiments=("coordinates",))
+    b = synthetic_tables("paper", experiments=("coordinates",), seeds=(5, 6, 7, 8, 9), rng=1)
+    return (
+        pd.concat([a[0], b[0]], ignore_index=True),
+        pd.concat([a[1], b[1]], ignore_index=True),
+    )
+
+
+def test_the_selections_split_the_paper_cells_by_k():
+    core = {c.config_hash for c in expand("coordinates", "paper-core")}
+    links = {c.config_hash for c in expand("coordinates", "paper-k")}
+    paper = {c.config_hash for c in expand("coordinates", "paper")}
+    assert core | links == paper and not core & links
+    assert {c.k for c in expand("coordinates", "paper-k")} == {1, 3, 4}
+    assert {c.k for c in expand("second_order", "paper-k")} == {1, 3, 4}
+    assert {c.k for c in expand("symplectic", "paper-k")} == {3, 4}
+
+
+def test_each_k_and_every_k_pooled_are_judged(fig5):
+    runs, curves = fig5
+    got = {r.label: r for r in L.readings(runs, curves)}
+    assert list(got) == ["k = 1", "k = 2", "k = 3", "k = 4", "k = 1-4"]
+    for r in got.values():
+        assert r.counts[4][0] == r.counts[4][1] > 0  # every Fig. 5 cell stored
+        assert r.judgement.replication_seeds == (5, 6, 7, 8, 9)
+    # claims 1 and 3 read the second_order cells too, which this table lacks: pending
+    assert got["k = 3"].counts[3][0] < got["k = 3"].counts[3][1]
+    # the pooled reading is claim 4's (and claim 1's) only
+    assert set(got["k = 1-4"].counts) == {1, 4}
+    one = {v.key: v for v in got["k = 3"].judgement.final}
+    assert one["4 (geometric-mean error, spring from paper)"].verdict == R.REPRODUCED
+    # the per-k reading sees its k only: the edge equals the rule's on that k's rows alone
+    k3 = runs[runs["k"] == 3]
+    every = evaluate_claims(k3, curves, "paper", claims=(4,), seeds=range(10))
+    alone = {v.key: v for v in every}
+    key = "4 (MSE, spring from paper)"
+    assert one[key].effect == pytest.approx(alone[key].effect)
+
+
+def test_the_section_names_pending_readings_and_seeds(fig5):
+    runs, curves = fig5
+
+    class Ctx:
+        pass
+
+    ctx = Ctx()
+    ctx.runs, ctx.curves = runs, curves
+    text = "\n".join(L.links_section(ctx))
+    assert "| claim | k = 1 | k = 2 | k = 3 | k = 4 | k = 1-4 |" in text
+    assert "pending (" in text and "seeds 0-9" in text
+    # k = 2 alone is paper-core's own reading: no section
+    ctx.runs = runs[runs["k"] == 2]
+    assert L.links_section(ctx) == []
+
+
+def test_the_figure_draws_error_against_k(fig5, tmp_path):
+    runs, _ = fig5
+    runs.to_parquet(tmp_path / "runs.parquet", index=False)
+    paths = L.fig_links(tmp_path)
+    assert {p.suffix for p in paths} == {".png", ".pdf"} and all(p.exists() for p in paths)
+    # one k only: nothing to draw
+    other = tmp_path / "one"
+    other.mkdir()
+    runs[runs["k"] == 2].to_parquet(other / "runs.parquet", index=False)
+    assert L.fig_links(other) == []
