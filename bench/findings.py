@@ -4,11 +4,13 @@
 ``<!-- findings:end -->`` of README.md from the *Claims* tables of
 ``results/reference/quick/REPORT.md`` and ``results/reference/paper/REPORT.md`` (paper-core);
 ``--check`` exits 1, naming the file, when the README no longer says what the reports say.
-Each row: the claim, the paper's sentence, the final verdict at both budgets (paper-core's with
+First a few sentences per paper generated from the verdicts (:func:`summary`). Then one row per
+claim: the claim, the paper's sentence, the final verdict at both budgets (paper-core's with
 its replication: seeds 0-4 and 5-9 where they differ, else whether 5-9 are stored), and the
-measured effect behind the paper-core verdict with its 90% interval; then each budget's
-margin-dependent claims, the seeds' protocols and the compute the committed runs took (the
-reports' *compute on* lines; the GPU folder's beside them). The margins themselves are in
+measured effect behind the paper-core verdict with its 90% interval and the seeds it rests on;
+then each budget's margin-dependent claims and the compute the committed runs took (the
+reports' *compute on* lines; the GPU folder's beside them). ``--protocols`` prints the seeds'
+protocols beside ours. The margins themselves are in
 docs/verdicts.md and each report's *Margin policy*.
 """
 
@@ -24,6 +26,7 @@ README = ROOT / "README.md"
 BUDGETS = {"quick": "results/reference/quick", "paper-core": "results/reference/paper"}
 GPU = "results/reference/paper_gpu"  # the paper profile on a GPU, where one was lent
 BEGIN, END = "<!-- findings:begin -->", "<!-- findings:end -->"
+FIGURE = "results/reference/headlines"  # each claim's headline at both budgets
 _HEADER = "| claim | statement | verdict |"
 PROTOCOL_HEADER = "| protocol | ours | the seed's |"  # bench.studies.paper._protocols.HEADER
 
@@ -105,7 +108,7 @@ def _replicated(row: dict[str, str] | None) -> str:
         spans = [c.removeprefix("seeds ") for c in sets[:2]]
         return f"{_verdict(row)}: {spans[0]} {first}, {spans[1]} {second}"
     if rep == "yes":
-        if first != row["verdict"].strip("*"):  # ten seeds resolve what five did not
+        if first != row["verdict"].strip("*").split(":")[0]:  # ten seeds resolve what five did not
             spans = " and ".join(c.removeprefix("seeds ") for c in sets[:2])
             return f"{_verdict(row)}, replicates (pooled; {spans}: {first} each)"
         return f"{_verdict(row)}, replicates"
@@ -113,10 +116,20 @@ def _replicated(row: dict[str, str] | None) -> str:
 
 
 def _why(row: dict[str, str]) -> str:
-    """'<what the effect measures>: <value> [<90% interval>]' from the effect column."""
+    """'<what the effect measures>: <value> [<90% interval>] (seeds <span>)' from the effect
+    column, with the seeds the final reading rests on: both sets pooled where they replicate,
+    else the first set's."""
     m = re.fullmatch(r"(\S+) \((.*)\)", row["effect"])
     what, value = (m.group(2), m.group(1)) if m else ("effect", row["effect"])
-    return f"{what}: {value} {row['90% CI']}"
+    sets = [c.removeprefix("seeds ") for c in row if c.startswith("seeds ")]
+    pooled = [c.removeprefix("pooled ") for c in row if c.startswith("pooled ")]
+    if row.get("replicates") == "yes" and pooled:
+        seeds = f" (seeds {pooled[0]})"
+    elif sets:
+        seeds = f" (seeds {sets[0]})"
+    else:
+        seeds = ""
+    return f"{what}: {value} {row['90% CI']}{seeds}"
 
 
 def protocol_rows(text: str) -> dict[str, tuple[str, str]]:
@@ -196,11 +209,96 @@ def _protocol_lines(reports: dict[str, str]) -> list[str]:
     return lines
 
 
+PAPER_NAMES = {
+    "deconstructing": "The Deconstructing paper",
+    "hnn": "The HNN seed",
+    "lnn": "The LNN seed",
+    "vin": "The VIN seed",
+}
+
+
+def claim_papers() -> dict[int, str]:
+    """Claim number -> the paper it comes from (its experiments' ``paper``)."""
+    from .core._experiments import available, get
+
+    out: dict[int, str] = {}
+    for name in available():
+        e = get(name)
+        if e.claim is not None:
+            out.setdefault(e.claim, e.paper)
+    return out
+
+
+def _claim_of(label: str) -> int:
+    return int(label.split()[0])
+
+
+def _reading(row: dict[str, str]) -> str:
+    """A claims-table row's verdict in a few words (the headline's status kept)."""
+    text = re.sub(r" \(([^)]*)\)", r", \1", row["verdict"].strip("*"))
+    if row.get("discriminating") == "**no**":
+        text += ", not discriminating"
+    return text
+
+
+def _join(items: list[str]) -> str:
+    return ", ".join(items[:-1]) + (" and " if len(items) > 1 else "") + items[-1]
+
+
+def summary(core: dict, quick: dict, papers: dict[int, str] | None = None) -> list[str]:
+    """Two or three sentences per paper, generated from the verdicts (paper-core's where it
+    judges a claim, else quick's): what holds, what is contradicted, what could not be decided
+    and why. A claim with several readings (claim 4) is named once per distinct verdict."""
+    papers = claim_papers() if papers is None else papers
+    out = []
+    for paper, name in PAPER_NAMES.items():
+        labels = [x for x in (*core, *(q for q in quick if q not in core))]
+        labels = [x for x in labels if papers.get(_claim_of(x)) == paper]
+        if not labels:
+            continue
+        groups: dict[str, list[str]] = {"holds": [], "against": [], "open": []}
+        seen: set[tuple[int, str]] = set()
+        for label in labels:
+            row = core.get(label) or quick[label]
+            budget = "" if label in core else " (quick)"
+            reading = _reading(row)
+            key = (_claim_of(label), reading)
+            if key in seen:
+                continue
+            seen.add(key)
+            claim = str(_claim_of(label)) + budget
+            if reading.startswith(("reproduced", "partly reproduced: headline holds")):
+                groups["holds"].append(f"{claim} ({reading})")
+            elif reading.startswith(("not reproduced", "partly reproduced")):
+                groups["against"].append(f"{claim} ({reading})")
+            else:
+                groups["open"].append(f"{claim} ({reading})")
+        said = []
+        if groups["holds"]:
+            said.append(f"holds: claim {_join(groups['holds'])}")
+        if groups["against"]:
+            said.append(f"contradicted in part or whole: claim {_join(groups['against'])}")
+        if groups["open"]:
+            said.append(f"not decided: claim {_join(groups['open'])}")
+        text = "; ".join(said)
+        out.append(f"- **{name}.** {text[:1].upper()}{text[1:]}.")
+    return out
+
+
 def findings(root: Path = ROOT) -> str:
-    """The findings block (Markdown table) from the committed reports under ``root``."""
+    """The findings block from the committed reports under ``root``: a few generated sentences
+    per paper, then the claims table."""
     reports = {b: (root / d / "REPORT.md").read_text() for b, d in BUDGETS.items()}
     quick, core = (claims_table(reports[b]) for b in ("quick", "paper-core"))
     lines = [
+        "At paper-core (quick where paper-core does not judge a claim), generated from the "
+        "verdicts:",
+        "",
+        *summary(core, quick),
+        "",
+        f"![each claim's headline effect per budget]({FIGURE}.png) ({FIGURE}.pdf: "
+        "the headline effect in units of its margin, coloured by verdict)",
+        "",
         "| claim | the paper says | quick | paper-core (seeds 0-4, then 5-9) | "
         "measured at paper-core (90% CI) |",
         "| --- | --- | --- | --- | --- |",
@@ -214,7 +312,6 @@ def findings(root: Path = ROOT) -> str:
         )
     dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())
     lines += ["", f"Margin-dependent inside the bands: {dependent}."]
-    lines += _protocol_lines(reports)
     lines += ["", compute_sentence(root)]
     return "\n".join(lines)
 
@@ -249,8 +346,17 @@ def current(readme: Path = README) -> str:
     return _split(readme.read_text())[1].strip("\n")
 
 
+def draw(root: Path = ROOT) -> list[Path]:
+    """The headline figure from the budgets' ``headlines.csv`` (each report writes its own)."""
+    from .studies.paper._headlines import fig_headlines
+
+    return fig_headlines({b: root / d for b, d in BUDGETS.items()}, root / FIGURE)
+
+
 def write(readme: Path = README, root: Path = ROOT) -> bool:
-    """Rewrite README's block from the reports; True when it changed."""
+    """Rewrite README's block from the reports, and the headline figure; True when the block
+    changed."""
+    draw(root)
     head, old, tail = _split(readme.read_text())
     new = "\n" + findings(root) + "\n"
     if new == old:
@@ -262,7 +368,16 @@ def write(readme: Path = README, root: Path = ROOT) -> bool:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m bench.findings", description=__doc__)
     p.add_argument("--check", action="store_true", help="exit 1 if README.md is out of date")
+    p.add_argument(
+        "--protocols",
+        action="store_true",
+        help="print the table of the seeds' protocols beside ours (learning gates, verdicts)",
+    )
     args = p.parse_args(argv)
+    if args.protocols:
+        reports = {b: (ROOT / d / "REPORT.md").read_text() for b, d in BUDGETS.items()}
+        print("\n".join(_protocol_lines(reports)).strip("\n"))
+        return 0
     if args.check:
         if current() != findings():
             print(f"{README}: findings table out of date; run python -m bench.findings")

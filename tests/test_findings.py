@@ -220,3 +220,28 @@ def test_a_pending_claim_is_not_called_margin_dependent():
     assert "Margin-dependent: claim 1." in text and "| 12 |" not in text
     text = "\n".join(_dependence_section(deps, [v("1"), v("12")]))
     assert "Margin-dependent: claim 1, 12." in text
+
+
+def test_the_sentences_say_what_holds_what_is_contradicted_and_what_is_open():
+    def row(verdict, disc="yes"):
+        return {"verdict": f"**{verdict}**", "discriminating": disc}
+
+    core = {
+        "1": row("partly reproduced: headline contradicted"),
+        "2": row("reproduced"),
+        "4 (a)": row("inconclusive (does not replicate)"),
+        "4 (b)": row("inconclusive (does not replicate)"),
+        "13": row("inconclusive", "**no**"),
+        "9": row("not reproduced"),
+    }
+    quick = {"3": row("partly reproduced: headline holds"), "2": row("inconclusive")}
+    papers = {1: "deconstructing", 2: "deconstructing", 3: "deconstructing", 4: "deconstructing"}
+    papers |= {13: "deconstructing", 9: "lnn"}
+    lines = findings.summary(core, quick, papers)
+    assert lines == [
+        "- **The Deconstructing paper.** Holds: claim 2 (reproduced) and 3 (quick) (partly "
+        "reproduced: headline holds); contradicted in part or whole: claim 1 (partly "
+        "reproduced: headline contradicted); not decided: claim 4 (inconclusive, does not "
+        "replicate) and 13 (inconclusive, not discriminating).",
+        "- **The LNN seed.** Contradicted in part or whole: claim 9 (not reproduced).",
+    ]

@@ -27,6 +27,17 @@ def test_every_experiment_expands_and_validates(name, profile):
     assert len(seeds) == len(over or E.profile_defaults(profile)[1])
 
 
+# the profiles that run every claim (paper-k selects the k = 1, 3, 4 cells of Figs. 2-5 only)
+WHOLE = [p for p in E.PROFILES if p != "paper-k"]
+
+
+def test_the_k_selection_holds_the_other_links_of_figs_2_to_5():
+    for name in ("energy", "second_order", "coordinates"):
+        assert {c.k for c in E.expand(name, "paper-k")} == {1, 3, 4}, name
+    assert {c.k for c in E.expand("symplectic", "paper-k")} == {3, 4}
+    assert not E.expand("vin", "paper-k") and not E.expand("loss", "paper-k")
+
+
 def test_experiments_are_registered_with_their_claims():
     assert set(NAMES) <= set(E.available())
     claims = {E.get(n).claim for n in NAMES} - {None}
@@ -45,7 +56,8 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
-    assert bool(l2) == (profile != "quick")  # claim 6 is not run at quick
+    # claim 6 is not run at quick, nor at paper-k (which sweeps k in Figs. 2-5 only)
+    assert bool(l2) == (profile not in ("quick", "paper-k"))
 
 
 def test_damped_has_plain_mixture_and_rayleigh_hnn():
@@ -88,7 +100,7 @@ def test_relativistic_variants():
 def test_relativistic_seed_declares_the_seeds_protocol():
     """Claim 7's second reading: the LNN seed's three models trained on time derivatives with
     the seed's loss, optimiser settings and network, at every profile and in paper-core."""
-    for profile in E.PROFILES:
+    for profile in WHOLE:
         runs = E.expand("relativistic_seed", profile)
         cells = {(c.model, c.coordinates, c.model_options) for c in runs}
         assert cells == set(P.SEED_CELLS), profile
@@ -149,7 +161,7 @@ def test_spring_cells_use_the_papers_initial_state_and_claim_4_both():
 
 
 def test_vin_has_noisy_cells_at_every_profile():
-    for profile in E.PROFILES:
+    for profile in WHOLE:
         noisy = {(c.model, c.noise) for c in E.expand("vin", profile) if c.noise > 0}
         assert noisy == {(m, n) for m in ("vin", "resnet") for n in (0.01, 0.05)}, profile
 

@@ -287,8 +287,8 @@ def test_estimates_that_differ_beyond_chance_do_not_replicate(
     the sets cannot be pooled: *does not replicate*, with the reason named."""
     runs, curves = _join(reproduce_primary, reproduce_replication)
     jitter = (1.0, 1.05, 0.95, 1.1, 0.9)
-    runs = _replication_gains(runs, {s: 30.0 * j for s, j in zip(PRIMARY, jitter)})
-    runs = _replication_gains(runs, {s: 3.0 * j for s, j in zip(REPLICATION, jitter)})
+    runs = _replication_gains(runs, {s: 30.0 * j for s, j in zip(PRIMARY, jitter, strict=True)})
+    runs = _replication_gains(runs, {s: 3.0 * j for s, j in zip(REPLICATION, jitter, strict=True)})
     j = judge(runs, curves, PROFILE, loso=False)
     name = "chain_pendulum: (a) log(NODE / NODE+SO)"
     statuses = [
@@ -312,8 +312,8 @@ def test_stronger_evidence_in_one_set_never_weakens_the_verdict(
     pooled reading already signs the part."""
     runs, curves = _join(reproduce_primary, reproduce_replication)
     jitter = (1.0, 1.2, 0.8, 1.3, 0.7)
-    base = {s: 2.5 * stronger * j for s, j in zip(REPLICATION, jitter)}
-    primary_gain = {s: 2.5 * stronger * j for s, j in zip(PRIMARY, jitter[::-1])}
+    base = {s: 2.5 * stronger * j for s, j in zip(REPLICATION, jitter, strict=True)}
+    primary_gain = {s: 2.5 * stronger * j for s, j in zip(PRIMARY, jitter[::-1], strict=True)}
     runs = _replication_gains(_replication_gains(runs, primary_gain), base)
     j = judge(runs, curves, PROFILE, loso=False)
     assert j.replicates("3") is True

@@ -12,7 +12,7 @@ from . import energy, symplectic, second_order, coordinates, damped, loss
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: F401
 from . import pixels, vin_blog, _hnn_diagnosis  # noqa: F401
 from . import rigid_bodies, three_body, real_pendulum, mujoco  # noqa: F401
-from . import _commands, _sections, _links  # noqa: F401 - the paper's verbs and report sections
+from . import _commands, _sections  # noqa: F401 - the paper's verbs and report sections
 
 # isort: on
 from ._budget import (

@@ -226,6 +226,36 @@ def _campaign(args) -> int:
     return 0
 
 
+def _power_arguments(p):
+    p.add_argument(
+        "--simulations",
+        type=int_arg("simulations"),
+        default=2000,
+        help="draws per part and number of seeds (default 2000)",
+    )
+
+
+def _power(args) -> int:
+    from ...core._query import load_tables
+    from ._power import power_lines, power_table
+    from ._replication import judge
+
+    runs, curves, profile = load_tables(args.results)
+    if not len(runs):
+        raise ValueError(f"{args.results} holds no runs: nothing to simulate")
+    j = judge(runs, curves, profile, loso=False)
+    table = power_table(j.final, sims=args.simulations)
+    out = args.results / "power.csv"
+    table.to_csv(out, index=False)
+    print("\n".join(power_lines(table)) or "no undecided part")
+    print(f"wrote {out} ({len(table)} parts)")
+    return 0
+
+
+_POWER_HELP = (
+    "the verdict engine's power: each part's chance to sign at 5 and 10 seeds at its observed "
+    "effect and spread, and the seeds that would decide the undecided ones: <results>/power.csv"
+)
 _LNN_HELP = (
     "the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
     ": <results>/lnn_diagnosis.csv"
@@ -244,6 +274,7 @@ COMMANDS = tuple(
             _estimate,
             _estimate_arguments,
         ),
+        Command("power", _POWER_HELP, _power, _power_arguments, _POWER_HELP),
         Command("diagnose-lnn", _LNN_HELP, _diagnose_lnn, _lnn_arguments, _LNN_HELP),
         Command("diagnose-hnn", _HNN_HELP, _diagnose_hnn, _hnn_arguments, _HNN_HELP),
         *(_ablation_command(a) for a in ABLATIONS),

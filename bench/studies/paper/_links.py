@@ -26,7 +26,6 @@ import numpy as np
 import pandas as pd
 
 from ...core._experiments import expand, get
-from ...core._studies import ReportSection, register_section
 from ._replication import Judgement, judge, stored_counts
 from ._rules import claim_studies
 from ._seeds import seed_sets, seed_span
@@ -109,7 +108,7 @@ def _cell(r: LinkReading, key: str, claim: int) -> str:
         )
         eff = f" {v.effect:.3g}{ci}"
     seeds = seed_span(r.judgement.reading_seeds(key))
-    return f"**{v.verdict}**{eff}, seeds {seeds}"
+    return f"**{v.label()}**{eff}, seeds {seeds}"
 
 
 def links_section(ctx) -> list[str]:
@@ -145,9 +144,6 @@ def links_section(ctx) -> list[str]:
     for key, claim in keys:
         out.append(f"| {key} | " + " | ".join(_cell(r, key, claim) for r in got) + " |")
     return [*out, ""]
-
-
-SECTION = register_section(ReportSection("claims at every number of links", links_section))
 
 
 # ----------------------------------------------------------------------------- figure

@@ -13,8 +13,9 @@ import pandas as pd
 
 from ...core._experiments import Experiment
 from . import _pixel_ablation, policy
+from ._pixel_aux import diagnosis_line
 from ._pixel_experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_MSE, SHORT, _rows
-from ._pixel_rule import reading, readings, seed_protocol
+from ._pixel_rule import _learned, reading, readings, seed_protocol
 from ._protocols import Protocol, by_seed_set, learned_text, protocol_table
 from .hnn_seed import fmt, geometric_mean
 from .kit import bad_rows
@@ -88,6 +89,7 @@ def section(results_dir) -> str:
             "",
             *protocols(t, profile),
             *variant_lines(seed_diag),
+            *diagnosis_line(seed_diag, _learned),
             "",
             *seed_lines(t, diag, seed_diag),
             *_pixel_ablation.lines(results_dir, profile),
@@ -328,7 +330,7 @@ def variant_lines(diag: pd.DataFrame | None) -> list[str]:
             continue
         g = g.assign(observation="pixels")
         g["status"] = np.where(np.isfinite(pd.to_numeric(g["pixel_mse"])), "ok", "failed")
-        v = reading(g, "seed")
+        v = reading(g, "seed", aux=False)  # the energy statement under the variant
         head = v.parts[0] if v.parts else None
         why = f"; (a) {head.status}" + (f": {head.note}" if head and head.note else "")
         out.append(

@@ -9,6 +9,9 @@ import numpy as np
 from ...core._studies import ReportContext, ReportSection, register_section
 from .._text import fmt, md_escape
 from ._comparison import _disc_mark, comparison_section, load_other, pending
+from ._headlines import write_headlines
+from ._links import links_section
+from ._power import power_lines, power_table
 from ._replication import judge
 from ._sensitivity import margin_dependence
 from .kit import TRIVIAL_FACTOR
@@ -71,7 +74,7 @@ def _claims_table(j) -> list[str]:
         else:
             pooled_text = f"{pooled.verdict} ({pooled.n_seeds})" if pooled else "-"
         out.append(
-            f"| {md_escape(v.key)} | {md_escape(v.title)} | **{v.verdict}** | {prim.verdict} "
+            f"| {md_escape(v.key)} | {md_escape(v.title)} | **{v.label()}** | {prim.verdict} "
             f"({prim.n_seeds}) | {r.verdict + f' ({r.n_seeds})' if r else '-'} | "
             f"{pooled_text} | {rep} | "
             f"{md_escape(_loso_text(j, v.key))} | {md_escape(effect)} | "
@@ -245,10 +248,15 @@ def _judged(ctx: ReportContext):
     return ctx.memo["paper"]
 
 
+# draws per part in the report's power table (python -m bench power: 2000)
+POWER_SIMULATIONS = 1000
+
+
 def claims_section(ctx: ReportContext) -> list[str]:
     """How a claim is judged, the claims table, the claims not run here, and every part."""
     j = _judged(ctx)[0]
     n_failed = sum(v.n_failed for v in j.final)
+    write_headlines(ctx.results_dir, j.final)
     return [
         "## Claims",
         "",
@@ -288,6 +296,7 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "",
         *_parts_table(j),
         "",
+        *power_lines(power_table(j.final, sims=POWER_SIMULATIONS)),
         f"Failed or diverged runs scored as error 1 in the verdicts: {n_failed}.",
         "",
     ]
@@ -317,5 +326,6 @@ SECTIONS = tuple(
         ("margin policy", policy_section),
         ("margin-dependent claims", dependence_section),
         ("verdicts at both budgets", budgets_section),
+        ("claims at every number of links", links_section),
     )
 )

@@ -69,6 +69,7 @@ class Part:
     ranges: tuple = ()
     decide: Callable | None = field(default=None, repr=False, compare=False)
     levels: tuple[float, float] = (ALPHA, ALPHA)  # Holm's levels for holds / contradicts
+    center: float = 0.0  # a band's centre (``band``, ``below``), on the test scale
 
     def text(self) -> str:
         ci = f"[{self.lo:.3g}, {self.hi:.3g}]" if np.isfinite(self.lo) else "[n/a]"
@@ -253,6 +254,7 @@ def _part(kind: str, name: str, d, mg, note: str = "", center: float = 0.0) -> P
         quantity=mg.quantity,
         margin_value=mg.value,
         decide=decide,
+        center=center,
     )
 
 

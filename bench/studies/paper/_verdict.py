@@ -67,6 +67,19 @@ class Verdict:
     # the claim's other readings (another protocol's verdict), as (name, verdict) pairs; the
     # detail names them too (``_protocols.decided_by``)
     other_readings: tuple[tuple[str, str], ...] = ()
+    # the status of the headline part (the paper's central sentence) where it is one of the
+    # tested parts, else "" (a headline that summarises several parts)
+    headline_status: str = ""
+    headline_name: str = ""
+
+    def label(self) -> str:
+        """The verdict with the headline's status beside it where the verdict alone would hide
+        it (*partly reproduced*: which half is the paper's central sentence?), e.g.
+        "partly reproduced: headline contradicted"."""
+        if self.verdict == PARTLY and self.headline_status:
+            said = {"contradicts": "contradicted"}.get(self.headline_status, self.headline_status)
+            return f"{self.verdict}: headline {said}"
+        return self.verdict
 
     @property
     def key(self) -> str:
@@ -148,6 +161,10 @@ def verdict(
             p.decide = None
     not_disc = [d for d in discs if d.status == "no"]
     void_all = _void_undiscriminating(parts, not_disc)
+    # a claim that declares its discrimination but has no trivial-predictor runs to compute it
+    # (e.g. a GPU folder of trained models only) signs nothing: whether the test set can tell
+    # models apart is unknown
+    unknown = bool(discs) and all(d.status == "unknown" for d in discs)
     apply_gates(parts)
     holm(parts)
     claim_parts = [p for p in parts if p.role == "part"]
@@ -158,7 +175,7 @@ def verdict(
         discriminating = False
     else:
         discriminating = None
-    if n_seeds < need or not claim_parts or void_all:
+    if n_seeds < need or not claim_parts or void_all or unknown:
         reading = INCONCLUSIVE
     elif all(s == "holds" for s in statuses):
         reading = REPRODUCED
@@ -167,6 +184,8 @@ def verdict(
     else:
         reading = INCONCLUSIVE
     detail = "; ".join(p.text() for p in parts) or "no runs"
+    if unknown:
+        detail = f"DISCRIMINATION UNKNOWN (no trivial-predictor runs: nothing signed); {detail}"
     if void_all:
         detail = f"NOT DISCRIMINATING ({'; '.join(d.text() for d in not_disc)}); {detail}"
     elif discs:
@@ -195,4 +214,6 @@ def verdict(
         n_failed=int(n_failed),
         discriminating=discriminating,
         parts=tuple(parts),
+        headline_status=h.status if h is not None and any(h is p for p in parts) else "",
+        headline_name=h.name if h is not None else "",
     )

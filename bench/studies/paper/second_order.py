@@ -48,7 +48,9 @@ SECOND_ORDER = Experiment(
         "system_params": ((), SPRING_PAPER),
     },
     # the paper's Fig. 4 pools k = 1..4, as Figs. 2 and 5 do; paper-core is k = 2 only
-    profile_overrides=shared_overrides({"paper": {"k": (1, 2, 3, 4)}, "paper-k": {"k": (1, 3, 4)}}),
+    profile_overrides=shared_overrides(
+        {"paper": {"k": (1, 2, 3, 4)}, "paper-core": {"k": (2,)}, "paper-k": {"k": (1, 3, 4)}}
+    ),
     include=_paper_cell,
     claim=3,
 )
