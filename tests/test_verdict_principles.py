@@ -66,3 +66,47 @@ def test_no_system_discriminating_is_inconclusive():
     v = _claim(CLEAR, CLEAR, discs)
     assert v.verdict == R.INCONCLUSIVE
     assert {p.status for p in v.parts} == {"not tested"}
+
+
+# ----------------------------------------------------------------------------- properties
+ORDER = {"contradicts": 0, "undecided": 1, "holds": 2}
+draws = np.random.default_rng(7)
+SAMPLES = [draws.normal(draws.uniform(-0.5, 1.0), draws.uniform(0.05, 0.6), 5) for _ in range(40)]
+
+
+@pytest.mark.parametrize("kind", [greater, R.at_most])
+def test_moving_every_seed_in_a_parts_favour_never_weakens_it(kind):
+    """Monotone: every seed's value moved in the part's favour (up for *greater*, down for *at
+    most*) never lowers its status; and the seeds' order never matters."""
+    sign = 1.0 if kind is greater else -1.0
+    for d in SAMPLES:
+        before = kind("p", d, ERR).status
+        for shift in (0.05, 0.2, 1.0):
+            after = kind("p", d + sign * shift, ERR).status
+            assert ORDER[after] >= ORDER[before], (d, shift, before, after)
+        assert kind("p", d[::-1], ERR).status == before
+        assert kind("p", draws.permutation(d), ERR).status == before
+
+
+def test_mirrored_effects_give_mirrored_statuses():
+    """*greater* and *at most* on the same values read each other's status reversed, and an
+    equivalence reads the same on the mirrored values."""
+    flip = {"holds": "contradicts", "contradicts": "holds", "undecided": "undecided"}
+    for d in SAMPLES:
+        assert R.at_most("p", d, ERR).status == flip[greater("p", d, ERR).status]
+        assert R.equivalent("p", -d, ERR).status == R.equivalent("p", d, ERR).status
+
+
+def test_a_closed_gate_or_condition_never_contradicts():
+    """A comparison whose model did not learn, or whose condition is contradicted, reads *not
+    tested*, and a claim of such parts is inconclusive, never *not reproduced*."""
+    from bench.studies.paper.kit import Gate, gated, similar_fit
+
+    closed = Gate("model", False, "model did not learn")
+    fit, tied = similar_fit("(b) fit edge", np.log([40.0, 30.0, 35.0, 28.0, 33.0]), margin("loss"))
+    assert fit.status == "contradicts" and tied.open is False
+    for d in SAMPLES:
+        parts = [gated(greater("(a)", d, ERR), closed), gated(greater("(c)", d, ERR), tied), fit]
+        v = verdict(99, "synthetic", parts, parts[0], 5, "edge")
+        assert [p.status for p in parts[:2]] == ["not tested", "not tested"]
+        assert v.verdict == R.INCONCLUSIVE
