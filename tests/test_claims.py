@@ -1344,3 +1344,32 @@ def test_claim_8_d_at_every_pair_of_consecutive_sizes_at_quick():
     assert _status(v, "n_train=32 / ResNet") == "contradicts"
     assert _status(v, "n_train=8 / ResNet") == "holds"
     assert v.verdict == R.PARTLY
+
+
+def test_every_claim_counts_a_diverged_run(tables):
+    """Every run counts, in every claim these tables are built for: one trained model's run of
+    each claim's cells diverges, and the claim's verdict counts it (scored at the worst error,
+    never dropped)."""
+    runs, curves = tables
+    base = {v.key: v.n_failed for v in _claims(runs, curves)}
+    checked = 0
+    for study in C.claim_studies():
+        if str(study.claim) in OWN_TABLES:
+            continue
+        names = {e.name for e in study.experiments}
+        trained = ~runs["model"].isin(C.TRIVIAL_MODELS) & runs["experiment"].isin(names)
+        if not trained.any():
+            continue
+        counted = False
+        # one run of each trained model in turn (a model the claim only reports, e.g. claim
+        # 1's non-separable HNN, is not among those it judges)
+        for _, rows in runs[trained].groupby("model"):
+            hit = rows.index[0]
+            got = {v.key: v for v in _claims(_fail(runs, runs.index == hit), curves)}
+            mine = [k for k in got if k.split()[0] == str(study.claim)]
+            if any(got[k].n_failed > base[k] for k in mine):
+                counted = True
+                break
+        assert counted, study.claim
+        checked += 1
+    assert checked >= 6
