@@ -101,8 +101,13 @@ def _parser() -> argparse.ArgumentParser:
     cm.add_argument("b", nargs="?", help="the folder to check (default: --results)")
     cm.add_argument("--out", default=None, help="also write the comparison (Markdown) here")
 
-    sub.add_parser("figures", help="regenerate figures and tables from the stored runs")
-    sub.add_parser("report", help="write results/REPORT.md")
+    for verb, what in (("figures", "regenerate figures and tables"), ("report", "write REPORT.md")):
+        sub.add_parser(verb, help=f"{what} from the stored runs").add_argument(
+            "--profile",
+            dest="report_profile",
+            metavar="NAME",
+            help="whose runs (default: the profile with the most rows; a line names the others)",
+        )
     for c in commands():  # the verbs the studies register
         c.add_arguments(sub.add_parser(c.name, help=c.help, description=c.description))
 
@@ -228,8 +233,8 @@ class NoRuns(Exception):
     """No stored runs to draw or report: one line, exit code 1."""
 
 
-def _stored_runs(args, verb: str, action: str) -> None:
-    """Raise NoRuns when the results hold no runs; warn about row files that did not read."""
+def _stored_runs(args, verb: str, action: str):
+    """The stored runs (NoRuns where none); warn about row files that did not read."""
     from .core._store import (
         DAMAGED,
         ROWS,
@@ -261,21 +266,22 @@ def _stored_runs(args, verb: str, action: str) -> None:
             f"no runs stored in {results} for any profile ({profiles}): nothing to {action}; "
             "run `python -m bench sweep --all --profile <profile>` first"
         )
+    return runs
 
 
 def _cmd_figures(args) -> int:
-    from ._report import make_figures
+    from ._report import make_figures, report_profile
 
-    _stored_runs(args, "figures", "draw")
-    make_figures(Path(args.results))
+    runs = _stored_runs(args, "figures", "draw")
+    make_figures(Path(args.results), report_profile(args, runs, "drawing"))
     return 0
 
 
 def _cmd_report(args) -> int:
-    from ._report import write_report
+    from ._report import report_profile, write_report
 
-    _stored_runs(args, "report", "report")
-    write_report(Path(args.results))
+    runs = _stored_runs(args, "report", "report")
+    write_report(Path(args.results), profile=report_profile(args, runs, "reporting"))
     return 0
 
 
@@ -320,6 +326,7 @@ def _cmd_bench(args) -> int:
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     (results / "bench_meta.json").write_text(json.dumps(meta, indent=1))
+    args.swept_profile = args.profile  # figures and report show it where its rows are stored
     _cmd_figures(args)
     _cmd_report(args)
     print(f"bench: {meta['wall_seconds'] / 60:.1f} min (sweep and stability), report written")

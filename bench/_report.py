@@ -36,8 +36,11 @@ from .core._experiments import get
 from .core._params import BLOW_UP_RISE
 from .core._provenance import compare_provenance, provenance_markdown
 from .core._query import (
+    chosen_profile,
+    describe_profiles,
     experiment_rows,
     load_tables,
+    profile_counts,
     select,
 )
 from .core._store import compare_folders, load_runs
@@ -210,39 +213,63 @@ def figure_stem(name: str) -> str:
     return next(s.stem for s in figure_studies() if s.name == name)
 
 
-def make_figures(results_dir: Path) -> list[Path]:
-    """Every study's figure from the stored runs; returns the files written.
+def make_figures(results_dir: Path, profile: str | None = None) -> list[Path]:
+    """Every study's figure from the stored runs of ``profile`` (default: the one with the
+    most rows, :func:`load_tables`); returns the files written.
 
-    Runs that did not finish (``status != "ok"``) or have a non-finite error are left out of
-    the plots (the report lists them). An experiment without runs draws nothing; one broken
-    figure does not stop the others.
+    Every run of an experiment reaches its figure, failed and diverged ones included: the
+    figures score them as the verdicts do (at the worst error, ``kit.scored``) and mark them.
+    An experiment without runs draws nothing; one broken figure does not stop the others.
     """
     import matplotlib.pyplot as plt
 
     results_dir = Path(results_dir)
-    runs, curves, profile = load_tables(results_dir)
+    runs, curves, profile = load_tables(results_dir, profile)
     outdir = results_dir / "figures"
     written: list[Path] = []
-    for study in figure_studies():
-        rows = experiment_rows(runs, study.name, profile)
-        if len(rows):
-            rows = select(rows)
-        if not len(rows):
-            continue
-        try:
-            written += study.figure(rows, curves, outdir)
-        except Exception as e:  # noqa: BLE001 - one broken figure must not stop the others
-            plt.close("all")
-            print(f"figure {study.name} failed: {type(e).__name__}: {e}")
-    for study in studies():
-        if study.results_figure is None:
-            continue
-        try:
-            written += list(study.results_figure(results_dir) or [])
-        except Exception as e:  # noqa: BLE001
-            plt.close("all")
-            print(f"figure {study.results_figure.__name__} failed: {type(e).__name__}: {e}")
+    with chosen_profile(results_dir, profile):
+        for study in figure_studies():
+            rows = experiment_rows(runs, study.name, profile)
+            if not len(rows):
+                continue
+            try:
+                written += study.figure(rows, curves, outdir)
+            except Exception as e:  # noqa: BLE001 - one broken figure must not stop the others
+                plt.close("all")
+                print(f"figure {study.name} failed: {type(e).__name__}: {e}")
+        for study in studies():
+            if study.results_figure is None:
+                continue
+            try:
+                written += list(study.results_figure(results_dir) or [])
+            except Exception as e:  # noqa: BLE001
+                plt.close("all")
+                print(f"figure {study.results_figure.__name__} failed: {type(e).__name__}: {e}")
     return written
+
+
+def report_profile(args, runs: pd.DataFrame, doing: str) -> str | None:
+    """The profile ``figures`` or ``report`` shows: ``args.report_profile`` (``--profile``;
+    its rows must be stored, else one line naming the profiles present), else the profile
+    ``bench`` just swept (``args.swept_profile``) where its rows are stored, else the one with
+    the most rows, named in one line beside the others, so that a smaller profile's rows are
+    not left out unseen."""
+    from .core._query import check_profile, pick_profile
+
+    given = getattr(args, "report_profile", None)
+    if given is not None:
+        check_profile(runs, given, args.results)
+        return given
+    swept = getattr(args, "swept_profile", None)
+    if swept is not None and swept in profile_counts(runs):
+        return swept
+    kept = pick_profile(runs)
+    if kept is not None:
+        print(
+            f"{args.results} holds {describe_profiles(runs)}: {doing} {kept} "
+            "(--profile picks another)"
+        )
+    return kept
 
 
 def _blown_up_lines(rows: pd.DataFrame) -> list[str]:
@@ -272,15 +299,33 @@ def _blown_up_lines(rows: pd.DataFrame) -> list[str]:
     return [*lines, ""]
 
 
-def write_report(results_dir: Path, compare=None) -> Path:
-    """Write ``results_dir/REPORT.md`` from the stored runs and return its path.
+def _profile_line(results_dir: Path, profile: str | None) -> str:
+    """The header's profile line: the profile judged and, where the folder holds others,
+    which (with their row counts)."""
+    stored = load_runs(results_dir)
+    if profile is None or len(profile_counts(stored)) < 2:
+        return f"- profile: {profile or 'unknown'}"
+    return (
+        f"- profile: {profile} (judged here; the folder holds {describe_profiles(stored)}; "
+        "`python -m bench report --profile NAME` reports another)"
+    )
+
+
+def write_report(results_dir: Path, compare=None, profile: str | None = None) -> Path:
+    """Write ``results_dir/REPORT.md`` from the stored runs of ``profile`` (default: the one
+    with the most rows, :func:`load_tables`) and return its path.
 
     ``compare``: other results folders whose verdicts are tabulated beside these (default:
     :func:`compare_folders`, the subfolders with stored runs); a folder that cannot be read is
     named in the report and skipped."""
     results_dir = Path(results_dir)
     results_dir.mkdir(parents=True, exist_ok=True)
-    runs, curves, profile = load_tables(results_dir)
+    runs, curves, profile = load_tables(results_dir, profile)
+    with chosen_profile(results_dir, profile):
+        return _write_report(results_dir, compare, runs, curves, profile)
+
+
+def _write_report(results_dir: Path, compare, runs, curves, profile) -> Path:
     others = compare_folders(results_dir) if compare is None else [Path(c) for c in compare]
     ctx = ReportContext(results_dir, runs, curves, profile, tuple(others))
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
@@ -296,7 +341,7 @@ def write_report(results_dir: Path, compare=None) -> Path:
         f"{cpu_count()} cores available (os.cpu_count = {os.cpu_count()})",
         f"- date: {now}",
         f"- commit: {_git_commit()}",
-        f"- profile: {profile or 'unknown'}",
+        _profile_line(results_dir, profile),
         f"- runs: {_status_counts(runs)}",
         *_meta(results_dir, runs),
         "",

@@ -237,7 +237,9 @@ def _reading(row: dict[str, str]) -> str:
     """A claims-table row's verdict in a few words (the headline's status kept)."""
     text = re.sub(r" \(([^)]*)\)", r", \1", row["verdict"].strip("*"))
     if row.get("discriminating") == "**no**":
-        text += ", not discriminating"
+        # a signed verdict stands on the systems that discriminate (the others' parts void)
+        signed = text.startswith(("reproduced", "partly", "not reproduced"))
+        text += ", a system not discriminating" if signed else ", not discriminating"
     return text
 
 
@@ -257,6 +259,10 @@ def summary(core: dict, quick: dict, papers: dict[int, str] | None = None) -> li
         if not labels:
             continue
         groups: dict[str, list[str]] = {"holds": [], "against": [], "open": []}
+        readings: dict[tuple[int, str], int] = {}
+        for label in labels:
+            key = (_claim_of(label), _reading(core.get(label) or quick[label]))
+            readings[key] = readings.get(key, 0) + 1
         seen: set[tuple[int, str]] = set()
         for label in labels:
             row = core.get(label) or quick[label]
@@ -266,6 +272,9 @@ def summary(core: dict, quick: dict, papers: dict[int, str] | None = None) -> li
             if key in seen:
                 continue
             seen.add(key)
+            total = sum(1 for x in labels if _claim_of(x) == key[0])
+            if total > 1:
+                reading += f", {readings[key]} of {total} readings"
             claim = str(_claim_of(label)) + budget
             if reading.startswith(("reproduced", "partly reproduced: headline holds")):
                 groups["holds"].append(f"{claim} ({reading})")

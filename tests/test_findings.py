@@ -242,6 +242,6 @@ def test_the_sentences_say_what_holds_what_is_contradicted_and_what_is_open():
         "- **The Deconstructing paper.** Holds: claim 2 (reproduced) and 3 (quick) (partly "
         "reproduced: headline holds); contradicted in part or whole: claim 1 (partly "
         "reproduced: headline contradicted); not decided: claim 4 (inconclusive, does not "
-        "replicate) and 13 (inconclusive, not discriminating).",
+        "replicate, 2 of 2 readings) and 13 (inconclusive, not discriminating).",
         "- **The LNN seed.** Contradicted in part or whole: claim 9 (not reproduced).",
     ]

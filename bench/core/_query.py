@@ -11,6 +11,8 @@ import ast
 import json
 import math
 from collections.abc import Mapping, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import numpy as np
@@ -138,22 +140,83 @@ def labelled(runs: pd.DataFrame, profile: str | None) -> pd.Series:
     return col.isna() | col.isin(list(speaking_profiles(profile)))
 
 
-def pick_profile(runs: pd.DataFrame) -> str | None:
-    """The profile whose runs the figures show: the one with the most rows (None if untagged)."""
+def profile_counts(runs: pd.DataFrame) -> dict[str, int]:
+    """Rows per ``profile`` label, the most first (empty where the rows carry none)."""
+    if "profile" not in runs or not len(runs):
+        return {}
+    return {str(k): int(v) for k, v in runs["profile"].value_counts().items()}
+
+
+def describe_profiles(runs: pd.DataFrame) -> str:
+    """The profiles of ``runs`` and their row counts: ``quick (310 rows), smoke (12 rows)``."""
+    counts = profile_counts(runs)
+    if not counts:
+        return "no profile labels"
+    return ", ".join(f"{p} ({n} row{'s' if n != 1 else ''})" for p, n in counts.items())
+
+
+# The profile a report or figure run was asked for, per results folder (:func:`chosen_profile`)
+_CHOSEN: ContextVar[tuple[Path, str] | None] = ContextVar("chosen_profile", default=None)
+
+
+@contextmanager
+def chosen_profile(results_dir: Path, profile: str | None):
+    """Within the block, :func:`load_tables` and :func:`pick_profile` of ``results_dir`` (and
+    of no other folder) take ``profile`` instead of the one with the most rows: the sections and
+    figures that read the folder themselves show the profile the report was asked for."""
+    if profile is None:
+        yield
+        return
+    token = _CHOSEN.set((Path(results_dir).resolve(), profile))
+    try:
+        yield
+    finally:
+        _CHOSEN.reset(token)
+
+
+def _chosen_for(results_dir) -> str | None:
+    chosen = _CHOSEN.get()
+    if chosen is None or results_dir is None:
+        return None
+    return chosen[1] if Path(results_dir).resolve() == chosen[0] else None
+
+
+def check_profile(runs: pd.DataFrame, profile: str, where) -> None:
+    """Raise ValueError (one line naming the profiles present) unless rows of ``profile``
+    are stored in ``runs``."""
+    if profile not in profile_counts(runs):
+        raise ValueError(
+            f"no runs of profile {profile!r} in {where}; it holds {describe_profiles(runs)}"
+        )
+
+
+def pick_profile(runs: pd.DataFrame, results_dir: Path | None = None) -> str | None:
+    """The profile whose runs the figures show: the one with the most rows (None if untagged),
+    or the one chosen for ``results_dir`` (:func:`chosen_profile`) where its rows are stored."""
     if "profile" not in runs or not len(runs) or runs["profile"].isna().all():
         return None
+    chosen = _chosen_for(results_dir)
+    if chosen is not None and chosen in profile_counts(runs):
+        return chosen
     return str(runs["profile"].value_counts().idxmax())
 
 
-def load_tables(results_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
-    """(runs, curves, profile): the chosen profile (:func:`pick_profile`) and the rows of its
-    family, every profile with the same base (``paper-core`` beside ``paper-k`` and ``paper``:
-    the same budget on other cells, which a claim's rule reaches by cell, never by label)."""
+def load_tables(
+    results_dir: Path, profile: str | None = None
+) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
+    """(runs, curves, profile): ``profile`` (default: the one chosen for the folder, else the
+    one with the most rows, :func:`pick_profile`) and the rows of its family, every profile with
+    the same base (``paper-core`` beside ``paper-k`` and ``paper``: the same budget on other
+    cells, which a claim's rule reaches by cell, never by label). A ``profile`` with no stored
+    rows raises ValueError naming the profiles present."""
     from ._experiments import base_profile
 
     runs = _store.load_runs(results_dir)
     curves = _store.load_curves(results_dir)
-    profile = pick_profile(runs)
+    if profile is not None:
+        check_profile(runs, profile, results_dir)
+    else:
+        profile = pick_profile(runs, results_dir)
     if profile is not None:
         family = runs["profile"].map(base_profile) == base_profile(profile)
         runs = runs[family].reset_index(drop=True)

@@ -308,7 +308,7 @@ def _runs(results_dir, profile=None) -> tuple[pd.DataFrame, str | None]:
     if not len(runs):
         return runs, None
     if profile is None:
-        profile = pick_profile(runs)
+        profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile]
     return experiment_rows(runs.reset_index(drop=True), "tradeoff", profile), profile

@@ -63,7 +63,7 @@ def rows_of(results_dir) -> tuple[pd.DataFrame, str | None]:
     runs = load_runs(Path(results_dir))
     if not len(runs):
         return runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     return controlled(experiment_rows(runs, NAME, profile)), profile

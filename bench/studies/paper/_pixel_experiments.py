@@ -133,7 +133,7 @@ def _rows(results_dir, experiments=None) -> tuple[list[dict], pd.DataFrame, str 
     runs = load_runs(results_dir)
     if not len(runs):
         return [], runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile]
     parts = [experiment_rows(runs, e.name, profile) for e in experiments]

@@ -2,7 +2,9 @@
 
 Each study module draws its own figure (``fig_<experiment>(runs, curves, outdir)``) from the
 runs and curves of the chosen profile and returns the files it wrote. Every number drawn comes
-from the tables: error bars are the standard error of the mean over seeds.
+from the tables: error bars are the standard error of the mean over seeds. Failed and diverged
+runs reach the figures: an error is drawn as the verdicts score it (``kit.scored``: the worst
+error) and the runs so scored are marked with their count (:func:`_bars`, :func:`_mark_failed`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,9 @@ import pandas as pd  # noqa: E402
 from ...core._query import aggregate, variant  # noqa: E402
 from .._figure import save_figure, subplots  # noqa: E402
 from ._common import TRIVIAL_MODELS  # noqa: E402
-from .kit import MODEL_LABELS  # noqa: E402
+from .kit import MODEL_LABELS, bad_rows, scored  # noqa: E402
+
+FAILED_LABEL = "with failed or diverged runs, scored at the worst error (count)"
 
 SYSTEM_LABELS = {
     "chain_pendulum": "chain pendulum",
@@ -44,15 +48,37 @@ TRIVIAL_STYLE = {"constant_velocity": ("black", "--"), "at_rest": ("dimgray", ":
 # ----------------------------------------------------------------------------- tables
 
 
-def _agg(df: pd.DataFrame, by: Sequence[str], metric: str) -> pd.DataFrame:
-    """Per group of ``by``: n, mean, std and sem of the finite values (the seed aggregation,
-    without its bootstrap, which figures don't use); NaN keys (k of the relativistic
-    particle) group as "-"."""
+def _agg(
+    df: pd.DataFrame,
+    by: Sequence[str],
+    metric: str,
+    *,
+    score: bool = True,
+    values: pd.Series | None = None,
+) -> pd.DataFrame:
+    """Per group of ``by``: n, mean, std and sem (the seed aggregation, without its bootstrap,
+    which figures don't use) and ``n_failed``; NaN keys (k of the relativistic particle) group
+    as "-". ``score``: every run counts, a failed or diverged one (or a non-finite value) at
+    its score (``kit.scored`` over ``df``, or ``values`` where the caller scored them), and
+    ``n_failed`` counts them; else (a cost, a parameter count) the finished runs' finite
+    values, and ``n_failed`` is 0."""
     df = df.copy()
     for col in by:
         if df[col].isna().any():
             df[col] = df[col].astype(object).where(df[col].notna(), "-")
-    return aggregate(df, by, metric, bootstrap=False)
+    if score:
+        failed = bad_rows(df, metric) if len(df) else pd.Series(False, index=df.index)
+        df[metric] = scored(df, metric) if values is None else values.to_numpy()
+        df["_failed"] = failed.to_numpy(bool)
+    else:
+        if "status" in df:
+            df = df[df["status"] == "ok"]
+        df["_failed"] = False
+    out = aggregate(df, by, metric, bootstrap=False)
+    if not len(out):
+        return out.assign(n_failed=pd.Series(dtype=int))
+    counts = df.groupby(list(by), dropna=False)["_failed"].sum().rename("n_failed")
+    return out.merge(counts.reset_index(), on=list(by), how="left")
 
 
 def _bars(
@@ -66,10 +92,13 @@ def _bars(
     log: bool = True,
     ylabel: str = "",
 ) -> None:
-    """Grouped bars: one group per ``groups`` value, one bar per ``members`` value, sem bars."""
+    """Grouped bars: one group per ``groups`` value, one bar per ``members`` value, sem bars; a
+    bar whose mean takes in failed runs (``n_failed`` of :func:`_agg`) is hatched and carries
+    their count."""
     width = 0.8 / max(1, len(members))
+    hatched = False
     for j, m in enumerate(members):
-        xs, ys, es = [], [], []
+        xs, ys, es, nf = [], [], [], []
         for i, g in enumerate(groups):
             row = agg[(agg[gcol] == g) & (agg[mcol] == m)]
             if not len(row):
@@ -77,10 +106,11 @@ def _bars(
             xs.append(i + (j - (len(members) - 1) / 2) * width)
             ys.append(row["mean"].iloc[0])
             es.append(0.0 if not np.isfinite(row["sem"].iloc[0]) else row["sem"].iloc[0])
+            nf.append(int(row["n_failed"].iloc[0]) if "n_failed" in row else 0)
         if xs:
             ys, es = np.asarray(ys), np.asarray(es)
             lower = np.minimum(es, ys * 0.999) if log else es  # keep log bars positive
-            ax.bar(
+            bars = ax.bar(
                 xs,
                 ys,
                 width,
@@ -89,12 +119,40 @@ def _bars(
                 label=labels(m),
                 color=COLORS.get(str(m)),
             )
+            for bar, y, e, n in zip(bars, ys, es, nf, strict=True):
+                if n:
+                    bar.set_hatch("xx")
+                    bar.set_edgecolor("black")
+                    ax.annotate(
+                        f"{n} failed",
+                        (bar.get_x() + bar.get_width() / 2, y + e),
+                        xytext=(0, 2),
+                        textcoords="offset points",
+                        ha="center",
+                        fontsize=6,
+                    )
+                    hatched = True
     ax.set_xticks(range(len(groups)))
     ax.set_xticklabels([SYSTEM_LABELS.get(str(g), str(g)) for g in groups])
     if log:
         ax.set_yscale("log")
     ax.set_ylabel(ylabel)
+    if hatched:  # an empty hatched area: the legend's entry, without data to rescale the axes
+        ax.fill_between([], [], facecolor="none", edgecolor="black", hatch="xx", label=FAILED_LABEL)
     ax.legend(fontsize=8)
+
+
+def _mark_failed(ax, x, y, n_failed) -> None:
+    """An 'x' and the count beside each point whose value takes in failed runs (``n_failed``
+    of :func:`_agg`), with one legend entry."""
+    first = True
+    for xi, yi, n in zip(np.asarray(x), np.asarray(y), np.asarray(n_failed), strict=True):
+        if n and np.isfinite(yi):
+            ax.scatter([xi], [yi], marker="x", color="black", s=30, zorder=5,
+                       label=FAILED_LABEL if first else None)  # fmt: skip
+            ax.annotate(f"{int(n)}", (xi, yi), xytext=(4, 4), textcoords="offset points",
+                        fontsize=6)  # fmt: skip
+            first = False
 
 
 def _label(m) -> str:
@@ -167,6 +225,16 @@ def _trivial_lines(ax, trivial, metric="rollout_error", groups=None, gcol="syste
 # ----------------------------------------------------------------------------- one per figure
 
 
+def model_bar_values(runs: pd.DataFrame, metric: str = "rollout_error") -> pd.DataFrame:
+    """What :func:`_model_bars` draws: per system and model variant, the mean over runs of
+    ``metric`` as the verdicts score it (failed and diverged runs at the worst error), its
+    sem, ``n`` runs and ``n_failed`` of them scored so (trivial predictors left out)."""
+    runs, _ = split_trivial(runs)
+    if not len(runs):
+        return _agg(runs.assign(variant=pd.Series(dtype=object)), ["system", "variant"], metric)
+    return _agg(runs.assign(variant=variant(runs)), ["system", "variant"], metric)
+
+
 def _model_bars(
     runs,
     outdir: Path,
@@ -175,17 +243,18 @@ def _model_bars(
     metric: str = "rollout_error",
     ylabel: str = "rollout error (geometric mean)",
 ) -> list[Path]:
-    runs, trivial = split_trivial(runs)
-    if not len(runs):
+    """One bar per system and model variant (:func:`model_bar_values`), the trivial
+    predictors as lines."""
+    models_, trivial = split_trivial(runs)
+    if not len(models_):
         return []
-    df = runs.assign(variant=variant(runs))
-    ag = _agg(df, ["system", "variant"], metric)
+    df = models_.assign(variant=variant(models_))
     fig, ax = subplots(figsize=(7, 4))
     groups = _order(df["system"], SYSTEM_ORDER)
     _trivial_lines(ax, trivial, metric, groups)
     _bars(
         ax,
-        ag,
+        model_bar_values(runs, metric),
         groups,
         _order(df["variant"], MODEL_ORDER),
         "system",

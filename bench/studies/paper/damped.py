@@ -240,9 +240,9 @@ def fig_damped(runs, curves, outdir: Path) -> list[Path]:
         (axes[1], "n_params", "parameters", False),
         (axes[2], "train_seconds", "training time (s)", False),
     ):
-        _bars(
+        _bars(  # the error as the verdicts score it; costs of the finished runs only
             ax,
-            _agg(df, ["system", "variant"], metric),
+            _agg(df, ["system", "variant"], metric, score=metric == "rollout_error"),
             systems_,
             members,
             "system",

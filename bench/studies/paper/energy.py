@@ -1,9 +1,9 @@
-"""Fig. 2 (energy): the experiment, claim 1's verdict rule and the figure."""
+"""Fig. 2 (energy): the experiment and claim 1's verdict rule; the figure is
+:mod:`._energy_figure`'s, which draws the rule's own line."""
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -15,7 +15,6 @@ from ...core._query import (
     select,
 )
 from ...core._studies import Study, register_study
-from .._figure import save_figure, subplots
 from . import policy
 from ._common import (
     PAPER_MODELS,
@@ -25,17 +24,7 @@ from ._common import (
     _paper_cell,
     shared_overrides,
 )
-from ._plot import (
-    COLORS,
-    MODEL_ORDER,
-    SYSTEM_LABELS,
-    TRIVIAL_STYLE,
-    _curve_mean,
-    _gmean,
-    _label,
-    _order,
-    split_trivial,
-)
+from ._energy_figure import fig_energy
 from ._rules import CLAIM_TITLES
 from ._solver_drift import footnote_part
 from .kit import (
@@ -92,6 +81,14 @@ def energy_cells(runs: pd.DataFrame) -> pd.DataFrame:
         model=[*PAPER_MODELS, *TRIVIAL_MODELS],
         loss="l2",
     )
+
+
+def scored_cells(runs: pd.DataFrame) -> pd.DataFrame:
+    """The model runs of the Fig. 2 cells (:func:`energy_cells`, trivial predictors left out)
+    with ``_err`` and ``_ev``: rollout error and energy violation as claim 1 and Fig. 2 score
+    them (failed and diverged runs at the worst, ``kit.scored`` over these runs)."""
+    cells = non_trivial(energy_cells(runs))
+    return cells.assign(_err=scored(cells, "rollout_error"), _ev=scored(cells, "energy_violation"))
 
 
 # Claim 1 is judged on the models of the paper's Fig. 2 (its plotting notebook: the separable
@@ -229,11 +226,8 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     models = non_trivial(fig2)
     discs = per_system_discrimination(fig2)
     n_failed = n_bad(models)
-    scored_cells = non_trivial(cells).assign(
-        _err=scored(non_trivial(cells), "rollout_error"),
-        _ev=scored(non_trivial(cells), "energy_violation"),
-    )
-    models = scored_cells[scored_cells["model"].isin([*FIG2_NODES, *FIG2_HNNS])]
+    all_models = scored_cells(runs)
+    models = all_models[all_models["model"].isin([*FIG2_NODES, *FIG2_HNNS])]
     seeds = np.sort(models["seed"].unique()) if len(models) else np.array([])
     parts: list[Part] = []
     notes = []
@@ -260,7 +254,7 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         y = np.log(models["_ev"].to_numpy(float))
         r = np.corrcoef(x, y)[0, 1] if len(x) > 2 else math.nan
         notes.append(f"corr(log err, log EV) = {r:.2f} over {len(models)} runs")
-        extra_cells = scored_cells[scored_cells["model"].isin(["hnn", *FIG2_NODES])]
+        extra_cells = all_models[all_models["model"].isin(["hnn", *FIG2_NODES])]
         if (extra_cells["model"] == "hnn").any():
             ep, el, eh, _ = _energy_advantage(extra_cells, ("hnn",))
             notes.append(
@@ -287,7 +281,7 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         footnote = footnote_part(models, fig2, FIG2_HNNS, FIG2_NODES)
         if footnote is not None:
             parts.append(footnote)
-    all_sl = curve_slopes(scored_cells[scored_cells["model"] == "hnn"], curves, t_min_frac=0.5)
+    all_sl = curve_slopes(all_models[all_models["model"] == "hnn"], curves, t_min_frac=0.5)
     if len(all_sl):
         notes.append(
             f"extra: non-separable HNN late-half slope {all_sl['slope'].mean():.3g} "
@@ -304,78 +298,6 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
         discs=discs,
         n_failed=n_failed,
     )
-
-
-def fig_energy(runs, curves, outdir: Path) -> list[Path]:
-    """Fig. 2. Left: energy violation vs rollout error (log-log), one point per run, with the
-    least-squares line of log EV on log error and its R^2. Right: energy violation vs time
-    (geometric mean over runs) per model, from the curves."""
-    runs, trivial = split_trivial(runs)
-    if not len(runs):
-        return []
-    fig, (a, b) = subplots(1, 2, figsize=(11, 4.2))
-    markers = {"chain_pendulum": "o", "spring_pendulum": "s"}
-    for s, g in trivial.groupby("system"):  # the trivial predictors' error: vertical lines
-        for m, gm in g.groupby("model"):
-            color, _ = TRIVIAL_STYLE.get(m, ("black", "--"))
-            ls = "--" if s == "chain_pendulum" else ":"
-            a.axvline(
-                _gmean(gm["rollout_error"]),
-                color=color,
-                ls=ls,
-                lw=1,
-                label=f"{MODEL_LABELS.get(m, m)}, {SYSTEM_LABELS.get(s, s)}",
-            )
-    for m in _order(runs["model"], MODEL_ORDER):
-        for s, g in runs[runs["model"] == m].groupby("system"):
-            a.scatter(
-                g["rollout_error"],
-                g["energy_violation"],
-                c=COLORS.get(m),
-                marker=markers.get(s, "^"),
-                s=22,
-                alpha=0.8,
-                label=f"{_label(m)}, {SYSTEM_LABELS.get(s, s)}",
-            )
-    ok = runs[(runs["rollout_error"] > 0) & (runs["energy_violation"] > 0)]
-    if len(ok) >= 3:
-        x, y = np.log10(ok["rollout_error"]), np.log10(ok["energy_violation"])
-        slope, icpt = np.polyfit(x, y, 1)
-        r2 = 1 - np.sum((y - (slope * x + icpt)) ** 2) / max(np.sum((y - y.mean()) ** 2), 1e-300)
-        xs = np.linspace(x.min(), x.max(), 20)
-        a.plot(
-            10**xs,
-            10 ** (slope * xs + icpt),
-            "k--",
-            lw=1,
-            label=f"fit: slope {slope:.2f}, $R^2$ = {r2:.2f}",
-        )
-    a.set(
-        xscale="log",
-        yscale="log",
-        xlabel="rollout error (geometric mean)",
-        ylabel="energy violation",
-        title="Energy violation vs rollout error",
-    )
-    a.legend(fontsize=6, ncol=2)
-    drawn = False
-    for m in _order(runs["model"], MODEL_ORDER):
-        for s, g in runs[runs["model"] == m].groupby("system"):
-            t, v = _curve_mean(curves, g["config_hash"], "energy_violation")
-            if len(t):
-                drawn = True
-                b.plot(
-                    t,
-                    v,
-                    color=COLORS.get(m),
-                    ls="-" if s == "chain_pendulum" else ":",
-                    label=f"{_label(m)}, {SYSTEM_LABELS.get(s, s)}",
-                )
-    if drawn:
-        b.set(xscale="log", yscale="log")
-        b.legend(fontsize=6, ncol=2)
-    b.set(xlabel="time (s)", ylabel="energy violation", title="Energy violation over time")
-    return save_figure(fig, outdir, "fig2_energy")
 
 
 STUDY = register_study(

@@ -234,7 +234,7 @@ def seed_rows(results_dir, experiments=EXPERIMENTS) -> tuple[pd.DataFrame, str |
     runs = load_runs(results_dir)
     if not len(runs):
         return runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     parts = [experiment_rows(runs, e.name, profile) for e in experiments]

@@ -322,7 +322,7 @@ def _rows(results_dir, experiment=LNN_SEED) -> tuple[pd.DataFrame, str | None]:
     runs = load_runs(results_dir)
     if not len(runs):
         return runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     notebook = experiment is LNN_SEED_NOTEBOOK

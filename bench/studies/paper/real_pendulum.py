@@ -203,7 +203,7 @@ def _rows(results_dir) -> tuple[pd.DataFrame, str | None]:
     runs = load_runs(results_dir)
     if not len(runs):
         return runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     return experiment_rows(runs, EXPERIMENT.name, profile), profile

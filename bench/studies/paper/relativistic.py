@@ -76,7 +76,7 @@ def _figure(stem: str, title: str):
         if not len(runs):
             return []
         df = runs.assign(variant=_coord_label(runs))
-        ag = _agg(df, ["system", "variant"], "score")
+        ag = _agg(df, ["system", "variant"], "rollout_error", values=df["score"])
         fig, (a, b) = subplots(1, 2, figsize=(11, 4))
         vs = list(dict.fromkeys(df["variant"]))
         _trivial_lines(a, trivial, "score", ["relativistic_particle"])

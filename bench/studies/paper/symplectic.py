@@ -33,6 +33,7 @@ from ._plot import (
     SYSTEM_LABELS,
     _agg,
     _label,
+    _mark_failed,
     _trivial_lines,
     split_trivial,
 )
@@ -45,6 +46,7 @@ from .kit import (
     Part,
     Verdict,
     at_most,
+    bad_rows,
     gated,
     learned,
     n_bad,
@@ -300,23 +302,31 @@ def fig_symplectic(runs, curves, outdir: Path) -> list[Path]:
             capsize=3,
             label=f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}",
         )
+        _mark_failed(a, pos["weight"], pos["mean"], pos["n_failed"])
         zero = ag[ag["weight"] == 0]
         if len(zero):
             m0, e0 = zero["mean"].iloc[0], np.nan_to_num(zero["sem"].iloc[0])
             a.axhline(m0, ls="--", color=line[0].get_color(), lw=1)
             a.axhspan(m0 - e0, m0 + e0, color=line[0].get_color(), alpha=0.15)
-        if "symplectic_error" in g:
-            b.scatter(
-                g["symplectic_error"],
-                g["rollout_error"],
-                c=np.log10(g["weight"] + 1e-7),
-                cmap="viridis",
-                vmin=-7,
-                vmax=3,
-                marker="o" if model == "node_so_symreg" else "^",
-                s=20,
-                label=f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}",
-            )
+            if zero["n_failed"].iloc[0]:
+                a.annotate(f"w=0: {int(zero['n_failed'].iloc[0])} failed", (1e-7, m0), fontsize=6)
+        if "symplectic_error" in g:  # failed runs at the worst error, as 'x', where placeable
+            err, bad = scored(g, "rollout_error"), bad_rows(g, "rollout_error")
+            label = f"{_label(model)}, {SYSTEM_LABELS.get(s, s)}"
+            for sel, mk in ((~bad, "o" if model == "node_so_symreg" else "^"), (bad, "x")):
+                if not sel.any():
+                    continue
+                b.scatter(
+                    g.loc[sel, "symplectic_error"],
+                    err[sel],
+                    c=np.log10(g.loc[sel, "weight"] + 1e-7),
+                    cmap="viridis",
+                    vmin=-7,
+                    vmax=3,
+                    marker=mk,
+                    s=20,
+                    label=label if mk != "x" else f"{label}: {int(sel.sum())} failed (x)",
+                )
     if not (df["weight"] > 0).any():  # e.g. a campaign under way: a log axis needs a range
         a.set_xlim(1e-7, 1e3)
         a.text(0.5, 0.5, "no run with weight > 0 stored yet", transform=a.transAxes, ha="center")

@@ -23,6 +23,7 @@ from ._plot import (
     _agg,
     _curve_mean,
     _label,
+    _mark_failed,
     _trivial_lines,
     split_trivial,
 )
@@ -193,6 +194,7 @@ def fig_vin(runs, curves, outdir: Path) -> list[Path]:
             ls="-" if noise == 0 else "--",
             label=f"{_label(m)}" + (f", noise {noise:g}" if noise else ""),
         )
+        _mark_failed(a, ag["n_train"], ag["mean"], ag["n_failed"])
     a.set(
         xscale="log",
         yscale="log",

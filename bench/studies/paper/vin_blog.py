@@ -262,7 +262,7 @@ def _rows(results_dir) -> tuple[pd.DataFrame, pd.DataFrame, str | None]:
     runs = load_runs(results_dir)
     if not len(runs):
         return runs, runs, None
-    profile = pick_profile(runs)
+    profile = pick_profile(runs, results_dir)
     if profile is not None:
         runs = runs[runs["profile"] == profile].reset_index(drop=True)
     blog = _blog_rows(experiment_rows(runs, VIN_BLOG.name, profile))
