@@ -28,7 +28,7 @@ def test_a_headline_part_gives_its_margin_and_the_verdict_its_status():
     t = H.headline_rows([one, two]).set_index("claim")
     assert t.loc["1", "headline"] == "(b) edge" and t.loc["1", "kind"] == "greater"
     assert math.isclose(t.loc["1", "margin"], math.log(1.25))
-    assert math.isnan(t.loc["2", "margin"])  # a summary of parts: no margin of its own
+    assert math.isnan(t.loc["2", "margin"])  # a bare summary part: no margin
 
 
 def test_the_figure_sets_the_budgets_side_by_side(tmp_path):

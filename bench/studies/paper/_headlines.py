@@ -6,9 +6,8 @@ paper's central sentence, :attr:`Verdict.headline_name`), the part's effect and 
 its test scale (log for ratios), its margin on that scale, its kind and centre, and the
 verdict. :func:`fig_headlines` draws the committed budgets' tables as one picture: each
 claim's headline effect in units of its margin (so that every margin sits at +-1 and a band's
-centre at 0), with its interval, one marker per budget, coloured by the verdict. Verdicts whose
-headline summarises several parts (no single part, e.g. claim 4's spring edge minus chain
-edge) have no margin of their own and are listed under the figure instead.
+centre at 0), with its interval, one marker per budget, coloured by the verdict. A headline
+without a margin is listed under the figure instead.
 """
 
 from __future__ import annotations
@@ -18,8 +17,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from . import policy
-
 FILE = "headlines.csv"
 COLUMNS = (
     "claim", "verdict", "label", "headline", "kind", "effect", "lo", "hi", "margin", "center",
@@ -28,28 +25,21 @@ COLUMNS = (
 
 
 def headline_rows(verdicts) -> pd.DataFrame:
-    """One row per verdict (:data:`COLUMNS`); ``margin`` NaN where the headline is no tested
-    part of the claim."""
+    """One row per verdict (:data:`COLUMNS`); ``margin`` NaN where the headline has none."""
     rows = []
     for v in verdicts:
-        part = next((p for p in v.parts if p.name == v.headline_name), None)
-        margin = math.nan
-        if part is not None and part.quantity in policy.POLICY:
-            value = part.margin_value
-            if math.isfinite(value):
-                margin = math.log(value) if policy.POLICY[part.quantity].ratio else value
         rows.append(
             {
                 "claim": v.key,
                 "verdict": v.verdict,
                 "label": v.label(),
                 "headline": v.headline_name,
-                "kind": part.kind if part is not None else "",
+                "kind": v.headline_kind,
                 "effect": v.effect,
                 "lo": v.ci_low,
                 "hi": v.ci_high,
-                "margin": margin,
-                "center": part.center if part is not None else 0.0,
+                "margin": v.headline_margin,
+                "center": v.headline_center,
                 "n_seeds": v.n_seeds,
             }
         )
@@ -128,10 +118,8 @@ def fig_headlines(folders: dict[str, Path], out: Path) -> list[Path]:
         ax.plot([], [], "s", color=c, label=v)[0] for v, c in COLORS.items()
     ]
     handles.append(ax.plot([], [], "s", color="#7f7f7f", label="inconclusive")[0])
-    ax.legend(handles=handles, fontsize=7, loc="lower right")
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_title("Each claim's headline, per budget")
     if unscaled:
-        fig.text(
-            0.01, 0.005, "no single-part headline: " + ", ".join(unscaled), fontsize=6, wrap=True
-        )
+        fig.text(0.01, 0.005, "no margin: " + ", ".join(unscaled), fontsize=6, wrap=True)
     return save_figure(fig, out.parent, out.name)

@@ -71,6 +71,11 @@ class Verdict:
     # tested parts, else "" (a headline that summarises several parts)
     headline_status: str = ""
     headline_name: str = ""
+    # the headline's margin on its test scale (log for ratios; NaN where it has none), its kind
+    # and a band's centre: the headline figure's unit
+    headline_margin: float = math.nan
+    headline_kind: str = ""
+    headline_center: float = 0.0
 
     def label(self) -> str:
         """The verdict with the headline's status beside it where the verdict alone would hide
@@ -216,4 +221,17 @@ def verdict(
         parts=tuple(parts),
         headline_status=h.status if h is not None and any(h is p for p in parts) else "",
         headline_name=h.name if h is not None else "",
+        headline_margin=_test_margin(h),
+        headline_kind=h.kind if h is not None else "",
+        headline_center=h.center if h is not None else 0.0,
     )
+
+
+def _test_margin(part: Part | None) -> float:
+    """A part's margin on its test scale (log of the factor for ratios), NaN without one."""
+    from . import policy
+
+    if part is None or part.quantity not in policy.POLICY or not math.isfinite(part.margin_value):
+        return math.nan
+    v = part.margin_value
+    return math.log(v) if policy.POLICY[part.quantity].ratio else float(v)

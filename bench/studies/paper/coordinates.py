@@ -138,7 +138,16 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
             both = pd.concat([ds, dc], axis=1).dropna()
             diff = (both.iloc[:, 0] - both.iloc[:, 1]).to_numpy() if len(both) else np.array([])
             hp, hl, hh = t_bounds(diff)
-            head = Part("spring edge - chain edge", "", hp, hl, hh, len(diff))
+            head = Part(
+                "spring edge - chain edge",
+                "",
+                hp,
+                hl,
+                hh,
+                len(diff),
+                quantity=mg.quantity,
+                margin_value=mg.value,
+            )
             group = pd.concat([chain, spring])
             if disc_chain is None:  # one chain per metric, shared by both spring starts
                 disc_chain = discrimination(chain, "chain_pendulum", metric)
