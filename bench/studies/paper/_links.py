@@ -189,7 +189,7 @@ def fig_links(results_dir) -> list:
         return []
     systems = ("chain_pendulum", "spring_pendulum")
     metrics = [m for m in FIGURE_METRICS if m in rows]
-    fig, axes = subplots(len(metrics), 2, figsize=(9, 3.4 * len(metrics)), squeeze=False)
+    fig, axes = subplots(len(metrics), 2, figsize=(9, 3.8 * len(metrics)), squeeze=False)
     for i, metric in enumerate(metrics):
         for j, system in enumerate(systems):
             ax = axes[i][j]
@@ -218,7 +218,9 @@ def fig_links(results_dir) -> list:
                 label = MODEL_LABELS.get(model, model)
                 if model in TRIVIAL_STYLE:
                     color, style = TRIVIAL_STYLE[model]
-                    ax.plot(ks, np.exp(mu), style, color=color, label=label)
+                    ax.plot(
+                        ks, np.exp(mu), style, marker="_", markersize=14, color=color, label=label
+                    )
                     continue
                 ax.errorbar(
                     ks,
@@ -249,6 +251,10 @@ def fig_links(results_dir) -> list:
             )
             ax.grid(alpha=0.3)
     axes[0][1].legend(fontsize=7, loc="best")
-    seeds = sorted(int(s) for s in rows["seed"].unique())
-    fig.suptitle(f"Fig. 5 over k: NODE+SO vs HNN+SO by coordinates (seeds {seed_span(seeds)})")
+    per_k = "; ".join(
+        f"k = {int(k)}: seeds {seed_span(sorted(int(s) for s in g['seed'].unique()))}"
+        for k, g in rows.groupby("k")
+    )
+    fig.suptitle(f"Fig. 5 over k: NODE+SO vs HNN+SO by coordinates\n({per_k})", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     return save_figure(fig, Path(results_dir) / "figures", "fig5_coordinates_links")
