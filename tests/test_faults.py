@@ -152,10 +152,10 @@ def test_report_and_figures_say_how_many_rows_they_could_not_read(stored, monkey
     res, configs = stored
     seen = []
     monkeypatch.setattr(
-        bench._report, "write_report", lambda d: seen.append(len(_store.load_runs(d)))
+        bench._report, "write_report", lambda d, *a, **kw: seen.append(len(_store.load_runs(d)))
     )
     monkeypatch.setattr(
-        bench._report, "make_figures", lambda d: seen.append(len(_store.load_runs(d)))
+        bench._report, "make_figures", lambda d, *a, **kw: seen.append(len(_store.load_runs(d)))
     )
     (res / _store.ROWS / f"{configs[0].config_hash}.json").write_text("{")
     (res / _store.ROWS / f"{configs[1].config_hash}.json").write_text("")
@@ -499,7 +499,7 @@ def test_a_row_rewritten_under_its_hash_marks_every_table_stale(stored, monkeypa
     import bench._report
 
     res, configs = stored
-    monkeypatch.setattr(bench._report, "write_report", lambda d: None)
+    monkeypatch.setattr(bench._report, "write_report", lambda d, *a, **kw: None)
     assert _store.stale_tables(res) == []
     row = _fake_row(configs[0])
     row.update(experiment="faults_resume", profile="smoke", rollout_error=0.5)
@@ -540,8 +540,8 @@ def test_report_and_figures_rebuild_a_damaged_runs_table_and_name_it(
     import bench._report
 
     res, configs = stored
-    monkeypatch.setattr(bench._report, "write_report", lambda d: None)
-    monkeypatch.setattr(bench._report, "make_figures", lambda d: None)
+    monkeypatch.setattr(bench._report, "write_report", lambda d, *a, **kw: None)
+    monkeypatch.setattr(bench._report, "make_figures", lambda d, *a, **kw: None)
     _store.rebuild_tables(res)
     assert _store.stale_tables(res) == []
     data = (res / "runs.parquet").read_bytes()

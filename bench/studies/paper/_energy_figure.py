@@ -1,7 +1,7 @@
 """Fig. 2 (energy): what the report says about it, drawn. Left: energy violation vs rollout
 error, one point per run of the Fig. 2 cells, failed and diverged runs where claim 1 scores them
 (the worst error, marked), with claim 1 (c)'s own line: the Theil-Sen slope over the Fig. 2
-models' runs (:func:`.energy.proportionality`, the rule's function) and its 90% interval.
+models' runs (:func:`._energy_cells.proportionality`, the rule's function) and its 90% interval.
 Right: energy violation vs time (geometric mean over runs) per model, from the curves."""
 
 from __future__ import annotations
@@ -59,13 +59,13 @@ def _report_seeds(runs: pd.DataFrame, curves) -> tuple[int, ...] | None:
 def fig2_line(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> dict | None:
     """Claim 1 (c)'s line as the report reads it, from the Fig. 2 cells of ``runs``:
     ``slope``, ``lo``, ``hi`` (the rule's Theil-Sen slope and its 90% interval,
-    :func:`.energy.proportionality`) over the Fig. 2 models' scored runs of the reading's
+    :func:`._energy_cells.proportionality`) over the Fig. 2 models' scored runs of the reading's
     ``seeds``: the profile's seeds, or (with ``curves``) those the report reads claim 1 on,
     both seed sets pooled where they agree (:func:`_report_seeds`); ``intercept`` (median
     of log EV minus slope times the median of log error, for drawing); ``fitted``, the rows it
     fits; ``sets``, each seed set's (slope, lo, hi, seeds) where the replication seeds are
     stored, else (). None without two runs to fit."""
-    from .energy import FIG2_HNNS, FIG2_NODES, proportionality, scored_cells
+    from ._energy_cells import FIG2_HNNS, FIG2_NODES, proportionality, scored_cells
 
     cells = scored_cells(runs)
     models = cells[cells["model"].isin([*FIG2_NODES, *FIG2_HNNS])]
@@ -150,7 +150,7 @@ def fig_energy(runs, curves, outdir: Path) -> list[Path]:
     left, energy violation vs rollout error with claim 1 (c)'s Theil-Sen line
     (:func:`fig2_line`), every run at its scored values (failed ones as 'x'), the runs outside
     the fit named in the legend; right, energy violation vs time per model."""
-    from .energy import FIG2_HNNS, FIG2_NODES, energy_cells, scored_cells
+    from ._energy_cells import FIG2_HNNS, FIG2_NODES, energy_cells, scored_cells
 
     cells = scored_cells(runs)
     if not len(cells):

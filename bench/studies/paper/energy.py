@@ -10,10 +10,6 @@ import pandas as pd
 from scipy import stats
 
 from ...core._experiments import Experiment
-from ...core._query import (
-    plain,
-    select,
-)
 from ...core._studies import Study, register_study
 from . import policy
 from ._common import (
@@ -23,6 +19,15 @@ from ._common import (
     TRIVIAL_MODELS,
     _paper_cell,
     shared_overrides,
+)
+from ._energy_cells import (
+    FIG2_FAMILIES,
+    FIG2_HNNS,
+    FIG2_NODES,
+    _theil_sen,
+    energy_cells,
+    proportionality,
+    scored_cells,
 )
 from ._energy_figure import fig_energy
 from ._rules import CLAIM_TITLES
@@ -40,9 +45,7 @@ from .kit import (
     learned_cell,
     n_bad,
     non_trivial,
-    paper_spring,
     per_system_discrimination,
-    scored,
     t_bounds_jackknife,
     undecided,
     verdict,
@@ -70,34 +73,6 @@ ENERGY = Experiment(
 )
 
 
-def energy_cells(runs: pd.DataFrame) -> pd.DataFrame:
-    """Fig. 2 cells: the four paper models and the trivial predictors on undamped chain/spring
-    (the paper's spring initial state where present), any k, L2 loss; failed rows kept."""
-    p = paper_spring(plain(runs))
-    return select(
-        p,
-        ok=False,
-        system=["chain_pendulum", "spring_pendulum"],
-        model=[*PAPER_MODELS, *TRIVIAL_MODELS],
-        loss="l2",
-    )
-
-
-def scored_cells(runs: pd.DataFrame) -> pd.DataFrame:
-    """The model runs of the Fig. 2 cells (:func:`energy_cells`, trivial predictors left out)
-    with ``_err`` and ``_ev``: rollout error and energy violation as claim 1 and Fig. 2 score
-    them (failed and diverged runs at the worst, ``kit.scored`` over these runs)."""
-    cells = non_trivial(energy_cells(runs))
-    return cells.assign(_err=scored(cells, "rollout_error"), _ev=scored(cells, "energy_violation"))
-
-
-# Claim 1 is judged on the models of the paper's Fig. 2 (its plotting notebook: the separable
-# HNN, NODE and NODE+SO); the non-separable HNN is reported beside it, not judged.
-FIG2_HNNS = ("hnn_so",)
-FIG2_NODES = ("node", "node_so")
-FIG2_FAMILIES = {"NODEs": FIG2_NODES, "HNNs": FIG2_HNNS}
-
-
 def _energy_advantage(models: pd.DataFrame, hnns: tuple[str, ...]):
     """(point, lo, hi, n) of ``-c`` in ``log EV = a + b log(err) + c [HNN] (+ per system)``
     fitted over the runs of every seed, with jackknife-over-seeds t bounds."""
@@ -116,35 +91,6 @@ def _energy_advantage(models: pd.DataFrame, hnns: tuple[str, ...]):
         y = np.concatenate([by_seed[i][1] for i in idx])
         coef, *_ = np.linalg.lstsq(x, y, rcond=None)
         return -float(coef[1])
-
-    return (*t_bounds_jackknife(stat, len(seeds)), len(seeds))
-
-
-def _theil_sen(x: np.ndarray, y: np.ndarray) -> float:
-    """The Theil-Sen slope of ``y`` on ``x`` (the median of the pairwise slopes); NaN with fewer
-    than two distinct ``x``."""
-    if len(x) < 2 or np.ptp(x) == 0:
-        return math.nan
-    return float(stats.theilslopes(y, x).slope)
-
-
-def proportionality(models: pd.DataFrame) -> tuple[float, float, float, int]:
-    """(slope, lo, hi, n seeds): the Theil-Sen slope of ``log EV`` on ``log rollout_error``
-    (columns ``_ev``, ``_err``) over every run of ``models``, one line through models, systems
-    and seeds pooled (as the paper's notebook fits one line through Fig. 2's scatter), with
-    one-sided (1 - alpha) t bounds from the leave-one-seed-out jackknife
-    (:func:`t_bounds_jackknife`)."""
-    seeds = np.sort(models["seed"].unique())
-    by_seed = [
-        (np.log(g["_err"].to_numpy(float)), np.log(g["_ev"].to_numpy(float)))
-        for g in (models[models["seed"] == s] for s in seeds)
-    ]
-
-    def stat(idx) -> float:
-        return _theil_sen(
-            np.concatenate([by_seed[i][0] for i in idx]),
-            np.concatenate([by_seed[i][1] for i in idx]),
-        )
 
     return (*t_bounds_jackknife(stat, len(seeds)), len(seeds))
 
