@@ -57,3 +57,17 @@ def test_the_table_and_the_reports_lines():
     assert table.loc[1, "seeds_to_decide"] > 5
     lines = "\n".join(P.power_lines(table))
     assert "| 99 | b undecided |" in lines and "a clear" not in lines
+
+
+def test_the_command_writes_the_table(tmp_path, monkeypatch):
+    """`python -m bench power` on a folder of synthetic runs writes power.csv."""
+    import pandas as pd
+    from _synthetic import synthetic_tables
+
+    from bench._cli import main
+
+    runs, _ = synthetic_tables("quick", experiments=("second_order",))
+    runs.to_parquet(tmp_path / "runs.parquet", index=False)
+    assert main(["--results", str(tmp_path), "power", "--simulations", "50"]) == 0
+    table = pd.read_csv(tmp_path / "power.csv")
+    assert {"claim", "part", "holds_5", "seeds_to_decide"} <= set(table.columns) and len(table)

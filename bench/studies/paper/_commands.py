@@ -236,16 +236,19 @@ def _power_arguments(p):
 
 
 def _power(args) -> int:
+    from pathlib import Path
+
     from ...core._query import load_tables
     from ._power import power_lines, power_table
     from ._replication import judge
 
-    runs, curves, profile = load_tables(args.results)
+    results = Path(args.results)
+    runs, curves, profile = load_tables(results)
     if not len(runs):
-        raise ValueError(f"{args.results} holds no runs: nothing to simulate")
+        raise ValueError(f"{results} holds no runs: nothing to simulate")
     j = judge(runs, curves, profile, loso=False)
     table = power_table(j.final, sims=args.simulations)
-    out = args.results / "power.csv"
+    out = results / "power.csv"
     table.to_csv(out, index=False)
     print("\n".join(power_lines(table)) or "no undecided part")
     print(f"wrote {out} ({len(table)} parts)")
