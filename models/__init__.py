@@ -17,6 +17,7 @@ concatenation (static args, u); ``rollout(..., controls=...)`` holds u_i on inte
 
 from ._autoencoder import Autoencoder
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
+from ._features import Features
 from ._implicit import implicit_tolerance
 from ._integrators import (
     DESCRIPTIONS,
@@ -51,6 +52,7 @@ __all__ = [
     "AbstractContinuousModel",
     "Autoencoder",
     "DESCRIPTIONS",
+    "Features",
     "METHODS",
     "MODULES_ENV",
     "ORDERS",
