@@ -320,3 +320,20 @@ def test_export_refuses_a_non_empty_folder_and_loses_nothing(tmp_path, capsys):
     assert _cli.main(["data", "export", SYSTEM, "--out", str(tmp_path)]) == 2
     assert "not empty" in capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == ["mine.txt"]
+
+
+def test_the_docs_state_what_the_export_writes():
+    """docs/overview.md's example states the number of datasets and arrays that the export of
+    the chain pendulum at k = 2, quick, writes (counted without generating them)."""
+    import re
+    from pathlib import Path
+
+    from bench import data_loader
+    from bench._data import select
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "overview.md").read_text()
+    m = re.search(r"-> (\d+) datasets .*?, (\d+) arrays", text)
+    assert m, "docs/overview.md no longer states the export's counts"
+    configs, _ = select("chain_pendulum", "quick", k=2)
+    assert int(m.group(1)) == len(configs)
+    assert int(m.group(2)) == len(configs) * len(data_loader.ARRAYS)
