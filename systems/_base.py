@@ -335,7 +335,7 @@ def reference_masses_lengths(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The reference masses and lengths of n bodies.
 
     A legacy ``numpy.random.RandomState(0)`` draws n masses and then n lengths, each uniform on
-    [0.6, 1.4]; each list is used in reverse order (REFERENCE.md, "Systems").
+    [0.6, 1.4]; each list is used in reverse order, as the paper's public code does.
     """
     rng = np.random.RandomState(0)
     masses = rng.uniform(0.6, 1.4, size=n)

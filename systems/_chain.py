@@ -67,7 +67,7 @@ class ChainPendulum(AbstractSystem):
 
     @eqx.filter_jit
     def sample_initial(self, key, n: int):
-        """Random states spread like the reference's (REFERENCE.md, "Initial conditions").
+        """Random states spread like those of the paper's public code.
 
         Angles and rates N(0, 1); Cartesian bob positions jittered by 0.2 N(0, 1) and projected
         back onto the links (the angle of each jittered link vector); Cartesian velocities set to

@@ -1,6 +1,7 @@
 """Training and test sets of ground-truth trajectories, cached on disk.
 
-Protocol (Gruver et al. 2022, with the reference's defects fixed, see REFERENCE.md):
+Protocol (Gruver et al. 2022, as the paper's public code generates its data, with its defects
+fixed: every trajectory on the same uniform time grid, test windows anywhere, independent keys):
 
 - every trajectory is simulated on ts = arange(n) * dt with n = round(duration / dt) + 1
   (334 points for 10 s at dt = 0.03);

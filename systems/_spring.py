@@ -116,7 +116,7 @@ def spring_pendulum(
     """A spring pendulum of k bobs; masses default to the reference table.
 
     ``initial``: "equilibrium" (initial states about the true equilibrium) or "paper" (about
-    the reference's heights, bob i about i - 1 m higher; REFERENCE.md "Initial conditions").
+    the heights of the paper's public code, bob i about i - 1 m higher).
     """
     if not isinstance(initial, str) or initial not in INITIALS:
         raise ValueError(f"initial must be one of {', '.join(INITIALS)}; got {initial!r}")

@@ -82,6 +82,12 @@ def test_card_names_protocol_generator_suite_and_checksums(exported):
         assert hashlib.sha256(raw).hexdigest() == e["sha256"]
     readme = (root / "npz" / "README.md").read_text()
     assert "## Protocol" in readme and card["arrays"][0]["sha256"] in readme
+    # self-contained: no file of the suite's maintainers cited, no cache internals, and the
+    # card's licence and citation stated
+    for outside in ("REFERENCE.md", "STYLE.md", "ARCHITECTURE.md", "Cache:", "os.replace"):
+        assert outside not in readme, outside
+    assert card["license"].startswith("MIT") and "ICLR 2022" in card["citation"]
+    assert "## Licence and citation" in readme
 
 
 @pytest.mark.parametrize("fmt", data_loader.FORMATS)
