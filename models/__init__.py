@@ -7,6 +7,7 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 :func:`spec` (a model's capabilities as a frozen :class:`ModelSpec`), :func:`register` and
 :func:`load_plugins` (models from outside the suite: entry-point group ``decon_bench.models``,
 ``$DECON_MODEL_MODULES``), :func:`plugin_fingerprint` (what a plug-in's source hashes to),
+:func:`plugin_modules` (what another process needs to load the same plug-ins),
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve) and
 :func:`velocity_hessian`, the :class:`MLP` every model is built from, :func:`n_parameters`,
 and the integrators (``Integrator``, ``rollout``, ...).
@@ -39,6 +40,7 @@ from ._registry import (
     make,
     n_parameters,
     plugin_fingerprint,
+    plugin_modules,
     register,
     trivial_models,
 )
@@ -78,6 +80,7 @@ __all__ = [
     "make",
     "n_parameters",
     "plugin_fingerprint",
+    "plugin_modules",
     "register",
     "spec",
     "symplectic_error",

@@ -208,6 +208,7 @@ ENTRY_POINT_GROUP = "decon_bench.models"
 MODULES_ENV = "DECON_MODEL_MODULES"  # comma-separated plug-in modules (--model-module)
 _PLUGINS: set[str] = set()  # plug-in sources already loaded ("ep:<name>", "module:<name>")
 _SOURCES: dict[str, str] = {}  # plug-in name -> fingerprint of its source when registered
+_MODULES: dict[str, str] = {}  # plug-in name -> the module that registered it
 # The suite's own top-level packages: the parameter cache fingerprints their source already.
 _OWN_PACKAGES = ("models", "systems", "bench")
 
@@ -251,6 +252,27 @@ def plugin_fingerprint(name: str) -> str | None:
     parameter cache's code fingerprint."""
     load_plugins()
     return _SOURCES.get(name) if name in _REGISTRY else None
+
+
+def plugin_modules(used=None) -> dict[str, list[str]]:
+    """The plug-in modules this process loaded (``$DECON_MODEL_MODULES``/``--model-module``, and
+    the modules that registered the plug-in models named in ``used``, every one if None; not
+    ``__main__``), each with the ``sys.path`` folders its top-level package came from: what
+    another process (a Ray worker, which inherits none of this one's imports) needs to load
+    the same plug-ins with :func:`load_plugins`."""
+    import sys
+    from pathlib import Path
+
+    names = [k.split(":", 1)[1] for k in sorted(_PLUGINS) if k.startswith("module:")]
+    names += [m for n, m in _MODULES.items() if (used is None or n in used) and m != "__main__"]
+    out: dict[str, list[str]] = {}
+    for name in dict.fromkeys(n for n in names if n and n.partition(".")[0] not in _OWN_PACKAGES):
+        top = sys.modules.get(name.partition(".")[0])
+        roots = [Path(w).parent for w in getattr(top, "__path__", None) or []]  # a package
+        if not roots and getattr(top, "__file__", None):  # a one-file module
+            roots = [Path(top.__file__).parent]
+        out[name] = list(dict.fromkeys(str(r) for r in roots))
+    return out
 
 
 def register(
@@ -339,6 +361,7 @@ def register(
     )
     _REGISTRY[name] = _Entry(cls, build, options, bool(takes_dissipation), coordinates, activation)
     _SOURCES[name] = source
+    _MODULES[name] = caller
     from ._spec import spec
 
     spec.cache_clear()

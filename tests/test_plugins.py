@@ -95,7 +95,11 @@ def test_model_module_option_loads_a_module_without_an_entry_point(tmp_path):
 @pytest.fixture
 def clean_registry():
     before, sources = dict(registry._REGISTRY), dict(registry._SOURCES)
+    modules, loaded = dict(registry._MODULES), set(registry._PLUGINS)
     yield
+    registry._MODULES.clear()
+    registry._MODULES.update(modules)
+    registry._PLUGINS.intersection_update(loaded)
     registry._REGISTRY.clear()
     registry._REGISTRY.update(before)
     registry._SOURCES.clear()
@@ -195,3 +199,48 @@ def test_expansions_follow_a_model_registered_again_as_first_order(clean_registr
     assert not models.spec("drag_so").second_order
     combos = {(r.model, r.eval_integrator) for r in expand(exp, "smoke")}
     assert ("drag_so", "rk4") in combos and ("drag_so", "leapfrog") not in combos
+
+
+@pytest.mark.slow  # starts a local Ray instance and trains one smoke run (~1 min on 2 cores)
+@pytest.mark.ray
+def test_a_model_module_plugin_trains_on_ray_workers(clean_registry, tmp_path, monkeypatch):
+    """A plug-in that only the driver imported (``--model-module``, from a folder that only
+    the driver has on its path) is built on the Ray workers, which import nothing of it."""
+    pytest.importorskip("ray")
+    from bench.core import _runner as runner
+    from bench.core import _store
+    from bench.core._experiments import expand
+
+    site = _install(tmp_path / "site", "ray_only_plugin", "ray_only_so", entry_point=False)
+    monkeypatch.syspath_prepend(str(site))  # this process only: not in $PYTHONPATH
+    monkeypatch.delenv(models.MODULES_ENV, raising=False)
+    models.load_plugins("ray_only_plugin")
+    configs = [c for c in expand("second_order", "smoke", models=["ray_only_so"])]
+    configs = [c for c in configs if c.model == "ray_only_so"][:1]
+    rows = runner.sweep(
+        configs,
+        tmp_path / "res",
+        experiment="ray_plugin",
+        profile="smoke",
+        executor="ray",
+        progress=False,
+        cache_root=tmp_path / "cache",
+    )
+    assert [r["status"] for r in rows] == ["ok"], [r.get("error") for r in rows]
+    assert _store.load_runs(tmp_path / "res")["model"].tolist() == ["ray_only_so"]
+
+
+def test_plugin_modules_name_what_a_worker_must_load(clean_registry, tmp_path, monkeypatch):
+    """The modules of the plug-ins a sweep uses, with their folders, load in a process that
+    has neither on its path (a Ray task's ``_load_plugins``)."""
+    from bench.core import _runner as runner
+
+    site = _install(tmp_path / "site", "worker_plugin", "worker_so", entry_point=False)
+    monkeypatch.setattr(sys, "path", list(sys.path))  # _load_plugins appends the folder
+    monkeypatch.delenv(models.MODULES_ENV, raising=False)
+    runner._load_plugins({"worker_plugin": [str(site)]})
+    assert "worker_so" in models.available() and str(site) in sys.path
+    assert models.plugin_modules({"worker_so"}) == {"worker_plugin": [str(site)]}
+    assert models.plugin_modules({"node"}) == {"worker_plugin": [str(site)]}  # loaded by name
+    _example_class()  # a package loaded from its file: the folder holding the package
+    assert models.plugin_modules({"drag_so"})["_example_plugin"] == [str(EXAMPLE.parent)]

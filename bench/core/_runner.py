@@ -344,7 +344,9 @@ def _star_execute(job):
 
     configure_compilation_cache()  # a Ray worker has no initializer; idempotent in the pool's
     configure_numerics()
-    dicts, cache_root = job
+    dicts, cache_root, *plugins = job  # plugins: models.plugin_modules() of a Ray driver
+    if plugins and plugins[0]:
+        _load_plugins(plugins[0])
     if draining():  # the sweep is being drained: this job ends without running
         return []
     if len(dicts) == 1:
@@ -357,36 +359,66 @@ def _star_execute(job):
     return rows
 
 
+def _load_plugins(plugins: Mapping[str, Sequence[str]]) -> None:
+    """Load the driver's plug-in models in this worker (a Ray worker, started by the raylet,
+    imported none of them): put the folders they were imported from on ``sys.path``, then
+    import the modules (:func:`models.load_plugins`, once each per process)."""
+    for folder in (f for fs in plugins.values() for f in fs):
+        if folder not in sys.path:
+            sys.path.append(folder)
+    models.load_plugins(",".join(plugins))
+
+
 def _sweep_ray(groups, finish, cache_root, address, cores):
+    from ._ray_head import auth_ready
+
+    # a local instance is hosted by a spawned helper where Ray's authentication mode can be set
+    # before ray is imported here; else ray.init() starts it (forking this process)
+    hosted = not address and auth_ready(fresh="ray" not in sys.modules)
     try:
         import ray
     except ImportError as e:  # pragma: no cover
         raise ValueError("the ray executor needs the 'ray' extra: pip install -e '.[ray]'") from e
+    # The plug-in models the configs may name: each task loads them (_star_execute), whether
+    # or not this process started Ray; the workers' environment names them too.
+    plugins = models.plugin_modules({c.model for g in groups for c in g})
+    folders = [str(Path(__file__).resolve().parents[2])]  # this checkout, installed or not
+    folders += [f for fs in plugins.values() for f in fs]
     env = {
         "OMP_NUM_THREADS": "1",
         "DECON_CACHE": str(cache_root),
-        # Workers start elsewhere: let them import this checkout whether or not it is installed.
+        # Workers start elsewhere: let them import this checkout and the plug-ins.
         "PYTHONPATH": os.pathsep.join(
-            p for p in (str(Path(__file__).resolve().parents[2]), os.environ.get("PYTHONPATH")) if p
+            dict.fromkeys(p for p in (*folders, os.environ.get("PYTHONPATH")) if p)
         ),
+        models.MODULES_ENV: ",".join(plugins),
     }
-    started = False
+    started, head = False, None
     if not ray.is_initialized():
-        if address:
-            ray.init(address=address, runtime_env={"env_vars": env}, log_to_driver=False)
-        else:
+        if hosted:  # a local instance, its processes not forked from this one (JAX's)
+            from ._ray_head import LocalHead
+
+            head = LocalHead(cores)
+            address = head.address
+        try:
             ray.init(
-                num_cpus=cores,
-                include_dashboard=False,
-                log_to_driver=False,
+                address=address,
                 runtime_env={"env_vars": env},
+                log_to_driver=False,
+                **({} if address else {"num_cpus": cores, "include_dashboard": False}),
             )
+        except BaseException:
+            if head is not None:
+                head.stop()
+            raise
         started = True
     try:
         # one task per ensemble (a single run is an ensemble of 1); a GPU per task on GPUs
         gpus = 1 if ray.cluster_resources().get("GPU", 0) >= 1 else 0
         remote = ray.remote(num_cpus=1, num_gpus=gpus)(_star_execute)
-        pending = {remote.remote(([c.to_dict() for c in g], str(cache_root))): g for g in groups}
+        pending = {
+            remote.remote(([c.to_dict() for c in g], str(cache_root), plugins)): g for g in groups
+        }
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             g = pending.pop(ready[0])
@@ -405,6 +437,8 @@ def _sweep_ray(groups, finish, cache_root, address, cores):
     finally:
         if started:
             ray.shutdown()
+        if head is not None:
+            head.stop()
 
 
 def run_experiments(
