@@ -1,4 +1,4 @@
-"""The packages' layers point one way: systems <- models <- bench (ARCHITECTURE.md).
+"""The packages' layers point one way: systems <- models <- bench (docs/INTERNALS.md).
 
 Checked two ways: statically, over every ``import`` statement of the packages' source (so a
 lazy import inside a function counts too), and dynamically, by importing ``models`` in a fresh
@@ -68,7 +68,7 @@ def test_import_models_loads_no_bench():
 
 
 # ----------------------------------------------------------------------------- inside bench
-# Layers inside bench (STYLE.md 14): core <- studies <- the CLI, the report and the package's
+# Layers inside bench: core <- studies <- the CLI, the report and the package's
 # entry points. A module may import its own layer or a lower one, and no import cycle may join
 # bench's modules (lazy imports inside functions count: they are cycles all the same).
 def _layer(module: str) -> int:

@@ -315,7 +315,7 @@ def test_relativistic_sampling_ranges_are_parameters():
 
 @pytest.mark.parametrize("k, offsets", [(2, (0.0, 0.87)), (3, (0.0, 0.96, 1.92))])
 def test_spring_paper_initial_states_start_above_equilibrium(k, offsets):
-    """REFERENCE.md: the reference's heights ignore the rest lengths of springs 2..k (and take
+    """The paper's code: its heights ignore the rest lengths of springs 2..k (and take
     the masses in draw order), so bob i starts about i - 1 m above the true equilibrium."""
     paper = systems.make("spring_pendulum", k=k, initial="paper")
     z = _random_states(paper, n=4000)

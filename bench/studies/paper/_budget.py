@@ -63,8 +63,9 @@ WALL_S: dict[tuple[str, str | None], tuple[float, float]] = {
 }
 
 
-# Milliseconds per training step at batch 200, width 128, chain-2 (REFERENCE.md's calibration;
-# the others guesses). Superseded here by WALL_S; kept for bench.studies.tradeoff's estimate.
+# Milliseconds per training step at batch 200, width 128, chain-2 (the calibration against the
+# paper's public code; the others guesses). Superseded here by WALL_S; kept for
+# bench.studies.tradeoff's estimate.
 MS_PER_STEP = {
     "node": 8.0,
     "node_so": 8.0,
@@ -304,7 +305,8 @@ def estimate_seconds(
     divided by ``workers``, with :data:`WALL_S`'s measured quick costs (``s = 1`` at quick for
     the measured dof 2 systems). ``g = 1`` for the free models and ``(dof / dof_quick) ** 0.49``
     for the structured ones (the separable HNN's step cost rose from 35 to 60 ms from dof 2 to
-    6, REFERENCE.md). Returns ``{"runs", "trivial_runs", "per_experiment": {name: n},
+    6, as the paper's public code counts them). Returns ``{"runs", "trivial_runs",
+    "per_experiment": {name: n},
     "seconds"}``.
     """
     seen: dict[str, RunConfig] = {}

@@ -28,7 +28,7 @@ MODEL_LABELS = {
     "constant_velocity": "constant velocity (trivial)",
     "at_rest": "at rest (trivial)",
 }
-# Fig. 3's grid: log-spaced from 1e-6 to 1e3 (REFERENCE.md), 0 = the unregularised model.
+# Fig. 3's grid: log-spaced from 1e-6 to 1e3 (the paper's code), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
 # paper-core: five points spanning the paper's grid at the paper budget; quick: three of them,
 # 0, the grid's log-midpoint 1e-3 and its largest 1e3 (the other two would cost 6 of the 62 CPU

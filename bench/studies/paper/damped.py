@@ -71,7 +71,7 @@ def _damped_include(c: RunConfig) -> bool:
 
 # Claim 5. The paper's damped comparator ("SymODEN" in Fig. 6, MixtureHNN in the reference) is
 # a separable HNN plus a free MLP field on the whole state: that is mixture_hnn, and claim 5 is
-# judged against it. REFERENCE.md's Rayleigh form (-D(q) qdot on dp/dt, hnn_so with
+# judged against it. The paper's Rayleigh form (-D(q) qdot on dp/dt, hnn_so with
 # dissipation=True) is a stronger, correctly specified model of this friction: kept as an extra
 # row, labelled "HNN+SO + Rayleigh", not used by the verdict.
 DAMPED = Experiment(

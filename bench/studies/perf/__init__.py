@@ -1,8 +1,9 @@
 """Performance benchmark: training-step and rollout cost of every model at the reference setting.
 
-Setting (REFERENCE.md, "Cost of the reference code"): 2-link chain (dof 2, angles), MLP width
-256 x 2 hidden layers, batch 200 chunks of 5 points, rk4_38 one step per dt, float32. The
-training data are synthetic (timing does not depend on their values; no simulation needed).
+Setting (that of the paper's public code, timed on this machine class): 2-link chain (dof 2,
+angles), MLP width 256 x 2 hidden layers, batch 200 chunks of 5 points, rk4_38 one step per dt,
+float32. The training data are synthetic (timing does not depend on their values; no simulation
+needed).
 
 Per model: the median ms per training step, timed over blocks of ``block`` steps run as one
 compiled ``lax.scan`` exactly as ``bench.train`` runs them (compile first, then ``repeats``
