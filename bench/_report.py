@@ -50,7 +50,7 @@ from .studies._text import folder_label, md_escape
 __all__ = ["write_report"]
 
 DEFECTS = """\
-The reference implementation has defects that this suite does not copy (REFERENCE.md):
+The paper's public code has defects that this suite does not copy:
 
 - its test set was generated with the same seed as the training set (overlapping initial
   conditions); here train and test use independent keys;

@@ -219,7 +219,7 @@ def _perf_section(results_dir: Path) -> list[str]:
     lines = head + [
         f"Measured by `python -m bench perf` ({when}{load}) at the reference setting: chain-2, "
         "2 x 256 tanh, batch 200, chunk 5, RK4 (3/8) one step per dt, float32. Reference = the "
-        "paper's PyTorch code on this machine class (REFERENCE.md); speedup = reference / ours; "
+        "paper's PyTorch code timed on this machine class; speedup = reference / ours; "
         "FLOP floor = the step's FLOPs (XLA cost analysis) over the measured matmul peak.",
         "",
         "| " + " | ".join(cols) + " |",
