@@ -13,6 +13,27 @@ os.environ.setdefault(
 # the test processes (two workers, the CLI's subprocesses) reuse one another's.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
+import pytest  # noqa: E402
+
 from bench.core._env import setup_process  # noqa: E402
 
 setup_process()
+
+
+@pytest.fixture
+def clean_registry():
+    """The model registry as it was before the test: plug-ins a test loads are forgotten."""
+    import models
+    from models import _registry
+
+    before, sources = dict(_registry._REGISTRY), dict(_registry._SOURCES)
+    modules, loaded = dict(_registry._MODULES), set(_registry._PLUGINS)
+    yield
+    _registry._MODULES.clear()
+    _registry._MODULES.update(modules)
+    _registry._PLUGINS.intersection_update(loaded)
+    _registry._REGISTRY.clear()
+    _registry._REGISTRY.update(before)
+    _registry._SOURCES.clear()
+    _registry._SOURCES.update(sources)
+    models.spec.cache_clear()

@@ -16,7 +16,6 @@ import pandas as pd
 import pytest
 
 import models
-from models import _registry as registry
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "decon_bench_example_model" / "decon_bench_example_model"
@@ -90,21 +89,6 @@ def test_model_module_option_loads_a_module_without_an_entry_point(tmp_path):
     assert p.returncode == 2
     err = p.stderr.strip()
     assert err.startswith("error: model plug-in 'no_such_plugin'") and "\n" not in err
-
-
-@pytest.fixture
-def clean_registry():
-    before, sources = dict(registry._REGISTRY), dict(registry._SOURCES)
-    modules, loaded = dict(registry._MODULES), set(registry._PLUGINS)
-    yield
-    registry._MODULES.clear()
-    registry._MODULES.update(modules)
-    registry._PLUGINS.intersection_update(loaded)
-    registry._REGISTRY.clear()
-    registry._REGISTRY.update(before)
-    registry._SOURCES.clear()
-    registry._SOURCES.update(sources)
-    models.spec.cache_clear()
 
 
 def _example_class():
