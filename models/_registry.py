@@ -209,6 +209,14 @@ MODULES_ENV = "DECON_MODEL_MODULES"  # comma-separated plug-in modules (--model-
 _PLUGINS: set[str] = set()  # plug-in sources already loaded ("ep:<name>", "module:<name>")
 _SOURCES: dict[str, str] = {}  # plug-in name -> fingerprint of its source when registered
 _MODULES: dict[str, str] = {}  # plug-in name -> the module that registered it
+_GENERATION = [0]  # counts the registrations: models.spec caches what it read per generation
+
+
+def generation() -> int:
+    """How many models have been registered since import: a cache of registry reads keys on it."""
+    return _GENERATION[0]
+
+
 # The suite's own top-level packages: the parameter cache fingerprints their source already.
 _OWN_PACKAGES = ("models", "systems", "bench")
 
@@ -362,9 +370,7 @@ def register(
     _REGISTRY[name] = _Entry(cls, build, options, bool(takes_dissipation), coordinates, activation)
     _SOURCES[name] = source
     _MODULES[name] = caller
-    from ._spec import spec
-
-    spec.cache_clear()
+    _GENERATION[0] += 1  # what models.spec read of the registry is stale now
     return name
 
 

@@ -7,7 +7,7 @@ import functools
 from dataclasses import dataclass
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel
-from ._registry import _REGISTRY, available, coordinates
+from ._registry import _REGISTRY, available, coordinates, generation
 
 __all__ = ["ModelSpec", "spec"]
 
@@ -50,11 +50,18 @@ class ModelSpec:
         return self.structure == "lagrangian"
 
 
-@functools.cache
 def spec(name: str) -> ModelSpec:
-    """The :class:`ModelSpec` of the registered model ``name`` (ValueError naming them)."""
+    """The :class:`ModelSpec` of the registered model ``name`` (ValueError naming them).
+
+    Read once per registry generation: a model registered again (a plug-in replacing a
+    definition) is read afresh, without the registry knowing of this module."""
     if name not in available():  # available() loads the plug-ins first
         raise ValueError(f"unknown model {name!r}; allowed: {available()}")
+    return _spec(name, generation())
+
+
+@functools.cache
+def _spec(name: str, generation: int) -> ModelSpec:
     entry = _REGISTRY[name]
     cls = entry.cls
     return ModelSpec(
@@ -71,3 +78,6 @@ def spec(name: str) -> ModelSpec:
         controls=bool(getattr(cls, "takes_controls", False)),
         forced=bool(getattr(cls, "forced", False)),
     )
+
+
+spec.cache_clear = _spec.cache_clear  # type: ignore[attr-defined]

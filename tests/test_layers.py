@@ -1,4 +1,4 @@
-"""The packages' layers point one way: systems <- models <- bench (docs/INTERNALS.md).
+"""The packages' layers point one way: systems <- models <- bench (docs/design.md).
 
 Checked two ways: statically, over every ``import`` statement of the packages' source (so a
 lazy import inside a function counts too), and dynamically, by importing ``models`` in a fresh
@@ -213,3 +213,10 @@ def test_every_import_of_ours_resolves():
                 if not hasattr(m, name) and not is_module(f"{mod}.{name}"):
                     bad.append(f"{path.relative_to(ROOT)}:{line}: {mod} has no {name}")
     assert not bad, "; ".join(bad)
+
+
+@pytest.mark.parametrize("package", ["models", "systems"])
+def test_the_lower_packages_have_no_import_cycle(package):
+    graph = _module_graph(ROOT, package)
+    assert f"{package}._registry" in graph or f"{package}._base" in graph, sorted(graph)[:5]
+    assert not _cycles(graph), _cycles(graph)
