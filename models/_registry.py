@@ -212,11 +212,6 @@ _MODULES: dict[str, str] = {}  # plug-in name -> the module that registered it
 _GENERATION = [0]  # counts the registrations: models.spec caches what it read per generation
 
 
-def generation() -> int:
-    """How many models have been registered since import: a cache of registry reads keys on it."""
-    return _GENERATION[0]
-
-
 # The suite's own top-level packages: the parameter cache fingerprints their source already.
 _OWN_PACKAGES = ("models", "systems", "bench")
 

@@ -7,7 +7,7 @@ import functools
 from dataclasses import dataclass
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel
-from ._registry import _REGISTRY, available, coordinates, generation
+from ._registry import _GENERATION, _REGISTRY, available, coordinates
 
 __all__ = ["ModelSpec", "spec"]
 
@@ -57,7 +57,7 @@ def spec(name: str) -> ModelSpec:
     definition) is read afresh, without the registry knowing of this module."""
     if name not in available():  # available() loads the plug-ins first
         raise ValueError(f"unknown model {name!r}; allowed: {available()}")
-    return _spec(name, generation())
+    return _spec(name, _GENERATION[0])
 
 
 @functools.cache
