@@ -1,7 +1,7 @@
 """Command line of decon-bench: ``python -m bench <verb>`` (also the ``decon-bench`` script).
 
 Verbs: list, run, sweep, preflight, figures, report, perf, stability, bench, estimate, campaign,
-compare, data (export, verify). A bad
+compare (``--scores``: predictions beside the reference), data (export, verify), score. A bad
 name or value, a run that can never run (e.g. leapfrog on a first-order model) or a results
 folder that cannot be used prints one line ``error: ...`` on stderr and exits with code 2,
 without a traceback. A write that fails during a sweep (full disk) stops it with one line and
@@ -19,7 +19,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from . import _adhoc
+from . import _adhoc, _score  # _score registers the verb score
 from ._compare import OWN_DIR, reference_dir
 from .core._config import check_choice
 from .core._experiments import PROFILES
@@ -100,6 +100,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     cm.add_argument("b", nargs="?", help="the folder to check (default: --results)")
     cm.add_argument("--out", default=None, help="also write the comparison (Markdown) here")
+    _score.compare_arguments(cm)
 
     for verb, what in (("figures", "regenerate figures and tables"), ("report", "write REPORT.md")):
         sub.add_parser(verb, help=f"{what} from the stored runs").add_argument(
@@ -492,7 +493,7 @@ def _main(argv) -> int:
         "figures": _cmd_figures,
         "report": _cmd_report,
         "bench": _cmd_bench,
-        "compare": _cmd_compare,
+        "compare": _score.compare_verb(_cmd_compare),
         "data": _cmd_data,
     }
     verbs.update({c.name: c.run for c in commands()})

@@ -26,9 +26,11 @@ import shutil
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from systems import MAX_STEPS
 
-from . import data_loader
+from . import data_loader, metrics
 from .core._config import RunConfig
 from .core._experiments import available, expand, profile_defaults
 
@@ -139,6 +141,7 @@ def export(
             "config_hash": c.hash(),
             "used_by_experiments": sorted(names),
             "angular": list(d.angular),
+            "energy": energy_form(systems.make(c.system, **dict(c.system_params)), d),
         }
     sys_obj = systems.make(next(iter(configs)).system, **dict(next(iter(configs)).system_params))
     prov = provenance()
@@ -211,6 +214,58 @@ def export(
     return card
 
 
+_BODIES = "1/2 sum_i m_i |v_i|^2"
+
+
+def _form(system) -> tuple[dict, dict, str] | None:
+    """(kinetic, potential, text) of ``system``'s H for :func:`bench.data_loader.energy`."""
+    name, f = type(system).__name__, [float(x) for x in getattr(system, "masses", ())]
+    fs = "[" + ", ".join(f"{x:.6g}" for x in f) + "]"  # the masses in the text
+    if name == "Pendulum":
+        ml2, mgl = system.mass * system.length**2, system.mass * system.g * system.length
+        kin, pot = {"kind": "diagonal", "masses": [ml2]}, {"kind": "cosine", "c": mgl}
+        return kin, pot, f"1/2 m l^2 qdot^2 + m g l (1 - cos q), m l^2 = {ml2:g}, m g l = {mgl:g}"
+    if name == "MassSpring":
+        m, k = system.mass, system.spring_constant
+        kin, pot = {"kind": "diagonal", "masses": [m]}, {"kind": "quadratic", "k": k}
+        return kin, pot, f"1/2 m qdot^2 + 1/2 k q^2, m = {m:g}, k = {k:g}"
+    if name == "ChainPendulum":
+        lengths, g = [float(x) for x in system.lengths], system.g
+        kin = {"kind": "chain", "masses": f, "lengths": lengths}
+        pot = {"kind": "chain_gravity", "masses": f, "lengths": lengths, "g": g}
+        ls = "[" + ", ".join(f"{x:.6g}" for x in lengths) + "]"
+        text = f"{_BODIES} + g sum_i m_i y_i (bob i), masses {fs}, lengths {ls}, g = {g:g}"
+        return kin, pot, text
+    if name == "SpringPendulum":
+        g, k = system.g, system.spring_constant
+        pot = {"kind": "spring_chain", "masses": f, "g": g, "k": k}
+        text = (
+            f"{_BODIES} + g sum_i m_i z_i + 1/2 k |x_1|^2 + 1/2 k sum_(i>1) (|x_i - x_(i-1)| - "
+            f"1)^2, masses {fs}, g = {g:g}, k = {k:g}"
+        )
+        return {"kind": "diagonal", "masses": [m for m in f for _ in range(3)]}, pot, text
+    if name in ("TwoBody", "ThreeBody"):
+        pot = {"kind": "gravitation", "masses": f, "G": system.gravity}
+        text = f"{_BODIES} - G sum_(i<j) m_i m_j / |x_i - x_j|, masses {fs}, G = {system.gravity:g}"
+        return {"kind": "diagonal", "masses": [m for m in f for _ in range(2)]}, pot, text
+    return None
+
+
+def energy_form(system, d) -> dict | None:
+    """The true H of ``system`` in the NumPy form of :func:`bench.data_loader.energy` (the
+    card's ``energy`` of dataset ``d``, which decon_data.score reads), checked against the
+    suite's own energies on the test states; None for a system without one here (a system with
+    per-trajectory parameters among them), or one that does not match."""
+    form = None if system.n_args else _form(system)
+    if form is None:
+        return None
+    out = {"kinetic": form[0], "potential": form[1], "text": "H = " + form[2]}
+    z = d.z_test[:8]
+    numpy_h = data_loader.energy(out, z, d.config.coordinates)
+    suite_h = metrics.energies(system, z, None, d.config.coordinates)
+    return out if np.allclose(numpy_h, suite_h, rtol=1e-9, atol=1e-12) else None
+
+
 def _velocity_twin(c) -> str:
     return dataclasses.replace(c, coordinates="velocity").canonical_json()
 
@@ -278,6 +333,16 @@ def card_markdown(card: dict) -> str:
         lines.append(
             f"| `{name}` | {e['state']} | {e['seed']} | {used} | `{e['config_hash'][:16]}` |"
         )
+    forms = list(
+        dict.fromkeys((e.get("energy") or {}).get("text", "") for e in card["datasets"].values())
+    )
+    lines += [
+        "",
+        "True energy in NumPy form (the datasets' `energy`, which `decon_data.score` reads for "
+        "the energy violation): "
+        + ("; ".join(f for f in forms if f) or "none for this system")
+        + ("" if all(forms) else " (where none: `python -m bench score` computes it)"),
+    ]
     lines += [
         "",
         "## Arrays",
@@ -298,6 +363,8 @@ def card_markdown(card: dict) -> str:
         "names = decon_data.datasets('.')",
         "arrays = decon_data.load('.', names[0])  # checked against the card",
         "train = decon_data.TorchDataset('.', names[0], split='train')  # needs torch",
+        "# predictions: np.savez('pred.npz', **{name: zhat}), zhat shaped as the z_test of name",
+        "rows = decon_data.score('.', 'pred.npz')  # the suite's test metrics, NumPy only",
         "```",
         "",
     ]

@@ -87,7 +87,7 @@ def test_several_orders_of_magnitude_at_similar_loss_are_reproduced():
     assert [p.role for p in v.parts if p.name.startswith("(b)")] == ["condition"] * 3
     # the two-body margin is the seed's stated number, the others the policy's energy margin
     two = next(p for p in v.parts if p.name.startswith("(a) two_body"))
-    assert two.margin_value == 100.0 and "stated: seeds/003 line 47" in two.margin
+    assert two.margin_value == 100.0 and "stated: Greydanus et al. 2019" in two.margin
     assert "Deconstructing view" in v.detail
 
 

@@ -4,7 +4,7 @@ budget (claims 1 and 3): the first training steps of its runs, replayed and prob
 Each seed's run is replayed through the trainer's own compiled block for :data:`PROBE_STEPS`
 steps, in several variants (:data:`VARIANTS`), and probed after every block (loss, the learned
 mass matrix's eigenvalues, the predicted motion). ``python -m bench diagnose-hnn`` writes
-``hnn_diagnosis.csv``; the probes and variants: docs/studies/hnn_diagnosis.md.
+``hnn_diagnosis.csv``; the probes and variants: docs/studies/paper.md.
 """
 
 from __future__ import annotations

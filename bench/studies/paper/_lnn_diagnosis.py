@@ -4,7 +4,7 @@ d2L/dqdot2 along rollouts and at initialisation, computed from real (small) runs
 Two parts, one table (``lnn_diagnosis.csv``; ``python -m bench diagnose-lnn``): ``init``, an
 ablation of freshly initialised LNNs (kinetic prior, solve, activation), and ``trained``, the
 Hessian along each trained model's own rollout against the step where it blows up. Every number
-comes from the models; what each column means: docs/studies/lnn_diagnosis.md.
+comes from the models; what it measures: docs/studies/lnn_seed.md.
 """
 
 from __future__ import annotations

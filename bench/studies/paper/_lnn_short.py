@@ -1,5 +1,5 @@
 """Claim 9 (c): the LNN seed's Fig. 2(a), "the LNN and baseline model perform similarly in
-modelling the dynamics of the pendulum over short time periods" (seeds/002, line 80).
+modelling the dynamics of the pendulum over short time periods" (Cranmer et al. 2020).
 
 "Short" is the window of Fig. 2(a): the seed's notebook (``notebooks/DoublePendulum.ipynb`` of
 MilesCranmer/lagrangian_nns, the cell that draws the figure) plots theta_1 and its error for the

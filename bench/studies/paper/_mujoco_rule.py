@@ -271,7 +271,7 @@ def _sources(rows: pd.DataFrame) -> str:
 
 
 def claim_16(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
-    """Claim 16 (Sec. 5, Fig. 7; seeds/004 line 180): "NODE + SO significantly outperforms
+    """Claim 16 (Sec. 5, Fig. 7; Gruver et al. 2022): "NODE + SO significantly outperforms
     baseline methods. Surprisingly HNNs underperform NODEs on all the systems we consider ...
     the bias towards Hamiltonian dynamics makes fitting the training data very difficult".
 

@@ -34,7 +34,7 @@ __all__ = ["DIFFERENCES", "TITLE", "rows_of", "section", "shown", "summary"]
 
 TITLE = "MuJoCo transitions under controls (claim 16)"
 
-# What differs from the paper's Fig. 7 (docs/studies/mujoco.md, "What this suite does instead")
+# What differs from the paper's Fig. 7 (docs/studies/mujoco.md, "What the suite does")
 DIFFERENCES = (
     "Data: one SAC run per task on this CPU, its budget in the file's card (the data lines "
     "above), not the paper's SAC trained to convergence (a buffer of 850K transitions); the "

@@ -1,5 +1,5 @@
 """Claim 11 (c): the HNN seed's "We found that the auxiliary loss did not degrade the
-autoencoder's performance" (seeds/003, line 58, Task 5: the pixel pendulum).
+autoencoder's performance" (Greydanus et al. 2019, Task 5: the pixel pendulum).
 
 The auxiliary loss is the latent term cc = mean (dw_i - (w_{i+1} - w_i))^2 of the seed's
 three-term pixel loss (``bench.core._pixels.seed_loss``, weight 1); the autoencoder's

@@ -156,7 +156,7 @@ def readings(runs: pd.DataFrame) -> dict:
 def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 11 (HNN seed, Table 1's pixel pendulum): "The HNN and its baseline reached
     comparable train and test losses, but once again, the HNN dramatically outperformed the
-    baseline on the energy metric" (seeds/003 line 60); and (c) "the auxiliary loss did not
+    baseline on the energy metric" (Greydanus et al. 2019); and (c) "the auxiliary loss did not
     degrade the autoencoder's performance" (line 58; :mod:`._pixel_aux`: not tested on a runs
     table, judged in the report's pixel section on the HNN seed's pixel diagnosis).
 

@@ -110,8 +110,8 @@ def _reading(r: pd.DataFrame, *, variant: str, extras=(), extra: str = "") -> Ve
         name = f"{label}: log(err best trivial / err model) vs {gate_margin.label()}"
         kind = at_most if fails else greater
         parts.append(kind(name, gain, gate_margin))
-    # "learns the system as accurately as an HNN trained on canonical coordinates" (seeds/002,
-    # line 82): an *at most* part, as every "matches" (a better LNN is also as accurate)
+    # "learns the system as accurately as an HNN trained on canonical coordinates" (Cranmer et al.
+    # 2020): an *at most* part, as every "matches" (a better LNN is also as accurate)
     ratio(
         "(e) LNN as accurate as HNN(q,p): log(LNN / HNN(q,p))",
         "lnn",
@@ -201,7 +201,7 @@ def claim_7(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
     predictor (the "fails" and "succeeds" of the claim, at the policy's learning margin on
     ``log(err trivial / err model)``): (b) the naive HNN *fails*, an *at most* part; (c) the HNN
     on (q, p) and (d) the LNN *succeed*, *greater* parts; (e) the LNN is "as accurate as" the
-    HNN on (q, p) (seeds/002 line 82), an *at most* part at the error margin on ``log(err LNN /
+    HNN on (q, p) (Cranmer et al. 2020), an *at most* part at the error margin on ``log(err LNN /
     err HNN(q, p))``, judged where HNN(q, p) learned; (f) the LNN beats the naive HNN, a
     *greater* part at the error margin. Headline: (a).
 

@@ -1,6 +1,6 @@
 """The solver's own energy drift on the TRUE system, for claim 1's footnote: "The energy
 violation is considerably larger than merely the numerical error associated with the solver"
-(seeds/004, footnote 1).
+(Gruver et al. 2022, footnote 1).
 
 For a stored run, :func:`solver_drift` rolls the system's true vector field out with the run's
 evaluation integrator (method, substeps, tolerance), time step, horizon, dtype and test initial

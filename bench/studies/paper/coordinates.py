@@ -80,9 +80,9 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
     start about i - 1 m above equilibrium; "equilibrium": the physical one). Parts at the error
     margin (its square for the MSE), each judged where NODE+SO and HNN+SO learned: the chain
     pendulum (angles) edge is a *greater* part (HNN+SO beats NODE+SO by more than the margin);
-    the spring (Cartesian) part, "the gap vanishes (and even favors NODE+SO)" (seeds/004 line
-    153), is an *at most* part on the same edge: it holds only when the data rule out an HNN+SO
-    edge of the margin, and is contradicted by an edge shown to exceed it.
+    the spring (Cartesian) part, "the gap vanishes (and even favors NODE+SO)" (Gruver et al.
+    2022, Sec. 4), is an *at most* part on the same edge: it holds only when the data rule out
+    an HNN+SO edge of the margin, and is contradicted by an edge shown to exceed it.
     Headline: spring edge minus chain edge.
     """
     p = select(plain(runs), loss="l2", ok=False)

@@ -160,7 +160,7 @@ def claim_5(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
 
     Parts, per system, on paired per-seed log ratios: (a) a *greater* part at the error margin:
     ``log(err HNN+SO plain / err NODE+SO)`` (the plain HNN, ``dissipation=False``, "fits the
-    data poorly", seeds/004 line 145; judged where NODE+SO learned); (b) NODE+SO "matches" the
+    data poorly", Gruver et al. 2022; judged where NODE+SO learned); (b) NODE+SO "matches" the
     damped HNN, an *at most* part at the error margin on ``log(err NODE+SO / err mixture
     HNN)`` (being better also matches, so only the upper equivalence test applies; judged where
     both learned); (c) cost, a *greater* part at the cost margin on ``log(train s mixture /

@@ -139,7 +139,7 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     (b) Growth in time, per family (NODEs = node, node_so; HNNs = hnn_so): for every run with a
     stored curve, the slope of ``log EV`` against ``log t`` over the late half of the horizon;
     the per-seed mean slope of each family must lie within the slope margin of 1 (the paper:
-    "grow linearly", seeds/004 line 89): a *band* part, holds when both one-sided bounds are
+    "grow linearly", Gruver et al. 2022): a *band* part, holds when both one-sided bounds are
     inside, contradicts when the interval lies wholly below it (the violation levels off) or
     above it.
     (c) "Rollout Error proportional to Energy Violation" (Fig. 2 left, "scattered around the
@@ -150,7 +150,7 @@ def claim_1(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     jackknife's t bounds (the seed is the unit of replication, as in (a)): a *band* part within
     the proportionality margin of 1. Not gated: the statement is about every run of the
     figure, learned or not (the notebook pools even crashed runs).
-    (d) Footnote 1 (seeds/004, on "energy is *not* conserved as time progresses for HNNs"):
+    (d) Footnote 1 (Gruver et al. 2022, on "energy is *not* conserved as time progresses for HNNs"):
     "The energy violation is considerably larger than merely the numerical error associated
     with the solver", a *greater* part at the energy margin on, per seed, ``log(EV of HNN+SO /
     solver drift)``, the weaker of the two systems. The solver drift

@@ -46,12 +46,12 @@ BASELINE = {"model": "node", "coordinates": "momentum"}
 HNN = {"model": "hnn", "coordinates": "momentum"}
 NODE_SO = {"model": "node_so", "coordinates": "velocity"}
 # The seed states a number for the two-body task only; its other tasks say "dramatically"
-# (seeds/003 line 35), which is the policy's energy margin (squared: an energy MSE).
+# (Greydanus et al. 2019), which is the policy's energy margin (squared: an energy MSE).
 TWO_BODY_ENERGY = policy.stated(
     "energy",
     100.0,
     "an energy MSE that was several orders of magnitude below the baseline",
-    "seeds/003 line 47",
+    "Greydanus et al. 2019",
 )
 
 # The seed's own numbers (greydanus/hamiltonian-nn README, "Numbers": baseline NN, HNN), the
@@ -153,8 +153,8 @@ CLAIM_TITLES[10] = (
 
 def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 10 (HNN seed, its Table 1): "even as HNNs tied with the baseline on loss, they
-    dramatically outperformed it on the MSE energy metric" (seeds/003 line 35; two-body: "several
-    orders of magnitude below the baseline", line 47).
+    dramatically outperformed it on the MSE energy metric" (Greydanus et al. 2019; two-body:
+    "several orders of magnitude below the baseline").
 
     Per system: (a) a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the
     policy's energy margin squared (an MSE), on the two-body at the stated 100x

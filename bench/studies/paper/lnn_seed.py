@@ -246,7 +246,7 @@ def _worst_for_failed(r: pd.DataFrame) -> pd.DataFrame:
 
 def claim_9(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 9 (LNN seed, double pendulum): the LNN "conserves the total energy of the system
-    significantly better than the baseline" at "similar final losses" (seeds/002, lines 71-80;
+    significantly better than the baseline" at "similar final losses" (Cranmer et al. 2020;
     parts (a), (b)), and the two "perform similarly in modelling the dynamics of the pendulum
     over short time periods" (Fig. 2(a); part (c), the first 10 s).
 

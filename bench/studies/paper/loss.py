@@ -129,7 +129,7 @@ def _ordering(arr: np.ndarray, labels: list[str], value: float, alpha: float):
 def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     """Claim 6 (Fig. 8): the four paper models on the chain pendulum trained with L1 and L2;
     "Switching from l2 to l1 loss can improve rollout error slightly, but doesn't impact the
-    ordering of the models" (seeds/004 line 319). Two kinds of part, on the models that learned
+    ordering of the models" (Gruver et al. 2022). Two kinds of part, on the models that learned
     under both losses:
 
     (a) "slightly", per model: ``log(err L1 / err L2)`` per seed, an *equivalent* part (TOST) at

@@ -86,7 +86,7 @@ POLICY: dict[str, Quantity] = {
             False,
             "most, much of, more closely matches",
             'more than half: NODE+SO "more closely matches HNNs than vanilla NODEs" '
-            "(seeds/004, line 136)",
+            "(Gruver et al. 2022)",
         ),
         Quantity(
             "slope",
@@ -105,7 +105,7 @@ POLICY: dict[str, Quantity] = {
             False,
             "Rollout Error proportional to Energy Violation, scattered around the line x = y",
             'slope 1: "Rollout Error proportional to Energy Violation", "scattered around '
-            'the line x = y" on log axes (seeds/004, Fig. 2 left, lines 85-87; Appendix B.1: '
+            'the line x = y" on log axes (Gruver et al. 2022, Fig. 2 left; Appendix B.1: '
             "the violation is first order in the dynamics error); 0.5 is half-way to the "
             "nearest other law, a quadratic one (slope 2) or none (slope 0); the paper "
             "states no number",
@@ -120,7 +120,7 @@ POLICY: dict[str, Quantity] = {
             'a positive rank correlation of practical size: rho = 0.3 (z = 0.31), a "medium" '
             'correlation; the band runs from a "small" 0.1 to a "large" 0.5 (Cohen\'s '
             'conventions). The paper states no number: "not positively correlated ... in '
-            'some cases even negatively" (seeds/004, line 112; Fig. 3 right)',
+            'some cases even negatively" (Gruver et al. 2022; Fig. 3 right)',
         ),
         Quantity(
             "embedding",

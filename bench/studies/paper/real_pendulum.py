@@ -97,7 +97,7 @@ CLAIM_TITLES[15] = (
 
 def claim_15(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 15 (HNN seed, Task 3, Table 1 row 3): on the real pendulum the HNN "dramatically
-    outperformed" the baseline "on the MSE energy metric" (seeds/003 line 35).
+    outperformed" the baseline "on the MSE energy metric" (Greydanus et al. 2019).
 
     One part, (a): a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the
     policy's energy margin squared (an MSE), judged where both models learned (the fit gate:

@@ -58,7 +58,7 @@ SECOND_ORDER = Experiment(
 
 # Where the paper claims that second-order structure closes the gap: Sec. 4.4 concedes "a gap
 # for some systems ... in each of these cases the system is described in a non-Cartesian
-# coordinate system" (seeds/004, line 140), so (b) is judged on the Cartesian system only.
+# coordinate system" (Gruver et al. 2022), so (b) is judged on the Cartesian system only.
 SHARE_SYSTEMS = ("spring_pendulum",)
 
 
@@ -67,7 +67,7 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     paper's two readings, per system (undamped chain and spring, k = 2 where present):
 
     (a) pairwise, Fig. 4's caption ("Models with the SO bias significantly outperform those that
-    do not", seeds/004 line 123): *greater* parts at the error margin on ``log(err NODE / err
+    do not", Gruver et al. 2022): *greater* parts at the error margin on ``log(err NODE / err
     NODE+SO)`` and ``log(err HNN / err HNN+SO)``, each judged where both models learned;
     (b) the share of the gap, Sec. 4.3 (NODE+SO "more closely matches HNNs than vanilla NODEs",
     line 136): per seed ``closed = log(err NODE / err NODE+SO)`` and ``gap = log(err NODE /

@@ -97,7 +97,7 @@ CLAIM_TITLES[14] = "HNN seed, three-body: the HNN's energy MSE below the baselin
 
 def claim_14(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 14 (HNN seed, Appendix B): on the three-body problem "the HNN outperforms its
-    baseline by a considerable margin" (seeds/003 line 48), with "a relative advantage to using
+    baseline by a considerable margin" (Greydanus et al. 2019), with "a relative advantage to using
     the HNN over the baseline model. However, both models struggled" (line 136).
 
     One part, (a): a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the

@@ -2,7 +2,7 @@
 reading): the experiment, the reading's rule, the claim's rule over both readings, a table with
 the two protocols side by side, and a figure of the learned embeddings beside the truth.
 
-The blog (seeds/000, lines 45-67) shows "example embedded representations of an ideal pendulum
+The blog (the VIN blog) shows "example embedded representations of an ideal pendulum
 system": the baselines, (a) a VAE, (b) a dynamic VAE and (c) a Lie group VAE, "fail to capture
 the global structure (a)-(b) and/or are discontinuous with respect to the time dimension (c)";
 "the VIN-SO(2) (d) learns an embedding that is consistent with the ground truth (f)". Its

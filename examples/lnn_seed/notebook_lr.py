@@ -2,7 +2,7 @@
 over its peak learning rate, from the notebook's own 1e-5 to the suite's rule (1e-5 x 600,000 /
 2,000 = 3e-3), beside constant velocity: does the raised rate stop the LNN from fitting?
 
-    PYTHONPATH=. .venv/bin/python docs/studies/lnn_seed_scripts/notebook_lr.py RESULTS_DIR
+    PYTHONPATH=. .venv/bin/python examples/lnn_seed/notebook_lr.py RESULTS_DIR
 
 Runs stored in RESULTS_DIR as experiment ``lnn_notebook_lr`` (not a claim's), then a table.
 """

@@ -15,13 +15,19 @@ Printed beside it: the same bound for one Euler step with dq/dt = v (the physica
 the error of the step alone) and for the reference's CoupledNODE rule at 8 steps with a perfect
 acceleration (q1 = q0 + dt * (v0 + v1) / 2, exact for constant acceleration).
 
-    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/reference_hnn_floor.py
+    PYTHONPATH=. .venv/bin/python examples/mujoco/reference_hnn_floor.py
 """
 
 import numpy as np
 
 from bench.core import _controlled as C
 from bench.core._experiments import expand
+
+
+def floor(q1_hat, q1, scale_q):
+    """The q1 share of the window's normalised MSE: 1 of 3 states, nq of 2 nq components."""
+    return float(np.mean(((q1_hat - q1) / scale_q) ** 2)) / 3 / 2
+
 
 print(f"{'task':20s} {'nq':>3s} {'dt':>6s}  floor: reference HNN  Euler dq/dt=v  (v0+v1)/2")
 done = set()
@@ -37,13 +43,9 @@ for c in expand("mujoco", "paper-core"):
     states = z.reshape(-1, z.shape[-1])
     mean_v, std_v = states[:, nq:].mean(0), states[:, nq:].std(0)
 
-    def floor(q1_hat):
-        """The q1 share of the window's normalised MSE: 1 of 3 states, nq of 2 nq components."""
-        return float(np.mean(((q1_hat - q1) / scale[:nq]) ** 2)) / 3 / 2
-
-    reference = floor(q0 + c.dt * (v0 - mean_v) / std_v)
-    euler = floor(q0 + c.dt * v0)
-    average = floor(q0 + c.dt * (v0 + v1) / 2)
+    reference = floor(q0 + c.dt * (v0 - mean_v) / std_v, q1, scale[:nq])
+    euler = floor(q0 + c.dt * v0, q1, scale[:nq])
+    average = floor(q0 + c.dt * (v0 + v1) / 2, q1, scale[:nq])
     print(
         f"{c.system:20s} {nq:3d} {c.dt:6.3f}  {reference:20.4g} {euler:14.4g} {average:10.4g}"
         f"   std_v {np.array2string(std_v, precision=2, max_line_width=200)}",

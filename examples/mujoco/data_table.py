@@ -1,14 +1,13 @@
 """The committed MuJoCo files as a Markdown table, read from their cards and sizes:
-``python docs/studies/mujoco_scripts/data_table.py``."""
+``python examples/mujoco/data_table.py``."""
 
 import json
-
-import numpy as np
 
 from systems import mujoco_data as D
 
 print(
-    "| task | transitions | episodes | test episodes | policy steps | evaluation return at 5K / 50K / 100K / end | mean episode return | file |"
+    "| task | transitions | episodes | test episodes | policy steps "
+    "| evaluation return at 5K / 50K / 100K / end | mean episode return | file |"
 )
 print("|---|---|---|---|---|---|---|---|")
 for path in sorted(D.COMMITTED.glob("*.npz")):

@@ -1,5 +1,6 @@
 """The probes' one step: build a MuJoCo run, train it, score it, and print one line."""
 
+import tempfile
 import time
 
 import equinox as eqx
@@ -13,8 +14,9 @@ def score(run, label: str, build=C.build) -> dict:
     train, test and rollout errors and the seconds taken, and return the row's columns."""
     t = time.time()
     built = build(run)
-    model, meta = C.train(run, built, None, False)
-    r = C.evaluate(run, built, model, meta, None)[0]
+    with tempfile.TemporaryDirectory() as cache:  # a probe keeps no resume state
+        model, meta = C.train(run, built, cache, False)
+        r = C.evaluate(run, built, model, meta, cache)[0]
     print(
         f"{label}: train_mse {r['train_mse']:.4g} test_mse {r['test_mse']:.4g} "
         f"rollout_error {r['rollout_error']:.4g} ({time.time() - t:.0f} s)",

@@ -1,7 +1,7 @@
 """Claim 16's models on HalfCheetahFull-v0 (quick's cells, seed 0) trained with the inputs and
 outputs raw and standardised: the test and train MSE of each (docs/studies/mujoco.md).
 
-    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/standardise_probe.py [steps]
+    PYTHONPATH=. .venv/bin/python examples/mujoco/standardise_probe.py [steps]
 """
 
 import dataclasses

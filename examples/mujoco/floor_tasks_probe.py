@@ -3,7 +3,7 @@ on each of Fig. 7's tasks: quick's cell moved to the task (its dt and test lengt
 App. C's learning rate, ``steps`` steps. Built through the registry's option, as the experiment
 declares it (docs/studies/mujoco.md).
 
-    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/floor_tasks_probe.py [steps] [seed]
+    PYTHONPATH=. .venv/bin/python examples/mujoco/floor_tasks_probe.py [steps] [seed]
 """
 
 import sys

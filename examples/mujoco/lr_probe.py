@@ -2,7 +2,7 @@
 (2e-4) and at the one the reference's code hard-codes (5e-3), for ``steps`` steps on the
 cosine schedule: test and train MSE of each (docs/studies/mujoco.md).
 
-    PYTHONPATH=. .venv/bin/python docs/studies/mujoco_scripts/lr_probe.py [steps]
+    PYTHONPATH=. .venv/bin/python examples/mujoco/lr_probe.py [steps]
 """
 
 import dataclasses

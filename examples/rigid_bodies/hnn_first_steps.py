@@ -6,9 +6,9 @@ batch loss, whether the trainer flagged the run dead (non-finite), the extreme e
 the learned M^-1(q) over the first state of every training window, and the largest predicted
 acceleration with the window it occurs at::
 
-    python docs/studies/rigid_bodies_scripts/hnn_first_steps.py rotor 0 0.005 12
+    python examples/rigid_bodies/hnn_first_steps.py rotor 0 0.005 12
 
-(docs/studies/rigid_bodies.md, "The HNN at the paper's learning rate", quotes its output.)
+(docs/studies/rigid_bodies.md quotes its output.)
 """
 
 import dataclasses
