@@ -24,10 +24,12 @@ import datetime as _dt
 import inspect
 import shutil
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+import systems
 from systems import MAX_STEPS
 
 from . import data_loader, metrics
@@ -38,8 +40,31 @@ DAMPED_PREFIX = "damped_"
 LOADER_NAME = "decon_data.py"
 
 
-def _dataset_name(c, k_in_name: bool) -> str:
-    parts = [f"k{dict(c.system_params).get('k')}"] if k_in_name else []
+def _effective(c) -> dict:
+    """The system parameters of ``c`` as the built system holds them, defaults included, so
+    that a parameter given at its default value and one left out read the same."""
+    obj = systems.make(c.system, **dict(c.system_params))
+    out = {}
+    for key in systems.parameters(c.system):
+        value = getattr(obj, key, dict(c.system_params).get(key))
+        if value is not None and np.ndim(value):
+            value = tuple(float(v) for v in np.ravel(value))
+        out[key] = value
+    return out
+
+
+def _varying(configs) -> list[str]:
+    """The system parameters whose values differ across ``configs``: only these name datasets."""
+    values = [_effective(c) for c in configs]
+    keys = sorted({key for v in values for key in v})
+    return [key for key in keys if len({repr(v.get(key)) for v in values}) > 1]
+
+
+def _dataset_name(c, varying: Sequence[str]) -> str:
+    """Coordinates, training size, noise, friction, the parameters given explicitly (e.g.
+    masses1-1) and the seed; k where it differs between the datasets. The values every
+    parameter takes, defaults included, are the card entry's ``parameters``."""
+    parts = [f"k{dict(c.system_params).get('k')}"] if "k" in varying else []
     parts += [c.coordinates, f"n{c.n_train}"]
     if c.noise:
         parts.append(f"noise{c.noise:g}")
@@ -123,12 +148,14 @@ def export(
     if out.is_dir() and any(out.iterdir()) and not force:
         raise ValueError(f"--out {out} is not empty; name a new folder or pass --force")
     configs, notes = select(system, profile, k=k, seeds=seeds)
-    k_in_name = len({dict(c.system_params).get("k") for c in configs}) > 1
+    varying = _varying(configs)
     arrays: dict[str, dict] = {}
     entries: dict[str, dict] = {}
     order = sorted(configs.items(), key=lambda x: (_velocity_twin(x[0]), x[0].coordinates))
     for i, (c, names) in enumerate(order):
-        name = _dataset_name(c, k_in_name)
+        name = _dataset_name(c, varying)
+        if name in arrays:  # the same data under two configurations (a default given or not)
+            name += f"_{c.hash()[:8]}"
         progress(f"data: {i + 1}/{len(configs)} {name}")
         d = systems.make_dataset(c)
         a = {n: getattr(d, n) for n in data_loader.ARRAYS}
@@ -141,6 +168,7 @@ def export(
             "config_hash": c.hash(),
             "used_by_experiments": sorted(names),
             "angular": list(d.angular),
+            "parameters": _effective(c),
             "energy": energy_form(systems.make(c.system, **dict(c.system_params)), d),
         }
     sys_obj = systems.make(next(iter(configs)).system, **dict(next(iter(configs)).system_params))
@@ -152,7 +180,11 @@ def export(
         "system": {
             "name": system,
             "class": type(sys_obj).__name__,
-            "parameters": sorted({p for c in configs for p in c.system_params}, key=str),
+            # as the built systems hold them, defaults included; "varies": see each dataset
+            "parameters": {
+                key: ("varies" if key in varying else value)
+                for key, value in _effective(first).items()
+            },
             "dof": sys_obj.dof,
             "angular": list(sys_obj.angular),
             "n_args": sys_obj.n_args,
@@ -294,7 +326,8 @@ def card_markdown(card: dict) -> str:
         "",
         f"`{s['name']}` ({s['class']}): {s['dof']} degrees of freedom, angular coordinates "
         f"{s['angular']}, {s['n_args']} per-trajectory parameters (`args_*`); parameters "
-        f"{s['parameters'] or 'default'}.",
+        + ", ".join(f"{k} = {v}" for k, v in s["parameters"].items())
+        + " (varies: named in each dataset's name and its card entry's `parameters`).",
         "",
         s["description"],
         "",

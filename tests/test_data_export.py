@@ -93,6 +93,29 @@ def test_card_names_protocol_generator_suite_and_checksums(exported):
     assert "## Licence and citation" in readme
 
 
+def test_card_names_every_parameter_one_way(exported):
+    """The system's parameters and each dataset's are one mapping, keyed by the system's own
+    parameter names, defaults included: a parameter given at its default and one left out read
+    alike; a parameter that differs between the datasets reads "varies" at the top."""
+    import systems
+
+    _, cards = exported
+    card = cards["npz"]
+    names = systems.parameters(SYSTEM)
+    top = card["system"]["parameters"]
+    assert list(top) == names and top["k"] == K and top["g"] == 9.81
+    for name, e in card["datasets"].items():
+        params = e["parameters"]
+        assert list(params) == names
+        built = systems.make(SYSTEM, **dict(e["config"]["system_params"]))
+        np.testing.assert_allclose(params["lengths"], built.lengths)
+        for key, value in dict(e["config"]["system_params"]).items():  # what was given
+            np.testing.assert_allclose(params[key], value)
+    for key, value in top.items():
+        seen = {json.dumps(e["parameters"][key]) for e in card["datasets"].values()}
+        assert (value == "varies") == (len(seen) > 1), (key, value, seen)
+
+
 @pytest.mark.parametrize("fmt", data_loader.FORMATS)
 def test_verify_passes_then_names_a_damaged_array(exported, fmt, tmp_path, capsys):
     folder = _copy(exported, fmt, tmp_path)
