@@ -221,8 +221,6 @@ def make_figures(results_dir: Path, profile: str | None = None) -> list[Path]:
     figures score them as the verdicts do (at the worst error, ``kit.scored``) and mark them.
     An experiment without runs draws nothing; one broken figure does not stop the others.
     """
-    import matplotlib.pyplot as plt
-
     results_dir = Path(results_dir)
     runs, curves, profile = load_tables(results_dir, profile)
     outdir = results_dir / "figures"
@@ -235,7 +233,6 @@ def make_figures(results_dir: Path, profile: str | None = None) -> list[Path]:
             try:
                 written += study.figure(rows, curves, outdir)
             except Exception as e:  # noqa: BLE001 - one broken figure must not stop the others
-                plt.close("all")
                 print(f"figure {study.name} failed: {type(e).__name__}: {e}")
         for study in studies():
             if study.results_figure is None:
@@ -243,7 +240,6 @@ def make_figures(results_dir: Path, profile: str | None = None) -> list[Path]:
             try:
                 written += list(study.results_figure(results_dir) or [])
             except Exception as e:  # noqa: BLE001
-                plt.close("all")
                 print(f"figure {study.results_figure.__name__} failed: {type(e).__name__}: {e}")
     return written
 

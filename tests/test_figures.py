@@ -9,6 +9,7 @@ sections and rows."""
 
 import dataclasses
 import re
+from pathlib import Path
 
 import pytest
 from _synthetic import synthetic_tables
@@ -373,3 +374,18 @@ def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_cla
     three = [p for p in tested if [r[0] for r in p.ranges] == ["holds", "undecided", "contradicts"]]
     assert three, "no part that holds, then is undecided, then contradicted as the margin grows"
     assert "\n## Margin-dependent claims\n" in text
+
+
+def test_figures_are_drawn_without_pyplot():
+    """Every figure is a ``Figure`` saved by ``bench.studies._figure``: no module of the suite
+    goes through pyplot's global state or switches the backend."""
+    root = Path(__file__).resolve().parents[1]
+    offenders = [
+        f"{p.relative_to(root)}:{i}"
+        for p in sorted((root / "bench").rglob("*.py"))
+        for i, line in enumerate(p.read_text().splitlines(), 1)
+        if re.search(
+            r"import matplotlib\.pyplot|from matplotlib import pyplot|matplotlib\.use\(", line
+        )
+    ]
+    assert not offenders, offenders

@@ -58,7 +58,9 @@ def figure(results_dir) -> list[Path]:
     n = len(c0["frame_index"])
     fig = new_figure(figsize=(1.1 * n + 3.6, 1.1 * (len(picked) + 1) + 0.4))
     # n frame columns, a spacer, the curves
-    grid = fig.add_gridspec(len(picked) + 1, n + 2, width_ratios=[1] * n + [0.3, 3.2])
+    grid = fig.add_gridspec(
+        len(picked) + 1, n + 2, width_ratios=[1] * n + [0.3, 3.2], wspace=0.08, hspace=0.12
+    )
     dt = c0["t"][1] - c0["t"][0] if len(c0["t"]) > 1 else 1.0
     panels = [("truth", c0["frames_true"])] + [
         (f"{SHORT[r['model']]} s{r['seed']}", r["curves"]["frames_pred"]) for r in picked
@@ -73,7 +75,6 @@ def figure(results_dir) -> list[Path]:
                 ax.set_ylabel(label, fontsize=8, rotation=0, ha="right", va="center", labelpad=6)
             if i == 0:
                 ax.set_title(f"t={c0['frame_index'][j] * dt:.1f}s", fontsize=7)
-    grid.update(wspace=0.08, hspace=0.12)
     ax = fig.add_subplot(grid[:, n + 1])
     ax.set_yscale("log")  # before the ticks move: a scale change resets them
     for r in rows:

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...core._errors import one_line
 from ...core._provenance import provenance
-from .._figure import save_figure
+from .._figure import save_figure, subplots
 from ._core import (
     COLUMNS,
     METHOD_NOTES,
@@ -154,15 +154,10 @@ def _load(results_dir):
 
 def stability_figure(results_dir="results") -> list[Path]:
     """Four panels: error vs dt, stiff solvers' evaluations, tolerance vs drift, long horizon."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     df = _load(results_dir)
     if df is None or df.empty:
         return []
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    fig, axes = subplots(2, 2, figsize=(11, 8))
 
     ax = axes[0, 0]
     d = df[(df.case == "dt_sweep") & (df.metric == "final_error")]
