@@ -170,8 +170,8 @@ def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):
     from types import SimpleNamespace
 
     import bench._compare as C
-    import bench.studies.paper._replication as replication
-    import bench.studies.paper._rules as rules
+    import bench.kit._claims as rules
+    import bench.kit._replication as replication
 
     def verdict(key, text, detail):
         return SimpleNamespace(key=key, claim=int(key), verdict=text, detail=detail, parts=[])

@@ -1,4 +1,4 @@
-"""The margin policy: every rule reads its margins from bench.studies.paper.policy.
+"""The margin policy: every rule reads its margins from bench.kit.policy.
 
 A margin typed into a rule (a number, a log of a number, a Margin built by hand) fails here:
 statically, no part constructor in the rule modules receives a literal, and no rule module
@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 from _synthetic import synthetic_tables
 
+from bench import kit as R
+from bench.kit import policy
 from bench.studies import paper as C
-from bench.studies.paper import kit as R
-from bench.studies.paper import policy
 
 RULES = Path(C.__file__).parent
 CONSTRUCTORS = {"greater", "at_most", "equivalent", "band", "below", "share", "_part"}
@@ -91,7 +91,7 @@ def _margins(verdicts):
 
 def test_every_part_has_a_margin_of_the_policy(tables):
     stated = {(m.quantity, m.value) for m in policy.stated_margins()}
-    got = _margins(C.evaluate_claims(*tables))
+    got = _margins(R.evaluate_claims(*tables))
     assert len({k for k, *_ in got}) >= 8  # every claim of these tables has parts
     for key, name, q, value, label in got:
         base = policy.POLICY[q].margin
@@ -100,10 +100,10 @@ def test_every_part_has_a_margin_of_the_policy(tables):
 
 
 def test_every_part_moves_with_the_policy(tables):
-    before = _margins(C.evaluate_claims(*tables))
+    before = _margins(R.evaluate_claims(*tables))
     moved = {q: policy.POLICY[q].band[1] for q in policy.POLICY}
     with policy.override(**moved):
-        after = _margins(C.evaluate_claims(*tables))
+        after = _margins(R.evaluate_claims(*tables))
     assert [(k, q) for k, _, q, *_ in before] == [(k, q) for k, _, q, *_ in after]
     for (key, name, q, v0, label), (*_, v1, _l) in zip(before, after, strict=True):
         if "(stated:" in label:

@@ -14,6 +14,6 @@ from . import paper, tradeoff  # noqa: I001 - registration order
 from . import stability
 from . import learning
 from . import perf
-from .paper._budget import run_seconds
+from .paper.campaign import run_seconds
 
 __all__ = ["learning", "paper", "perf", "run_seconds", "stability", "tradeoff"]
