@@ -437,3 +437,13 @@ def test_paper_gpu_packs_every_stored_row_into_its_out_folder(tmp_path):
         packed = sorted(Path(m.name).name for m in tar.getmembers() if m.name.endswith(".json"))
     assert packed == rows
     assert not (out / "rows.part").exists()
+
+
+def test_the_measured_costs_are_read_from_their_data_file():
+    from bench.studies.paper.campaign import _budget as B
+
+    assert all(table["about"] for name, table in B.COSTS.items() if name != "about")
+    assert B.WALL_S[("node", None)] == (2.9, 3.4)
+    assert B.STEP_COST[("pixels", "hnn", 200, 200)] == (15.0, 4.7)
+    assert B.DATA_MS_PER_S[("three_body", None)] == 1.8
+    assert B.TRADEOFF_S == (274.0 - 106.0 - 78.0) / 2 and B.SWEEP_RATIO == 25.2 / 23.4

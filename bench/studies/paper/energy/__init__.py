@@ -1,5 +1,5 @@
 """Fig. 2 (energy): the experiment and claim 1's verdict rule; the figure is
-:mod:`._energy_figure`'s, which draws the rule's own line."""
+:mod:`._figure`'s, which draws the rule's own line."""
 
 from __future__ import annotations
 

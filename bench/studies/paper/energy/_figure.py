@@ -1,7 +1,7 @@
 """Fig. 2 (energy): what the report says about it, drawn. Left: energy violation vs rollout
 error, one point per run of the Fig. 2 cells, failed and diverged runs where claim 1 scores them
 (the worst error, marked), with claim 1 (c)'s own line: the Theil-Sen slope over the Fig. 2
-models' runs (:func:`._energy_cells.proportionality`, the rule's function) and its 90% interval.
+models' runs (:func:`._cells.proportionality`, the rule's function) and its 90% interval.
 Right: energy violation vs time (geometric mean over runs) per model, from the curves."""
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def _seed_sets(runs: pd.DataFrame) -> tuple[tuple[int, ...], tuple[int, ...]]:
 
 
 def _report_seeds(runs: pd.DataFrame, curves) -> tuple[int, ...] | None:
-    """The seeds the report reads claim 1 on (:func:`._replication.judge`: the profile's
+    """The seeds the report reads claim 1 on (:func:`bench.kit.judge`: the profile's
     seeds, or both sets pooled where they agree); None where it cannot be judged."""
     from ....kit import judge
 
@@ -63,7 +63,7 @@ def _report_seeds(runs: pd.DataFrame, curves) -> tuple[int, ...] | None:
 def fig2_line(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> dict | None:
     """Claim 1 (c)'s line as the report reads it, from the Fig. 2 cells of ``runs``:
     ``slope``, ``lo``, ``hi`` (the rule's Theil-Sen slope and its 90% interval,
-    :func:`._energy_cells.proportionality`) over the Fig. 2 models' scored runs of the reading's
+    :func:`._cells.proportionality`) over the Fig. 2 models' scored runs of the reading's
     ``seeds``: the profile's seeds, or (with ``curves``) those the report reads claim 1 on,
     both seed sets pooled where they agree (:func:`_report_seeds`); ``intercept`` (median
     of log EV minus slope times the median of log error, for drawing); ``fitted``, the rows it

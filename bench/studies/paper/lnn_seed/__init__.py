@@ -40,7 +40,7 @@ from ....kit import (
 from .._common import CLAIM_TITLES, UNIT_DOUBLE_PENDULUM
 from ..hnn_seed import fmt as _f
 from ..hnn_seed import geometric_mean as _gm
-from . import _diagnosis as _lnn_diagnosis
+from . import _diagnosis as _diagnosis
 from ._short import short_part
 
 # Costs measured on this 2-core machine, the paper-core campaign paused (other
@@ -124,8 +124,8 @@ LNN_SEED = Experiment(
 # initialisation; ReLU baseline), 300 epochs of 2000 steps. Its L2 term (1e-6 ||theta||^2 /
 # 512 on a loss summed over the batch) is 1e-12 on our mean loss: left out. The paper profile
 # runs its steps; a CPU affords 1/20 of them at paper-core and 1/300 at quick (ms per step:
-# _budget.STEP_COST), so the peak learning rate is raised by the same factor (lr x steps, the
-# distance Adam can travel, as the notebook's).
+# campaign/costs.json's step_cost), so the peak learning rate is raised by the same factor (lr x
+# steps, the distance Adam can travel, as the notebook's).
 NOTEBOOK_BOX = (0.0, 2.0 * math.pi, -10.0, 10.0)  # q in [0, 2 pi)^2, qdot in [-10, 10]^2
 NOTEBOOK_STEPS = 300 * 2000
 NOTEBOOK_LR = {"lnn": 1e-5, "node_so": 4e-5}
@@ -277,7 +277,7 @@ def reading(r0: pd.DataFrame):
     (rollout error against the best trivial predictor). (c) Fig. 2(a), "the LNN and baseline
     model perform similarly ... over short time periods": an *equivalent* part (TOST) at the
     error margin on ``log(rollout error LNN / baseline)`` over the first 10 s (Fig. 2(a)'s
-    window; :mod:`._lnn_short`), judged where both models learned. Every part holding:
+    window; :mod:`._short`), judged where both models learned. Every part holding:
     reproduced; (a) or (c) contradicted: not reproduced, or partly where the other holds; else
     inconclusive. A diverged or failed run scores the table's worst value. The notebook's
     last-step metric is reported beside (``extra``), not tested.
@@ -422,10 +422,10 @@ def section(results_dir) -> str:
 
 def _diagnosis(results_dir: Path) -> list[str]:
     """The diagnosis table (``python -m bench diagnose-lnn``), where the folder has one."""
-    path = results_dir / _lnn_diagnosis.FILE
+    path = results_dir / _diagnosis.FILE
     if not path.exists():
         return ["", "(No LNN diagnosis in this folder: `python -m bench diagnose-lnn`.)"]
-    return ["", _lnn_diagnosis.summary(pd.read_csv(path))]
+    return ["", _diagnosis.summary(pd.read_csv(path))]
 
 
 def figure(results_dir) -> list[Path]:

@@ -5,8 +5,8 @@ beside the constant-velocity predictor.
 
 Its runs read each task's file (``systems.mujoco_data``) and exist only where the file is there;
 the smoke profile runs on the random-control stand-in instead (a pipeline check: the rule gives
-no signed verdict on it). The rule and the section are in ``_mujoco_rule`` and
-``_mujoco_section``. Facts and differences: docs/studies/mujoco.md.
+no signed verdict on it). The rule and the section are in ``_rule`` and
+``_section``. Facts and differences: docs/studies/mujoco.md.
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ has runs. The task, the models, the budgets, the seed's protocol read from its c
 quick's latent HNN does not learn the motion: docs/studies/pixels.md.
 
 This module holds the figure and registers the two studies; the experiments, the verdict rules
-and the report section are in ``_pixel_experiments``, ``_pixel_rule`` and ``_pixel_section``.
+and the report section are in ``_experiments``, ``_rule`` and ``_section``.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ the increment (R_a - I) z, a field the MLP can represent, whose flow (RK4 at the
 in with rate 1 - cos a; the HNN's field is divergence-free, cannot contract, and learns the
 nearest rotation. The mismatch handicaps the baseline, not the HNN. The diagnosis also trains
 the HNN without the auxiliary latent loss (aux weight 0) on every seed: its ``recon_mse`` beside
-the protocol's is what claim 11 (c) compares (``_pixel_aux``).
+the protocol's is what claim 11 (c) compares (``_aux``).
 
 A variant's run is read from a folder's stored rows where its configuration (by
 ``config_hash``) is there: the results folder (the protocol's runs: the campaign's), or a folder

@@ -12,7 +12,7 @@ margin is ruled out.
 
 Where the data are: a run's configuration has no auxiliary weight, so no stored run is trained
 without it; the HNN seed's pixel diagnosis (``python -m bench diagnose-hnn-seed-pixels``,
-``_pixel_ablation.HNN_SEED``, variant ``no auxiliary loss``) trains them and writes their
+``_ablation.HNN_SEED``, variant ``no auxiliary loss``) trains them and writes their
 ``recon_mse`` beside the protocol's to ``hnn_seed_pixel_diagnosis.csv`` (rows with an
 ``aux_weight`` column). A runs table has no such rows: there the part is *not tested*, with the
 reason; the report's pixel section judges it on the diagnosis's rows (:func:`diagnosis_line`).
@@ -31,7 +31,7 @@ import pandas as pd
 from ....kit import Gate, Part, at_most, gated, policy, undecided
 
 NAME = "(c) the auxiliary loss does not degrade the autoencoder: log(recon MSE HNN with / without)"
-NO_AUX = "no auxiliary loss"  # the diagnosis's variant (``_pixel_ablation.HNN_SEED``)
+NO_AUX = "no auxiliary loss"  # the diagnosis's variant (``_ablation.HNN_SEED``)
 WHERE = (
     "`python -m bench diagnose-hnn-seed-pixels` trains them (variant "
     f"'{NO_AUX}', hnn_seed_pixel_diagnosis.csv; the report's pixel section reads it there)"

@@ -108,7 +108,7 @@ def reading(r: pd.DataFrame, protocol: str, aux: bool = True):
     fit better than the MLP beyond the loss margin. Failed runs score the worst value. (c) the
     seed's "the auxiliary loss did not degrade the autoencoder's performance": *at most* on
     ``log(recon MSE of the HNN with / without the auxiliary loss)`` at the loss margin
-    (:mod:`._pixel_aux`); a runs table has no run trained without it (the HNN seed's pixel
+    (:mod:`._aux`); a runs table has no run trained without it (the HNN seed's pixel
     diagnosis trains them), so there it reads *not tested*, with the reason."""
     metric, label, other, other_label = READINGS[protocol]
     effect = f"log {label} ratio MLP / HNN"
@@ -157,7 +157,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     """Claim 11 (HNN seed, Table 1's pixel pendulum): "The HNN and its baseline reached
     comparable train and test losses, but once again, the HNN dramatically outperformed the
     baseline on the energy metric" (seeds/003 line 60); and (c) "the auxiliary loss did not
-    degrade the autoencoder's performance" (line 58; :mod:`._pixel_aux`: not tested on a runs
+    degrade the autoencoder's performance" (line 58; :mod:`._aux`: not tested on a runs
     table, judged in the report's pixel section on the HNN seed's pixel diagnosis).
 
     Two readings, each by :func:`reading`: ours (``pixel_pendulum_hnn``: AdamW with the suite's
@@ -172,7 +172,7 @@ def claim_11(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     detail. Headline (a).
 
     The seed's protocol carries two elements that act on the models unequally (the diagnosis
-    ``diagnose-hnn-seed-pixels``, ``_pixel_ablation.HNN_SEED``): its L2 term keeps the
+    ``diagnose-hnn-seed-pixels``, ``_ablation.HNN_SEED``): its L2 term keeps the
     autoencoder from fitting at paper-core's sizes, and its Euler training step, rolled out by
     RK4 at the test, makes the MLP's learned field spiral in while the HNN's divergence-free
     field cannot. The report reads this rule on the diagnosis's runs with those elements ours

@@ -14,7 +14,7 @@ import pandas as pd
 from ....core._experiments import Experiment
 from ....kit import Protocol, bad_rows, by_seed_set, learned_text, policy, protocol_table
 from ..hnn_seed import fmt, geometric_mean
-from . import _ablation as _pixel_ablation
+from . import _ablation as _ablation
 from ._aux import diagnosis_line
 from ._experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_MSE, SHORT, _rows
 from ._rule import _learned, reading, readings, seed_protocol
@@ -80,8 +80,8 @@ def section(results_dir) -> str:
                 + f" | {fmt(seed_numbers.get(model, math.nan))} | "
                 f"{fmt(geometric_mean(g.get('latent_energy_drift')))} |"
             )
-    diag = _pixel_ablation.read(_pixel_ablation.VIN, results_dir, profile)
-    seed_diag = _pixel_ablation.read(_pixel_ablation.HNN_SEED, results_dir, profile)
+    diag = _ablation.read(_ablation.VIN, results_dir, profile)
+    seed_diag = _ablation.read(_ablation.HNN_SEED, results_dir, profile)
     return "\n".join(
         [
             *lines,
@@ -91,7 +91,7 @@ def section(results_dir) -> str:
             *diagnosis_line(seed_diag, _learned),
             "",
             *seed_lines(t, diag, seed_diag),
-            *_pixel_ablation.lines(results_dir, profile),
+            *_ablation.lines(results_dir, profile),
         ]
     )
 
@@ -230,13 +230,13 @@ def seed_lines(
         return []
     gate = policy.margin("learning", squared=True).value
     t = t.assign(
-        _gain=_pixel_ablation.gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours")
+        _gain=_ablation.gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours")
     )
     t = t.assign(_learned=t["_gain"] >= gate)
     ablation = None
     if diag is not None and len(diag):
-        ablation = diag[diag["variant"] != _pixel_ablation.PROTOCOL].copy()
-        ablation["_gain"] = _pixel_ablation.gain(ablation)
+        ablation = diag[diag["variant"] != _ablation.PROTOCOL].copy()
+        ablation["_gain"] = _ablation.gain(ablation)
     lines = [
         f"Per seed: the models that learn the motion (pixel MSE {gate:g}x below holding the "
         "first frame, the claims' gate), the rest with their factor, and the autoencoder's "
@@ -297,9 +297,9 @@ def seed_lines(
                 )
         if seed_diag is not None and len(seed_diag):
             sd = seed_diag[
-                (seed_diag["seed"] == s) & (seed_diag["variant"] != _pixel_ablation.PROTOCOL)
+                (seed_diag["seed"] == s) & (seed_diag["variant"] != _ablation.PROTOCOL)
             ]
-            gains = _pixel_ablation.gain(sd)
+            gains = _ablation.gain(sd)
             runs = [
                 f"{SHORT.get(r['model'], r['model'])} {r['variant']} {x:.3g}x"
                 for (_, r), x in zip(sd.iterrows(), gains, strict=True)
@@ -323,7 +323,7 @@ def variant_lines(diag: pd.DataFrame | None) -> list[str]:
     if diag is None or not len(diag):
         return []
     out = []
-    d = diag[diag["variant"] != _pixel_ablation.PROTOCOL]
+    d = diag[diag["variant"] != _ablation.PROTOCOL]
     for name, g in d.groupby("variant", sort=False):
         if set(g["model"]) != {"hnn", "node"} or g["seed"].nunique() < 2:
             continue

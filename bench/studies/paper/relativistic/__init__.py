@@ -13,8 +13,8 @@ seed's protocol's, the rollout-trained reading is ``7 (rollout loss)``.
 and why: docs/studies/relativistic.md.
 
 This module holds the figures and registers the two studies; the experiments, the verdict rule
-and the report section are in ``_relativistic_experiments``, ``_relativistic_rule`` and
-``_relativistic_section``.
+and the report section are in ``_experiments``, ``_rule`` and
+``_section``.
 """
 
 from __future__ import annotations

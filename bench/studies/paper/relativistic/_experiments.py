@@ -1,6 +1,6 @@
 """Claim 7's two experiments on the relativistic particle: ``relativistic`` (the Deconstructing
 paper's rollout training) and ``relativistic_seed`` (the LNN seed's protocol), with the cells
-each runs. What the seed's protocol keeps and changes: :mod:`.relativistic`.
+each runs. What the seed's protocol keeps and changes: :mod:`bench.studies.paper.relativistic`.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 paper-core judges every claim at k = 2; the ``paper-k`` selection runs the same cells at
 k = 1, 3 and 4 (``make paper-k``). Both are cells of the ``paper`` profile, stored in one
 folder. This reading judges the claims whose experiments sweep k (:data:`LINK_CLAIMS`) with the
-same engine (:func:`._replication.judge`: seeds 0-4, the replication seeds 5-9, pooled where they
+same engine (:func:`bench.kit.judge`: seeds 0-4, the replication seeds 5-9, pooled where they
 agree), once per k and once over every k, where the rule pools k as the paper does:
 
 - claim 4 (Fig. 5) averages each seed's edge over the k present (the paper's plotting code

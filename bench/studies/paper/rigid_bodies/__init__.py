@@ -155,7 +155,7 @@ def claim_13(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
 
     (a) "second order structure seems to account for much of the difference between NODE and
     HNN models" (seeds/004, Fig. 9's caption), on every system: claim 3's share reading
-    (:func:`.kit.so_share`), per seed ``closed - s * gap > 0`` with ``closed = log(err NODE /
+    (:func:`bench.kit.so_share`), per seed ``closed - s * gap > 0`` with ``closed = log(err NODE /
     err NODE+SO)`` and ``gap = log(err NODE / err HNN)``, both sign-flipped where the NODE leads
     (the caption's "difference" runs either way: on the rotor and the magnet pendulum the paper
     has the NODE ahead); judged where the difference exceeds the error margin (a condition);
