@@ -40,7 +40,7 @@ from ....kit import (
 from .._common import CLAIM_TITLES, UNIT_DOUBLE_PENDULUM
 from ..hnn_seed import fmt as _f
 from ..hnn_seed import geometric_mean as _gm
-from . import _diagnosis as _diagnosis
+from . import _diagnosis as diagnosis
 from ._short import short_part
 
 # Costs measured on this 2-core machine, the paper-core campaign paused (other
@@ -422,10 +422,10 @@ def section(results_dir) -> str:
 
 def _diagnosis(results_dir: Path) -> list[str]:
     """The diagnosis table (``python -m bench diagnose-lnn``), where the folder has one."""
-    path = results_dir / _diagnosis.FILE
+    path = results_dir / diagnosis.FILE
     if not path.exists():
         return ["", "(No LNN diagnosis in this folder: `python -m bench diagnose-lnn`.)"]
-    return ["", _diagnosis.summary(pd.read_csv(path))]
+    return ["", diagnosis.summary(pd.read_csv(path))]
 
 
 def figure(results_dir) -> list[Path]:

@@ -14,7 +14,7 @@ import pandas as pd
 from ....core._experiments import Experiment
 from ....kit import Protocol, bad_rows, by_seed_set, learned_text, policy, protocol_table
 from ..hnn_seed import fmt, geometric_mean
-from . import _ablation as _ablation
+from . import _ablation
 from ._aux import diagnosis_line
 from ._experiments import LABELS, PIXEL_HNN, PIXEL_HNN_SEED, SEED_ENERGY_MSE, SHORT, _rows
 from ._rule import _learned, reading, readings, seed_protocol
@@ -229,9 +229,7 @@ def seed_lines(
     if not len(t) or "pixel_mse_static" not in t:
         return []
     gate = policy.margin("learning", squared=True).value
-    t = t.assign(
-        _gain=_ablation.gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours")
-    )
+    t = t.assign(_gain=_ablation.gain(t), _protocol=np.where(seed_protocol(t), "seed's", "ours"))
     t = t.assign(_learned=t["_gain"] >= gate)
     ablation = None
     if diag is not None and len(diag):
@@ -296,9 +294,7 @@ def seed_lines(
                     f"({a['_gain']:.3g}x)."
                 )
         if seed_diag is not None and len(seed_diag):
-            sd = seed_diag[
-                (seed_diag["seed"] == s) & (seed_diag["variant"] != _ablation.PROTOCOL)
-            ]
+            sd = seed_diag[(seed_diag["seed"] == s) & (seed_diag["variant"] != _ablation.PROTOCOL)]
             gains = _ablation.gain(sd)
             runs = [
                 f"{SHORT.get(r['model'], r['model'])} {r['variant']} {x:.3g}x"
