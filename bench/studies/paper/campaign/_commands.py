@@ -1,6 +1,6 @@
-"""The paper's verbs of ``python -m bench``: the campaign's estimate and sweep, and the
-diagnoses of the plain HNN, the double pendulum's LNNs and the pixel protocols (the VIN's
-auxiliary loss, the HNN seed's optimiser and training step)."""
+"""The campaign's verbs of ``python -m bench``: ``estimate`` (runs and hours per claim of a
+profile's campaign) and ``campaign`` (its sweep, claim by claim). The studies' diagnoses
+register their own verbs, in their folders."""
 
 from __future__ import annotations
 
@@ -11,11 +11,9 @@ from ..._options import (
     check_sweep_args,
     int_arg,
     run_experiments,
-    seed_list,
     sweep_options,
     usable_results,
 )
-from ..pixels._ablation import ABLATIONS
 
 
 def _estimate_arguments(p):
@@ -84,66 +82,6 @@ def _rep(args, seeds, prior, order, claims):
         order=order,
         claims=claims,
     )
-
-
-def _lnn_arguments(p):
-    p.add_argument("--profile", default="quick", help="smoke, quick, paper or paper-core")
-
-
-def _diagnose_lnn(args) -> int:
-    from ..lnn_seed._diagnosis import FILE, diagnose, summary
-
-    results = usable_results(args)
-    df = diagnose(args.profile, results)
-    print(summary(df))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
-
-
-def _hnn_arguments(p):
-    p.add_argument("--profile", default="paper-core", help="smoke, quick, paper or paper-core")
-    p.add_argument(
-        "--steps", type=int_arg("steps"), default=None, help="probe steps (default: by profile)"
-    )
-
-
-def _diagnose_hnn(args) -> int:
-    from ....core._store import read_rows, rows_frame
-    from ..hnn_diagnosis import FILE, diagnose, summary
-
-    results = usable_results(args)
-    df = diagnose(args.profile, results, steps=args.steps)
-    print(summary(df, rows_frame(read_rows(results))))
-    print(f"wrote {results / FILE} ({len(df)} rows)")
-    return 0
-
-
-def _ablation_arguments(p):
-    p.add_argument("--profile", default="paper-core", help="smoke, quick or paper-core")
-    p.add_argument("--seeds", default=None, metavar="0,1", help="only these seeds")
-    p.add_argument(
-        "--runs-from",
-        action="append",
-        default=[],
-        metavar="DIR",
-        help="a results folder holding runs of the variants' configurations (read by "
-        "config_hash instead of training them again); repeatable",
-    )
-
-
-def _ablation_command(ablation) -> Command:
-    def run(args) -> int:
-        from ..pixels._ablation import diagnose, summary
-
-        results = usable_results(args)
-        df = diagnose(
-            ablation, args.profile, results, seeds=seed_list(args.seeds), runs_from=args.runs_from
-        )
-        print(summary(ablation, df))
-        print(f"wrote {results / ablation.file} ({len(df)} rows)")
-        return 0
-
-    return Command(ablation.command, ablation.help, run, _ablation_arguments, ablation.help)
 
 
 def _campaign_arguments(p):
@@ -226,47 +164,6 @@ def _campaign(args) -> int:
     return 0
 
 
-def _power_arguments(p):
-    p.add_argument(
-        "--simulations",
-        type=int_arg("simulations"),
-        default=2000,
-        help="draws per part and number of seeds (default 2000)",
-    )
-
-
-def _power(args) -> int:
-    from pathlib import Path
-
-    from ....core._query import load_tables
-    from ....kit import judge, power_lines, power_table
-
-    results = Path(args.results)
-    runs, curves, profile = load_tables(results)
-    if not len(runs):
-        raise ValueError(f"{results} holds no runs: nothing to simulate")
-    j = judge(runs, curves, profile, loso=False)
-    table = power_table(j.final, sims=args.simulations)
-    out = results / "power.csv"
-    table.to_csv(out, index=False)
-    print("\n".join(power_lines(table)) or "no undecided part")
-    print(f"wrote {out} ({len(table)} parts)")
-    return 0
-
-
-_POWER_HELP = (
-    "the verdict engine's power: each part's chance to sign at 5 and 10 seeds at its observed "
-    "effect and spread, and the seeds that would decide the undecided ones: <results>/power.csv"
-)
-_LNN_HELP = (
-    "the learned d2L/dqdot2 of the double pendulum's LNNs at init and along rollouts "
-    ": <results>/lnn_diagnosis.csv"
-)
-_HNN_HELP = (
-    "the first training steps of the plain HNN on the spring, replayed and probed "
-    "(claims 1 and 3): <results>/hnn_diagnosis.csv"
-)
-
 COMMANDS = tuple(
     register_command(c)
     for c in (
@@ -276,10 +173,6 @@ COMMANDS = tuple(
             _estimate,
             _estimate_arguments,
         ),
-        Command("power", _POWER_HELP, _power, _power_arguments, _POWER_HELP),
-        Command("diagnose-lnn", _LNN_HELP, _diagnose_lnn, _lnn_arguments, _LNN_HELP),
-        Command("diagnose-hnn", _HNN_HELP, _diagnose_hnn, _hnn_arguments, _HNN_HELP),
-        *(_ablation_command(a) for a in ABLATIONS),
         Command(
             "campaign",
             "sweep a profile's claim experiments claim by claim (make paper-core runs it niced "

@@ -40,6 +40,7 @@ from ....kit import (
 from .._common import CLAIM_TITLES, UNIT_DOUBLE_PENDULUM
 from ..hnn_seed import fmt as _f
 from ..hnn_seed import geometric_mean as _gm
+from . import _commands  # noqa: F401 - registers diagnose-lnn
 from . import _diagnosis as diagnosis
 from ._short import short_part
 

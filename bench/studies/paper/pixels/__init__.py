@@ -23,6 +23,7 @@ from ....core._studies import Study, register_study
 from ....kit import new_figure, save_figure
 from .._common import CLAIM_TITLES
 from ..hnn_seed import geometric_mean
+from . import _commands  # noqa: F401 - registers the diagnoses' verbs
 from ._experiments import (
     ALL_EXPERIMENTS,
     EXPERIMENTS,
