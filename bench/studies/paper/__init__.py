@@ -27,6 +27,8 @@ from ._common import (
     SPRING_PAPER,
     SYMREG_WEIGHTS,
     SYSTEMS,
+    initial_ok,
+    shared_overrides,
 )
 from .campaign import MS_PER_STEP, PAPER_EXPERIMENTS, WALL_S, estimate_seconds, make_bench_seconds
 from .relativistic import (
@@ -52,6 +54,8 @@ __all__ = [
     "SYSTEMS",
     "WALL_S",
     "estimate_seconds",
+    "initial_ok",
     "make_bench_seconds",
+    "shared_overrides",
     "velocity_scores",
 ]
