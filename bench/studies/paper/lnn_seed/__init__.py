@@ -392,7 +392,7 @@ def section(results_dir) -> str:
         "rollout error |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    diag = [*_protocols(Path(results_dir)), *_diagnosis(Path(results_dir))]
+    diag = [*_protocols(Path(results_dir)), *_diagnosis_lines(Path(results_dir))]
     notebook, _ = _rows(Path(results_dir), LNN_SEED_NOTEBOOK)
     if not len(rows) and not len(notebook):
         return "\n".join([*lines, "| (no runs) | | | | | | | | | | |", *diag])
@@ -421,7 +421,7 @@ def section(results_dir) -> str:
     return "\n".join([*lines, *diag])
 
 
-def _diagnosis(results_dir: Path) -> list[str]:
+def _diagnosis_lines(results_dir: Path) -> list[str]:
     """The diagnosis table (``python -m bench diagnose-lnn``), where the folder has one."""
     path = results_dir / diagnosis.FILE
     if not path.exists():
