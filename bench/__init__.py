@@ -1,8 +1,9 @@
 """decon-bench: metrics, training, the sweep runner, the CLI, tables, figures and the report.
 
 Layers, each importing only those below it: ``bench.core`` (experiments, training, metrics,
-runner, store, query layer, study registry) <- ``bench.studies`` (the paper experiments with
-their verdict rules and figures, the trade-off, the stability study, perf) <- the CLI
+runner, store, query layer, study registry) <- ``bench.kit`` (the claims kit: parts, gates,
+verdicts, the policy, claim evaluation and replication) <- ``bench.studies`` (the paper's
+studies, one folder each, the trade-off, the stability study, perf) <- the CLI
 (``bench._cli``) and the report (``bench._report``). Importing ``bench`` registers the built-in
 studies and changes nothing in the process: the entry points set threads and the compilation
 cache up (``bench.core._env.setup_process``).

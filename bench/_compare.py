@@ -195,7 +195,7 @@ def _cell_label(row: pd.Series) -> str:
 
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
     from .core._query import row_cell_keys
-    from .studies.paper.kit import scored
+    from .kit import scored
 
     def prep(df):
         df = df.assign(
@@ -255,8 +255,7 @@ def _runs(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
 
 
 def _claims(ra, ca, pa, rb, cb, pb) -> pd.DataFrame:
-    from .studies.paper._replication import judge
-    from .studies.paper._rules import restrict_all
+    from .kit import judge, restrict_all
 
     rows_a, rows_b = restrict_all(ra, pa), restrict_all(rb, pb)
     ja = judge(ra, ca, pa, restricted=rows_a)
@@ -304,7 +303,7 @@ def _absent(v) -> bool:
 
 def _claims_with_runs(restricted: dict[int, pd.DataFrame]) -> set[int]:
     """The claims with at least one stored row of their experiments (``restricted``: each
-    claim's rows, :func:`~bench.studies.paper._rules.restrict_all`)."""
+    claim's rows, :func:`~bench.kit.restrict_all`)."""
     return {claim for claim, rows in restricted.items() if len(rows)}
 
 

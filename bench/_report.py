@@ -45,7 +45,7 @@ from .core._query import (
 )
 from .core._store import compare_folders, load_runs
 from .core._studies import ReportContext, report_sections, studies
-from .studies._text import folder_label, md_escape
+from .kit import folder_label, md_escape
 
 __all__ = ["write_report"]
 

@@ -236,7 +236,7 @@ def beside(scores: pd.DataFrame, reference, min_seeds: int = 2) -> tuple[str, di
     their median rollout error over seeds."""
     from .core._query import row_cell_keys
     from .core._store import load_runs
-    from .studies.paper.kit import scored
+    from .kit import scored
 
     if not Path(reference).is_dir():
         raise ValueError(f"reference folder {reference} does not exist")

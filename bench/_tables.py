@@ -12,10 +12,10 @@ import pandas as pd
 
 from .core._experiments import expand
 from .core._query import cell_key, option, params_of, parse_pairs, row_cell_keys, variant
-from .studies._text import fmt as _fmt
-from .studies._text import md_escape as _md_escape
-from .studies.paper import MODEL_LABELS, TRIVIAL_MODELS, discrimination, velocity_scores
-from .studies.paper._discrimination import several_rates
+from .kit import MODEL_LABELS, TRIVIAL_MODELS, discrimination, several_rates
+from .kit import fmt as _fmt
+from .kit import md_escape as _md_escape
+from .studies.paper import velocity_scores
 
 
 def _pm(mean, sem) -> str:
@@ -127,7 +127,7 @@ def _discrimination_lines(rows: pd.DataFrame) -> list[str]:
 
 def discrimination_groups(rows: pd.DataFrame) -> list:
     """Whether an experiment's test set discriminates, per comparison group (system, k,
-    friction, initial state): :func:`bench.studies.paper.kit.discrimination` of each group,
+    friction, initial state): :func:`bench.kit.discrimination` of each group,
     named ``"system=..., k=..."``."""
     if not len(rows):
         return []

@@ -28,7 +28,7 @@ GPU = "results/reference/paper_gpu"  # the paper profile on a GPU, where one was
 BEGIN, END = "<!-- findings:begin -->", "<!-- findings:end -->"
 FIGURE = "results/reference/headlines"  # each claim's headline at both budgets
 _HEADER = "| claim | statement | verdict |"
-PROTOCOL_HEADER = "| protocol | ours | the seed's |"  # bench.studies.paper._protocols.HEADER
+PROTOCOL_HEADER = "| protocol | ours | the seed's |"  # bench.kit._protocols.HEADER
 
 
 def claims_table(report: str) -> dict[str, dict[str, str]]:
@@ -357,7 +357,7 @@ def current(readme: Path = README) -> str:
 
 def draw(root: Path = ROOT) -> list[Path]:
     """The headline figure from the budgets' ``headlines.csv`` (each report writes its own)."""
-    from .studies.paper._headlines import fig_headlines
+    from .kit import fig_headlines
 
     return fig_headlines({b: root / d for b, d in BUDGETS.items()}, root / FIGURE)
 

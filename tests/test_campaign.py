@@ -9,8 +9,8 @@ import pytest
 from bench.core import _experiments as E
 from bench.core import _store
 from bench.studies import paper as P
-from bench.studies.paper import _campaign as C
 from bench.studies.paper._common import SYMREG_WEIGHTS_CORE
+from bench.studies.paper.campaign import _campaign as C
 
 NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 
@@ -85,7 +85,7 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     assert total["runs"] == len(runs) and total["stored"] == 0
     assert total["wall_hours_left"] == pytest.approx(total["cpu_hours_left"] / 2)
     # store the first claim's hnn_so runs as if they had taken twice the estimate
-    from bench.studies.paper._budget import run_seconds, total_seconds
+    from bench.studies.paper.campaign._budget import run_seconds, total_seconds
 
     done = [c for n, c in runs if n == "loss" and c.model == "hnn_so"]
     for c in done:
@@ -173,7 +173,7 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch)
     by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at
     the cost lnn_seed.MEASURED records (the rollout-trained scaling said 0.5 h, not 2.6)."""
     from bench.studies.paper import lnn_seed
-    from bench.studies.paper._budget import data_seconds, run_seconds, total_seconds
+    from bench.studies.paper.campaign._budget import data_seconds, run_seconds, total_seconds
 
     m = lnn_seed.MEASURED
     cfgs = E.expand("lnn_seed_double_pendulum", "paper-core")
@@ -225,7 +225,7 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch)
 def test_symplectic_runs_are_costed_as_measured_with_and_without_the_penalty():
     """Claim 2's paper-core runs: 112 ms a step with the penalty, 34 ms at weight 0 (which
     skips it), measured on the campaign's rows; the quick-to-paper scaling said 550 s for each."""
-    from bench.studies.paper._budget import run_seconds
+    from bench.studies.paper.campaign._budget import run_seconds
 
     cfgs = E.expand("symplectic", "paper-core")
     by_w = {}
@@ -273,12 +273,11 @@ def test_the_replication_phase_runs_the_same_cells_on_seeds_5_to_9(tmp_path):
 def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
     """Claims whose seeds 0-4 verdict is signed are replicated first; inconclusive and pending
     ones (which no replication can change) after them, each group cheapest first."""
+    from bench import kit
     from bench.core import _query
-    from bench.studies.paper import _replication
-    from bench.studies.paper.kit import Verdict
 
     def v(claim, verdict, pending=None):
-        return Verdict(claim, "t", verdict, 0.0, 0.0, 0.0, 5, "d", pending=pending)
+        return kit.Verdict(claim, "t", verdict, 0.0, 0.0, 0.0, 5, "d", pending=pending)
 
     primary = [
         v(6, "inconclusive"),
@@ -288,10 +287,10 @@ def test_replication_takes_the_signed_verdicts_first(tmp_path, monkeypatch):
         v(10, "inconclusive (changes without a seed)"),
         v(7, "reproduced"),
     ]
-    judged = _replication.Judgement(final=primary, primary={x.key: x for x in primary})
-    monkeypatch.setattr(_replication, "judge", lambda *a, **k: judged)
+    judged = kit.Judgement(final=primary, primary={x.key: x for x in primary})
+    monkeypatch.setattr(kit, "judge", lambda *a, **k: judged)
     counts = {4: (45, 45), 2: (30, 30), 7: (40, 40)}
-    monkeypatch.setattr(_replication, "stored_counts", lambda *a, **k: counts)
+    monkeypatch.setattr(kit, "stored_counts", lambda *a, **k: counts)
     monkeypatch.setattr(_query, "load_tables", lambda d: (None, None, None))
     seeds = E.replication_seeds("paper-core")
 
@@ -399,7 +398,7 @@ def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):
     """``campaign --claims 9,12`` runs the two claims' experiments and nothing else; with
     --signed, only those of them that are signed."""
     from bench._cli import main
-    from bench.studies.paper import _commands
+    from bench.studies.paper.campaign import _commands
 
     ran = []
     monkeypatch.setattr(
@@ -433,8 +432,18 @@ def test_paper_gpu_packs_every_stored_row_into_its_out_folder(tmp_path):
     )  # fmt: skip
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     rows = sorted(p.name for p in (results / ".rows").glob("*.json"))
-    assert rows and f"{len(rows)} rows in {results}" in done.stdout
+    assert rows and f", {len(rows)} in {results}" in done.stdout
     with tarfile.open(out / "rows.tgz") as tar:
         packed = sorted(Path(m.name).name for m in tar.getmembers() if m.name.endswith(".json"))
     assert packed == rows
     assert not (out / "rows.part").exists()
+
+
+def test_the_measured_costs_are_read_from_their_data_file():
+    from bench.studies.paper.campaign import _budget as B
+
+    assert all(table["about"] for name, table in B.COSTS.items() if name != "about")
+    assert B.WALL_S[("node", None)] == (2.9, 3.4)
+    assert B.STEP_COST[("pixels", "hnn", 200, 200)] == (15.0, 4.7)
+    assert B.DATA_MS_PER_S[("three_body", None)] == 1.8
+    assert B.TRADEOFF_S == (274.0 - 106.0 - 78.0) / 2 and B.SWEEP_RATIO == 25.2 / 23.4

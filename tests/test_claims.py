@@ -17,11 +17,13 @@ import pytest
 from _synthetic import synthetic_tables
 from scipy import stats
 
+from bench import kit as R
 from bench.core._query import initial_state, option, params_of
-from bench.studies import paper as C
-from bench.studies.paper import kit as R
-from bench.studies.paper import policy
+from bench.kit import policy
 from bench.studies.paper import relativistic as REL
+
+# claim number -> verdict rule, from the registry
+CLAIMS = {s.claim: s.rule for s in R.claim_studies()}
 
 ERR = policy.margin("error")  # 1.25x
 TWO = policy.margin("learning")  # 2x
@@ -52,7 +54,7 @@ OWN_TABLES = (
 
 def _claims(runs, curves):
     """The verdicts of the claims these synthetic tables are built for."""
-    return [v for v in C.evaluate_claims(runs, curves) if v.key not in OWN_TABLES]
+    return [v for v in R.evaluate_claims(runs, curves) if v.key not in OWN_TABLES]
 
 
 def _by_key(runs, curves):
@@ -209,8 +211,8 @@ def _status(v, *words):
 
 def test_every_claim_has_its_verdicts(reproducing, tables):
     assert sorted(reproducing) == sorted(KEYS)
-    assert {v.key for v in C.evaluate_claims(*tables)} == set(KEYS) | set(OWN_TABLES)
-    assert all(v.verdict in C.VERDICTS for v in reproducing.values())
+    assert {v.key for v in R.evaluate_claims(*tables)} == set(KEYS) | set(OWN_TABLES)
+    assert all(v.verdict in R.VERDICTS for v in reproducing.values())
 
 
 @pytest.mark.parametrize("key", KEYS)
@@ -264,7 +266,7 @@ def test_a_part_on_fewer_than_five_seeds_gives_no_verdict(tables):
     runs, curves = tables
     # the ResNet at n_train 16 ran on seeds 0-2 only: claim 8 (d) is tested on 3 seeds
     gone = (runs["model"] == "resnet") & (runs["n_train"] == 16) & (runs["seed"] >= 3)
-    v = C.CLAIMS[8](runs[~gone], curves)
+    v = CLAIMS[8](runs[~gone], curves)
     assert _part(v, "(d)").n == 3
     assert v.verdict == R.INCONCLUSIVE, v.detail
 
@@ -277,7 +279,7 @@ def test_trivial_predictor_that_wins_makes_every_claim_inconclusive():
 
 def test_without_trivial_runs_discrimination_is_unknown(tables):
     runs, curves = tables
-    runs = runs[~runs["model"].isin(C.TRIVIAL_MODELS)]
+    runs = runs[~runs["model"].isin(R.TRIVIAL_MODELS)]
     unknown = 0
     for v in _claims(runs, curves):
         assert v.discriminating is None, v.key
@@ -288,7 +290,7 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
         else:  # claim 7's parts (b)-(d) compare with the trivial predictor: only (a) is left
             assert v.verdict == R.REPRODUCED, (v.key, v.detail)
     assert unknown >= 6
-    for v7 in C.CLAIMS[7](runs, curves):  # both readings
+    for v7 in CLAIMS[7](runs, curves):  # both readings
         assert [p.name[:3] for p in v7.parts] == ["(a)", "(e)", "(f)"]
 
 
@@ -310,7 +312,7 @@ def test_huge_noise_gives_inconclusive(noisy, key):
 
 def test_missing_runs_are_inconclusive():
     empty = pd.DataFrame(columns=["system", "model", "seed", "rollout_error", "status"])
-    for v in C.evaluate_claims(empty, None):
+    for v in R.evaluate_claims(empty, None):
         assert v.verdict == R.INCONCLUSIVE
 
 
@@ -327,13 +329,13 @@ def test_failed_runs_count_as_error_one_not_dropped(tables):
     # longer shown (dropping them would leave three seeds on which it holds); it still learned
     # on the geometric mean over seeds, so the comparison is judged
     bad = _fail(runs, (runs["model"] == "node_so") & (runs["seed"] >= 3))
-    v = C.CLAIMS[3](bad, curves)
+    v = CLAIMS[3](bad, curves)
     assert v.n_failed == 4, v.detail  # 2 seeds x chain, spring
     for system in ("chain", "spring"):
         assert _status(v, system, "(a) log(NODE / NODE+SO)") in ("undecided", "contradicts")
         assert _status(v, system, "(a) log(HNN / HNN+SO)") == "holds"
     # failing on every seed, NODE+SO did not learn: its comparisons are not tested
-    v = C.CLAIMS[3](_fail(runs, runs["model"] == "node_so"), curves)
+    v = CLAIMS[3](_fail(runs, runs["model"] == "node_so"), curves)
     assert v.n_failed == 10
     assert _status(v, "chain", "(a) log(NODE / NODE+SO)") == "not tested"
     closed = [
@@ -350,14 +352,14 @@ def test_scored_sets_failures_to_the_worst_error():
             "mse": [4.0, np.nan, 1.0],
         }
     )
-    assert C.scored(df).tolist() == [0.1, 1.0, 1.0]
-    assert C.scored(df, "mse").tolist() == [4.0, 4.0, 1.0]
+    assert R.scored(df).tolist() == [0.1, 1.0, 1.0]
+    assert R.scored(df, "mse").tolist() == [4.0, 4.0, 1.0]
 
 
 def test_failed_trivial_predictors_leave_discrimination_unknown(tables):
     runs, curves = tables
-    bad = _fail(runs, runs["model"].isin(C.TRIVIAL_MODELS))
-    v = C.CLAIMS[3](bad, curves)
+    bad = _fail(runs, runs["model"].isin(R.TRIVIAL_MODELS))
+    v = CLAIMS[3](bad, curves)
     # whether the test set tells models apart is unknown: nothing is signed
     assert v.discriminating is None and v.verdict == R.INCONCLUSIVE, v.detail
     assert all(p.status == "holds" for p in v.parts if p.role == "part")
@@ -375,10 +377,10 @@ def test_option_parses_every_serialisation(value):
 
 def test_success_needs_the_factor_on_every_seed():
     triv = pd.Series(np.log([1.0, 1.0, 1.0]), index=[0, 1, 2])
-    assert C.succeeds(pd.Series(np.log([0.1, 0.1, 0.1]), index=[0, 1, 2]), triv)[0] is True
+    assert R.succeeds(pd.Series(np.log([0.1, 0.1, 0.1]), index=[0, 1, 2]), triv)[0] is True
     # 10x better on two seeds, 1.5x on the third: not a success
-    assert C.succeeds(pd.Series(np.log([0.1, 0.1, 0.67]), index=[0, 1, 2]), triv)[0] is False
-    assert C.succeeds(pd.Series(dtype=float), triv)[0] is None
+    assert R.succeeds(pd.Series(np.log([0.1, 0.1, 0.67]), index=[0, 1, 2]), triv)[0] is False
+    assert R.succeeds(pd.Series(dtype=float), triv)[0] is None
 
 
 # ----------------------------------------------------------------------------- the statistics
@@ -674,23 +676,23 @@ def test_a_verdict_that_flips_inside_the_band_is_margin_dependent():
 
 def test_claim_1_energy_at_equal_error_is_an_at_most_part(tables, contradicting_tables):
     runs, curves = tables
-    v = C.CLAIMS[1](runs, curves)
+    v = CLAIMS[1](runs, curves)
     a = _part(v, "(a)")
     assert a.status == "holds" and a.kind == "at most" and a.margin == "1.25x"
     # HNN+SO's energy violation 10x below a NODE's at equal error: contradicted
     hs = runs["model"] == "hnn_so"
     ten = _assign(runs, hs, runs.loc[hs, "energy_violation"].to_numpy() / 10, "energy_violation")
-    assert _status(C.CLAIMS[1](ten, curves), "(a)") == "contradicts"
-    assert _status(C.CLAIMS[1](*contradicting_tables), "(a)") == "contradicts"
+    assert _status(CLAIMS[1](ten, curves), "(a)") == "contradicts"
+    assert _status(CLAIMS[1](*contradicting_tables), "(a)") == "contradicts"
     # an advantage of 1.25x (the energy margin) on average, varying from seed to seed: undecided
     per_seed = runs.loc[hs, "seed"].map(_spread(1.25)).to_numpy()
     ev = runs.loc[hs, "energy_violation"].to_numpy()
     two = _assign(runs, hs, ev / per_seed, "energy_violation")
-    v = C.CLAIMS[1](two, curves)
+    v = CLAIMS[1](two, curves)
     assert _status(v, "(a)") == "undecided" and v.verdict == R.INCONCLUSIVE, v.detail
     # an HNN that conserves energy worse also has "no better" energy
     worse = _assign(runs, hs, runs.loc[hs, "energy_violation"].to_numpy() * 10, "energy_violation")
-    assert _status(C.CLAIMS[1](worse, curves), "(a)") == "holds"
+    assert _status(CLAIMS[1](worse, curves), "(a)") == "holds"
 
 
 def test_claim_1_judges_fig_2_models_only(tables):
@@ -700,18 +702,18 @@ def test_claim_1_judges_fig_2_models_only(tables):
     # touches the verdict, which is on HNN+SO, NODE and NODE+SO; it is reported as an extra
     ev = runs.loc[hnn, "energy_violation"].to_numpy()
     better = _assign(runs, hnn, ev / 100, "energy_violation")
-    v = C.CLAIMS[1](better, curves)
+    v = CLAIMS[1](better, curves)
     assert v.verdict == R.REPRODUCED, v.detail
     assert "extra, not judged: the non-separable HNN's advantage at equal error" in v.detail
-    v = C.CLAIMS[1](_fail(runs, hnn), curves)
+    v = CLAIMS[1](_fail(runs, hnn), curves)
     assert v.verdict == R.REPRODUCED and v.n_failed == 0, v.detail
-    v = C.CLAIMS[1](_fail(runs, runs["model"] == "hnn_so"), curves)
+    v = CLAIMS[1](_fail(runs, runs["model"] == "hnn_so"), curves)
     assert v.n_failed == 10  # HNN+SO at 5 seeds on the chain and the spring (paper start)
 
 
 def test_claim_1_growth_is_a_band_per_family(tables):
     runs, curves = tables
-    v = C.CLAIMS[1](runs, curves)
+    v = CLAIMS[1](runs, curves)
     for fam in ("NODEs", "HNNs"):
         b = _part(v, "(b)", fam)
         assert b.status == "holds" and b.kind == "band" and b.margin == "1 +- 0.5"
@@ -720,21 +722,21 @@ def test_claim_1_growth_is_a_band_per_family(tables):
     nodes = runs["model"].isin(["node", "node_so"])
     # HNN+SO's violation levels off (slope 0): the HNNs' part is contradicted, the NODEs' holds
     flat = _grow(runs, curves, hs, 0.0)
-    v = C.CLAIMS[1](runs, flat)
+    v = CLAIMS[1](runs, flat)
     assert _status(v, "(b) HNNs") == "contradicts" and _status(v, "(b) NODEs") == "holds"
     assert v.verdict == R.PARTLY, v.detail
     # the NODEs' violation accelerates (t^2): above the band, contradicted
-    v = C.CLAIMS[1](runs, _grow(runs, curves, nodes, 2.0))
+    v = CLAIMS[1](runs, _grow(runs, curves, nodes, 2.0))
     assert _status(v, "(b) NODEs") == "contradicts" and _status(v, "(b) HNNs") == "holds"
     # slopes about the band's lower end (0.5, a random walk): undecided
     edge = pd.Series(0.5 + SPREAD, index=SEEDS)
-    v = C.CLAIMS[1](runs, _grow(runs, curves, hs, edge))
+    v = CLAIMS[1](runs, _grow(runs, curves, hs, edge))
     assert _status(v, "(b) HNNs") == "undecided" and v.verdict == R.INCONCLUSIVE
     # the non-separable HNN is not in the HNN family of Fig. 2
-    v = C.CLAIMS[1](runs, _grow(runs, curves, runs["model"] == "hnn", 0.0))
+    v = CLAIMS[1](runs, _grow(runs, curves, runs["model"] == "hnn", 0.0))
     assert v.verdict == R.REPRODUCED and "non-separable HNN late-half slope" in v.detail
     # without curves the growth parts cannot be decided
-    v = C.CLAIMS[1](runs, None)
+    v = CLAIMS[1](runs, None)
     assert _status(v, "(b) HNNs") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
@@ -749,7 +751,7 @@ def _ev_power(runs, exponents):
 
 def test_claim_1_c_rollout_error_proportional_to_energy_violation(tables):
     runs, curves = tables
-    v = C.CLAIMS[1](runs, curves)
+    v = CLAIMS[1](runs, curves)
     c = _part(v, "(c)")
     assert (c.status, c.kind, c.quantity, c.margin) == (
         "holds",
@@ -761,13 +763,13 @@ def test_claim_1_c_rollout_error_proportional_to_energy_violation(tables):
     # the violation grows as the square of the error: contradicted, while (a) and (b) hold (a
     # common slope of 2 gives the HNN no advantage at equal error): a separate statement of
     # the paper, so the claim is partly reproduced
-    v = C.CLAIMS[1](_ev_power(runs, 2.0), curves)
+    v = CLAIMS[1](_ev_power(runs, 2.0), curves)
     c = _part(v, "(c)")
     assert c.status == "contradicts" and c.point == pytest.approx(2.0)
     assert _status(v, "(a)") == _status(v, "(b) NODEs") == _status(v, "(b) HNNs") == "holds"
     assert v.verdict == R.PARTLY, v.detail
     # slopes about the band's upper end (1.5), differing from seed to seed: undecided
-    v = C.CLAIMS[1](_ev_power(runs, pd.Series(1.5 + 2.5 * SPREAD, index=SEEDS)), curves)
+    v = CLAIMS[1](_ev_power(runs, pd.Series(1.5 + 2.5 * SPREAD, index=SEEDS)), curves)
     c = _part(v, "(c)")
     assert c.status == "undecided" and c.lo < 1.5 < c.hi
     assert v.verdict == R.INCONCLUSIVE
@@ -775,7 +777,7 @@ def test_claim_1_c_rollout_error_proportional_to_energy_violation(tables):
     # through the pooled runs stays 1 (a median of pairwise slopes, most within a family)
     hs = runs["model"] == "hnn_so"
     low = _assign(runs, hs, runs.loc[hs, "energy_violation"].to_numpy() / 10, "energy_violation")
-    v = C.CLAIMS[1](low, curves)
+    v = CLAIMS[1](low, curves)
     assert _status(v, "(a)") == "contradicts" and _status(v, "(c)") == "holds"
     assert v.verdict == R.PARTLY
 
@@ -796,12 +798,12 @@ def test_claim_2_no_gain_at_any_weight(tables):
     w = option(runs, "weight").astype(float)
     sr = runs["model"] == "node_so_symreg"
     reg, base = sr & (w == 1.0), sr & (w == 0.0)
-    v = C.CLAIMS[2](runs, curves)
+    v = CLAIMS[2](runs, curves)
     assert _status(v, "w=1") == "holds" and v.verdict == R.REPRODUCED
     assert not [p for p in v.parts if "rank correlation" in p.name]
-    v = C.CLAIMS[2](_set_ratio(runs, reg, base, 1 / 3), curves)  # a 3x gain
+    v = CLAIMS[2](_set_ratio(runs, reg, base, 1 / 3), curves)  # a 3x gain
     assert _status(v, "w=1") == "contradicts" and v.verdict == R.NOT_REPRODUCED
-    v = C.CLAIMS[2](_set_ratio(runs, reg, base, 1 / _spread(1.25)), curves)  # about 1.25x
+    v = CLAIMS[2](_set_ratio(runs, reg, base, 1 / _spread(1.25)), curves)  # about 1.25x
     assert _status(v, "w=1") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
@@ -817,9 +819,9 @@ def test_claim_2_one_weight_with_a_gain_refutes_it_whatever_the_others_do():
     assert sorted(set(w[sr])) == [0.0, 1e-6, 1e-3, 1.0, 1e3]
     base = sr & (w == 0.0)
     runs = _set_ratio(runs, sr & (w == 1.0), base, 4.0)  # hurts
-    v = C.CLAIMS[2](runs, curves)
+    v = CLAIMS[2](runs, curves)
     assert _status(v, "w=1:") == _status(v, "w=1000") == "holds" and v.verdict == R.REPRODUCED
-    v = C.CLAIMS[2](_set_ratio(runs, sr & (w == 1e-3), base, 1 / 1.6), curves)
+    v = CLAIMS[2](_set_ratio(runs, sr & (w == 1e-3), base, 1 / 1.6), curves)
     assert _status(v, "w=0.001") == "contradicts" and _status(v, "w=1:") == "holds"
     assert v.verdict == R.NOT_REPRODUCED
 
@@ -839,7 +841,7 @@ def test_claim_2_symplectic_error_not_positively_correlated_with_error():
     error over the regularised runs (every weight and seed of a cell), on Fisher's z scale,
     at most the correlation margin."""
     runs, curves = synthetic_tables("paper-core", experiments=("symplectic",))
-    v = C.CLAIMS[2](runs, curves)
+    v = CLAIMS[2](runs, curves)
     c = _part(v, "rank correlation")
     assert (c.status, c.kind, c.quantity) == ("holds", "at most", "correlation")
     assert c.margin_value == pytest.approx(math.atanh(0.3)) and c.n == 5
@@ -847,14 +849,14 @@ def test_claim_2_symplectic_error_not_positively_correlated_with_error():
     assert v.verdict == R.REPRODUCED
     # the symplectic error ranked with the error on every seed: contradicted
     up = _symplectic_like(runs, [1, 1, 1, 1, 1])
-    v = C.CLAIMS[2](up, curves)
+    v = CLAIMS[2](up, curves)
     c = _part(v, "rank correlation")
     assert c.status == "contradicts" and math.tanh(c.point) > 0.99
     # the gains still hold: a separate statement of the paper, so partly reproduced
     assert all(p.status == "holds" for p in v.parts if "gain" in p.name)
     assert v.verdict == R.PARTLY
     # three seeds rank it with the error, two against: undecided
-    v = C.CLAIMS[2](_symplectic_like(runs, [1, 1, 1, -1, -1]), curves)
+    v = CLAIMS[2](_symplectic_like(runs, [1, 1, 1, -1, -1]), curves)
     c = _part(v, "rank correlation")
     assert c.status == "undecided" and c.lo < math.atanh(0.3) < c.hi
     assert v.verdict == R.INCONCLUSIVE
@@ -866,12 +868,12 @@ def test_claim_2_gain_refuted_and_correlation_holding_is_partly_reproduced():
     sr = runs["model"] == "node_so_symreg"
     runs = _set_ratio(runs, sr & (w == 1e-3), sr & (w == 0.0), 1 / 1.6)
     runs = _symplectic_like(runs, [-1, -1, -1, -1, -1])
-    v = C.CLAIMS[2](runs, curves)
+    v = CLAIMS[2](runs, curves)
     assert _status(v, "w=0.001") == "contradicts"
     assert _status(v, "rank correlation") == "holds"
     assert v.verdict == R.PARTLY
     # both statements refuted: not reproduced
-    v = C.CLAIMS[2](_symplectic_like(runs, [1, 1, 1, 1, 1]), curves)
+    v = CLAIMS[2](_symplectic_like(runs, [1, 1, 1, 1, 1]), curves)
     assert _status(v, "rank correlation") == "contradicts" and v.verdict == R.NOT_REPRODUCED
 
 
@@ -881,8 +883,8 @@ def test_claim_2_correlation_pools_only_the_regularised_runs():
     base = (runs["model"] == "node_so_symreg") & (w == 0.0)
     # the unregularised runs far off any trend: the part does not read them
     off = _assign(runs, base, 1e6, "symplectic_error")
-    assert _part(C.CLAIMS[2](off, curves), "rank correlation").point == pytest.approx(
-        _part(C.CLAIMS[2](runs, curves), "rank correlation").point
+    assert _part(CLAIMS[2](off, curves), "rank correlation").point == pytest.approx(
+        _part(CLAIMS[2](runs, curves), "rank correlation").point
     )
 
 
@@ -890,7 +892,7 @@ def test_claim_2_ignores_velocity_space_regularisation(tables):
     runs, curves = tables
     runs = runs.copy()
     runs["coordinates"] = "velocity"
-    v = C.CLAIMS[2](runs, curves)
+    v = CLAIMS[2](runs, curves)
     assert v.verdict == R.INCONCLUSIVE and v.detail == "no runs"
 
 
@@ -918,17 +920,17 @@ def test_claim_3_a_pairwise_so_gain_per_system(tables, contradicting, system):
     assert _status(contradicting["3"], system, "(a) log(NODE / NODE+SO)") == "contradicts"
     assert _status(contradicting["3"], system, "(a) log(HNN / HNN+SO)") == "contradicts"
     # NODE+SO no better than NODE: contradicted in this system only
-    v = C.CLAIMS[3](_set_ratio(runs, so, node, 1.0), curves)
+    v = CLAIMS[3](_set_ratio(runs, so, node, 1.0), curves)
     assert _status(v, system, "(a) log(NODE / NODE+SO)") == "contradicts"
     assert _status(v, other, "(a) log(NODE / NODE+SO)") == "holds"
     assert v.verdict == R.PARTLY
     # NODE about 1.25x worse: undecided
-    v = C.CLAIMS[3](_set_ratio(runs, node, so, _spread(1.25)), curves)
+    v = CLAIMS[3](_set_ratio(runs, node, so, _spread(1.25)), curves)
     assert _status(v, system, "(a) log(NODE / NODE+SO)") == "undecided"
-    v = C.CLAIMS[3](_set_ratio(runs, hnn, hs, _spread(1.25)), curves)
+    v = CLAIMS[3](_set_ratio(runs, hnn, hs, _spread(1.25)), curves)
     assert _status(v, system, "(a) log(HNN / HNN+SO)") == "undecided"
     assert v.verdict == R.INCONCLUSIVE
-    v = C.CLAIMS[3](_set_ratio(runs, hnn, hs, 1.1), curves)
+    v = CLAIMS[3](_set_ratio(runs, hnn, hs, 1.1), curves)
     assert _status(v, system, "(a) log(HNN / HNN+SO)") == "contradicts"
 
 
@@ -938,13 +940,13 @@ def test_claim_3_b_most_of_the_gap(tables, contradicting):
     node, so, hs = (_paper(runs, sys_, m) for m in ("node", "node_so", "hnn_so"))
     assert _status(contradicting["3"], sys_, "(b)") == "contradicts"
     # SO gains 1.5x (part (a) holds) of a 4x gap: less than half, contradicted
-    v = C.CLAIMS[3](_set_ratio(runs, so, node, 1 / 1.5), curves)
+    v = CLAIMS[3](_set_ratio(runs, so, node, 1 / 1.5), curves)
     assert _status(v, sys_, "(a) log(NODE / NODE+SO)") == "holds"
     assert _status(v, sys_, "(b)") == "contradicts"
     assert v.verdict == R.PARTLY, v.detail
     # SO closes half the gap on average (closed - gap / 2 = SPREAD per seed): undecided
     half = np.sqrt(_per_seed(runs, node) * _per_seed(runs, hs)) * np.exp(-SPREAD)
-    v = C.CLAIMS[3](_assign(runs, so, half), curves)
+    v = CLAIMS[3](_assign(runs, so, half), curves)
     b = _part(v, sys_, "(b)")
     assert b.status == "undecided" and b.point == pytest.approx(0.5, abs=0.02)
     assert v.verdict == R.INCONCLUSIVE, v.detail
@@ -955,7 +957,7 @@ def test_claim_3_b_is_judged_only_where_hnn_so_has_an_advantage(tables):
     spring = "spring_pendulum"
     node, hs = _paper(runs, spring, "node"), _paper(runs, spring, "hnn_so")
     # HNN+SO no better than NODE on the spring: the condition fails, (b) is not tested
-    v = C.CLAIMS[3](_set_ratio(runs, hs, node, 1.0), curves)
+    v = CLAIMS[3](_set_ratio(runs, hs, node, 1.0), curves)
     cond = _part(v, spring, "HNN+SO beats NODE")
     assert cond.role == "condition" and cond.status == "contradicts"
     b = _part(v, spring, "(b)")
@@ -969,10 +971,10 @@ def test_claim_3_b_is_judged_only_where_hnn_so_has_an_advantage(tables):
 def test_claim_4_chain_edge_is_a_greater_part(tables):
     runs, curves = tables
     so, hs = _paper(runs, "chain_pendulum", "node_so"), _paper(runs, "chain_pendulum", "hnn_so")
-    got = {v.key: v for v in C.CLAIMS[4](_set_ratio(runs, hs, so, 1.0), curves)}
+    got = {v.key: v for v in CLAIMS[4](_set_ratio(runs, hs, so, 1.0), curves)}
     assert _status(got[CLAIM_4], "chain") == "contradicts"
     assert got[CLAIM_4].verdict == R.PARTLY  # the spring part still holds
-    got = {v.key: v for v in C.CLAIMS[4](_set_ratio(runs, hs, so, 1 / _spread(1.25)), curves)}
+    got = {v.key: v for v in CLAIMS[4](_set_ratio(runs, hs, so, 1 / _spread(1.25)), curves)}
     assert _status(got[CLAIM_4], "chain") == "undecided"
     assert got[CLAIM_4].verdict == R.INCONCLUSIVE
 
@@ -984,13 +986,13 @@ def test_claim_4_spring_must_be_shown_to_match(tables, contradicting):
     so, hs = _paper(runs, "spring_pendulum", "node_so"), _paper(runs, "spring_pendulum", "hnn_so")
     # an HNN+SO edge of about 1.25x on the spring: not shown to be absent, so no verdict
     undecided = _set_ratio(runs, hs, so, 1 / _spread(1.25))
-    got = {v.key: v for v in C.CLAIMS[4](undecided, curves)}
+    got = {v.key: v for v in CLAIMS[4](undecided, curves)}
     assert _status(got[CLAIM_4], "spring") == "undecided"
     assert got[CLAIM_4].verdict == R.INCONCLUSIVE
     eq = "4 (geometric-mean error, spring from equilibrium)"
     assert got[eq].verdict == R.REPRODUCED  # the other initial state is untouched
     # no spring runs: nothing shown, the part is undecided ("no runs"), not held by default
-    got = {v.key: v for v in C.CLAIMS[4](runs[~spring], curves)}
+    got = {v.key: v for v in CLAIMS[4](runs[~spring], curves)}
     p = _part(got[CLAIM_4], "spring")
     assert p.status == "undecided" and p.note.startswith("no runs")
     assert got[CLAIM_4].verdict == R.INCONCLUSIVE
@@ -1005,9 +1007,9 @@ def test_claim_5_a_plain_hnn_fits_worse(tables, contradicting):
     plain = _damped(runs, s, "hnn_so", dissipation=False)
     so = _damped(runs, s, "node_so")
     assert _status(contradicting["5"], s, "(a)") == "contradicts"
-    v = C.CLAIMS[5](_set_ratio(runs, plain, so, 1.0), curves)
+    v = CLAIMS[5](_set_ratio(runs, plain, so, 1.0), curves)
     assert _status(v, s, "(a)") == "contradicts" and _status(v, "spring", "(a)") == "holds"
-    v = C.CLAIMS[5](_set_ratio(runs, plain, so, _spread(1.25)), curves)
+    v = CLAIMS[5](_set_ratio(runs, plain, so, _spread(1.25)), curves)
     assert _status(v, s, "(a)") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
@@ -1015,42 +1017,42 @@ def test_claim_5_b_node_so_matches_the_mixture_hnn(tables, contradicting):
     runs, curves = tables
     s = "spring_pendulum"
     so, mix = _damped(runs, s, "node_so"), _damped(runs, s, "mixture_hnn")
-    b = _part(C.CLAIMS[5](runs, curves), s, "(b)")
+    b = _part(CLAIMS[5](runs, curves), s, "(b)")
     assert b.status == "holds" and b.kind == "at most" and b.margin == "1.25x"
     assert _status(contradicting["5"], s, "(b)") == "contradicts"
     # the mixture HNN 10x better than NODE+SO; the Rayleigh extra does not enter
-    v = C.CLAIMS[5](_set_ratio(runs, mix, so, 0.1), curves)
+    v = CLAIMS[5](_set_ratio(runs, mix, so, 0.1), curves)
     assert _status(v, s, "(b)") == "contradicts" and v.verdict == R.PARTLY, v.detail
     assert "Rayleigh" in v.detail
     # about 1.25x better: undecided
-    v = C.CLAIMS[5](_set_ratio(runs, mix, so, 1 / _spread(1.25)), curves)
+    v = CLAIMS[5](_set_ratio(runs, mix, so, 1 / _spread(1.25)), curves)
     assert _status(v, s, "(b)") == "undecided" and v.verdict == R.INCONCLUSIVE
     # NODE+SO better than the mixture HNN also "matches"
-    v = C.CLAIMS[5](_set_ratio(runs, mix, so, 3.0), curves)
+    v = CLAIMS[5](_set_ratio(runs, mix, so, 3.0), curves)
     assert _status(v, s, "(b)") == "holds"
     # a Rayleigh HNN 10x better than NODE+SO is an extra: the verdict stands
     ray = _damped(runs, s, "hnn_so", dissipation=True)
-    assert C.CLAIMS[5](_set_ratio(runs, ray, so, 0.1), curves).verdict == R.REPRODUCED
+    assert CLAIMS[5](_set_ratio(runs, ray, so, 0.1), curves).verdict == R.REPRODUCED
 
 
 def test_claim_5_c_cost(tables, contradicting):
     runs, curves = tables
     s = "chain_pendulum"
     so, mix = _damped(runs, s, "node_so"), _damped(runs, s, "mixture_hnn")
-    c = _part(C.CLAIMS[5](runs, curves), s, "(c) cost")
+    c = _part(CLAIMS[5](runs, curves), s, "(c) cost")
     assert c.status == "holds" and c.kind == "greater"
     assert _status(contradicting["5"], s, "(c) cost") == "contradicts"
     slow = _assign(runs, so, 500.0, "train_seconds")
-    v = C.CLAIMS[5](slow, curves)
+    v = CLAIMS[5](slow, curves)
     assert _status(v, s, "(c) cost") == "contradicts" and v.verdict == R.PARTLY, v.detail
     # faster, but more FLOPs per step than the mixture HNN: contradicted
-    v = C.CLAIMS[5](_assign(runs, so, 1e6, "flops_per_step"), curves)
+    v = CLAIMS[5](_assign(runs, so, 1e6, "flops_per_step"), curves)
     assert _status(v, s, "(c) cost") == "contradicts"
     # without FLOPs the times decide
-    v = C.CLAIMS[5](runs.drop(columns="flops_per_step"), curves)
+    v = CLAIMS[5](runs.drop(columns="flops_per_step"), curves)
     assert _status(v, s, "(c) cost") == "holds"
     # the mixture HNN about 1.25x slower: undecided
-    v = C.CLAIMS[5](_set_ratio(runs, mix, so, _spread(1.25), "train_seconds"), curves)
+    v = CLAIMS[5](_set_ratio(runs, mix, so, _spread(1.25), "train_seconds"), curves)
     assert _status(v, s, "(c) cost") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
@@ -1062,18 +1064,18 @@ def test_claim_5_c_cost_pairs_only_runs_of_one_machine(tables):
     s = "chain_pendulum"
     so, mix = _damped(runs, s, "node_so"), _damped(runs, s, "mixture_hnn")
     one = _assign(_assign(runs, so | mix, "cpu A", "device"), so | mix, "25/1", "cpu_family_model")
-    assert _part(C.CLAIMS[5](one, curves), s, "(c) cost").n == 5
+    assert _part(CLAIMS[5](one, curves), s, "(c) cost").n == 5
     # seeds 0 and 1: NODE+SO on a machine 100x slower; without the rule it would contradict (c)
     on_b = so & runs["seed"].isin([0, 1])
     two = _assign(_assign(one, on_b, "cpu B", "device"), on_b, 1e6, "train_seconds")
-    c = _part(C.CLAIMS[5](two, curves), s, "(c) cost")
+    c = _part(CLAIMS[5](two, curves), s, "(c) cost")
     assert c.n == 3 and c.status != "contradicts" and c.point > 0, c
     assert "seeds 0, 1 left out: their two models trained on different machines" in c.note
     other = _assign(one, on_b, "25/17", "cpu_family_model")  # same name, another CPU model
-    assert _part(C.CLAIMS[5](other, curves), s, "(c) cost").n == 3
+    assert _part(CLAIMS[5](other, curves), s, "(c) cost").n == 3
     unknown = _assign(one, on_b, None, "device")
     unknown = _assign(unknown, on_b, None, "cpu_family_model")
-    assert _part(C.CLAIMS[5](unknown, curves), s, "(c) cost").n == 5
+    assert _part(CLAIMS[5](unknown, curves), s, "(c) cost").n == 5
 
 
 # ----------------------------------------------------------------------------- claim 6
@@ -1088,20 +1090,20 @@ def _loss(runs, model, loss):
 def test_claim_6_a_slightly_is_tost_within_the_error_margin(tables, contradicting):
     runs, curves = tables
     l1, l2 = _loss(runs, "hnn", "l1"), _loss(runs, "hnn", "l2")
-    a = _part(C.CLAIMS[6](runs, curves), "(a) HNN:")
+    a = _part(CLAIMS[6](runs, curves), "(a) HNN:")
     assert a.status == "holds" and a.kind == "equivalent" and a.margin == "1/1.25x to 1.25x"
     assert _status(contradicting["6"], "(a) HNN:") == "contradicts"
     for factor in (3.0, 1 / 3):  # much worse or much better with L1: not "slightly"
-        v = C.CLAIMS[6](_set_ratio(runs, l1, l2, factor), curves)
+        v = CLAIMS[6](_set_ratio(runs, l1, l2, factor), curves)
         assert _status(v, "(a) HNN:") == "contradicts", factor
         assert _status(v, "(a) NODE:") == "holds"
-    v = C.CLAIMS[6](_set_ratio(runs, l1, l2, _spread(1.25)), curves)
+    v = CLAIMS[6](_set_ratio(runs, l1, l2, _spread(1.25)), curves)
     assert _status(v, "(a) HNN:") == "undecided"
 
 
 def test_claim_6_b_ordering(tables, contradicting):
     runs, curves = tables
-    b = _part(C.CLAIMS[6](runs, curves), "(b)")
+    b = _part(CLAIMS[6](runs, curves), "(b)")
     assert b.status == "holds" and b.point == 6  # every pair kept
     b = _part(contradicting["6"], "(b)")
     assert b.status == "contradicts" and b.extra["pairs"][("NODE", "HNN")] == (">", "<", "reversed")
@@ -1109,7 +1111,7 @@ def test_claim_6_b_ordering(tables, contradicting):
     tied = runs.copy()
     for m in ("node", "node_so", "hnn_so"):
         tied = _set_ratio(tied, _loss(tied, m, "l1"), _loss(tied, "hnn", "l1"), 1.0)
-    v = C.CLAIMS[6](tied, curves)
+    v = CLAIMS[6](tied, curves)
     b = _part(v, "(b)")
     assert b.status == "undecided" and b.extra["pairs"][("NODE", "NODE+SO")][2] == "one loss"
     assert b.extra["pairs"][("NODE", "NODE+SO")][0] == ">"
@@ -1123,14 +1125,14 @@ def test_claim_6_b_a_difference_inside_the_margin_is_a_tie(tables):
     swap = runs
     for loss, factor in (("l2", 1 / 1.1), ("l1", 1.1)):
         swap = _set_ratio(swap, _loss(swap, "hnn_so", loss), _loss(swap, "node_so", loss), factor)
-    b = _part(C.CLAIMS[6](swap, curves), "(b)")
+    b = _part(CLAIMS[6](swap, curves), "(b)")
     assert b.status == "holds" and b.point == 5, b.note
     assert b.extra["pairs"][("NODE+SO", "HNN+SO")] == ("tie", "tie", "neither")
     # 1.5x apart in opposite directions: a reversal, contradicted
     swap = runs
     for loss, factor in (("l2", 1 / 1.5), ("l1", 1.5)):
         swap = _set_ratio(swap, _loss(swap, "hnn_so", loss), _loss(swap, "node_so", loss), factor)
-    b = _part(C.CLAIMS[6](swap, curves), "(b)")
+    b = _part(CLAIMS[6](swap, curves), "(b)")
     assert b.status == "contradicts"
     assert b.extra["pairs"][("NODE+SO", "HNN+SO")] == (">", "<", "reversed")
 
@@ -1234,14 +1236,14 @@ def test_claim_7_verdict_is_the_seeds_protocol_where_the_readings_differ(tables)
     lnn = _rel(runs, "lnn", target="derivative")
     cv = _rel(runs, "constant_velocity", target="derivative")
     seed_fails = _rel_set(runs, lnn, cv, 1 / 1.2)
-    final, ours = C.CLAIMS[7](seed_fails, curves)
+    final, ours = CLAIMS[7](seed_fails, curves)
     assert (final.key, ours.key) == ("7", "7 (rollout loss)")
     assert final.verdict == R.PARTLY and ours.verdict == R.REPRODUCED
     assert _status(final, "(d)") == "contradicts" and _status(ours, "(d)") == "holds"
     assert final.other_readings == (("7 (rollout loss)", "reproduced"),)
     # and the other way round: the rollout-trained LNN fails, the seed's holds
     lnn, cv = _rel(runs, "lnn"), _rel(runs, "constant_velocity")
-    final, ours = C.CLAIMS[7](_rel_set(runs, lnn, cv, 1 / 1.2), curves)
+    final, ours = CLAIMS[7](_rel_set(runs, lnn, cv, 1 / 1.2), curves)
     assert final.verdict == R.REPRODUCED and ours.verdict == R.PARTLY
 
 
@@ -1250,12 +1252,12 @@ def test_claim_7_protocols_do_not_mix(tables):
     seed_rows = runs["train_target"] == "derivative"
     particle = runs["system"] == "relativistic_particle"
     # without the seed's runs the claim is inconclusive and says why; ours is unchanged
-    final, ours = C.CLAIMS[7](runs[~seed_rows], curves)
+    final, ours = CLAIMS[7](runs[~seed_rows], curves)
     assert final.verdict == R.INCONCLUSIVE and final.n_seeds == 0
     assert final.other_readings == (("7 (rollout loss)", "reproduced"),)
     assert ours.verdict == R.REPRODUCED
     # without ours, the seed's reading stands alone
-    final, ours = C.CLAIMS[7](runs[seed_rows | ~particle], curves)
+    final, ours = CLAIMS[7](runs[seed_rows | ~particle], curves)
     assert final.verdict == R.REPRODUCED and ours.verdict == R.INCONCLUSIVE
     assert ours.detail == "no runs"
     # rows from before derivative targets (no train_target column) are rollout-trained
@@ -1271,21 +1273,21 @@ def test_claim_8_a_b_per_noise_level_at_the_fewest_data(tables, contradicting, n
     runs, curves = tables
     vin, res = _vin(runs, "vin", noise=noise), _vin(runs, "resnet", noise=noise)
     name = f"noise={noise:g}:"
-    v = C.CLAIMS[8](runs, curves)
+    v = CLAIMS[8](runs, curves)
     assert _status(v, "(a)", name) == "holds" and _status(v, "(b)", name) == "holds"
     assert _part(v, "(b)", name).margin == "1.25x"
     assert _status(contradicting["8"], "(a)", name) == "contradicts"
     assert _status(contradicting["8"], "(b)", name) == "contradicts"
     # the ResNet as good as VIN at this noise level only
-    v = C.CLAIMS[8](_set_ratio(runs, res, vin, 1.0), curves)
+    v = CLAIMS[8](_set_ratio(runs, res, vin, 1.0), curves)
     assert _status(v, "(a)", name) == "contradicts"
     assert all(p.status == "holds" for p in v.parts if "(a)" in p.name and name not in p.name)
-    v = C.CLAIMS[8](_set_ratio(runs, res, vin, _spread(1.25)), curves)
+    v = CLAIMS[8](_set_ratio(runs, res, vin, _spread(1.25)), curves)
     assert _status(v, "(a)", name) == "undecided"
     # energy: the ResNet's violation as VIN's, or about 1.25x
-    v = C.CLAIMS[8](_set_ratio(runs, res, vin, 1.0, "energy_violation"), curves)
+    v = CLAIMS[8](_set_ratio(runs, res, vin, 1.0, "energy_violation"), curves)
     assert _status(v, "(b)", name) == "contradicts"
-    v = C.CLAIMS[8](_set_ratio(runs, res, vin, _spread(1.25), "energy_violation"), curves)
+    v = CLAIMS[8](_set_ratio(runs, res, vin, _spread(1.25), "energy_violation"), curves)
     assert _status(v, "(b)", name) == "undecided"
 
 
@@ -1298,40 +1300,40 @@ def test_claim_8_gates_the_vin_only_the_resnet_is_its_foil(tables):
     res, vin = _vin(runs, "resnet", noise=0.01), _vin(runs, "vin", noise=0.01)
     broken = runs.copy()
     broken.loc[res, "rollout_error"] = 10.0
-    assert _status(C.CLAIMS[8](broken, curves), "(a)", name) == "holds"
+    assert _status(CLAIMS[8](broken, curves), "(a)", name) == "holds"
     broken = runs.copy()
     broken.loc[vin, "rollout_error"] = 10.0
-    assert _status(C.CLAIMS[8](broken, curves), "(a)", name) == "not tested"
+    assert _status(CLAIMS[8](broken, curves), "(a)", name) == "not tested"
 
 
 def test_claim_8_c_bounded_energy(tables, contradicting):
     runs, curves = tables
-    c = _part(C.CLAIMS[8](runs, curves), "(c)")
+    c = _part(CLAIMS[8](runs, curves), "(c)")
     assert c.status == "holds" and c.kind == "below" and c.margin == "0 + 0.5"
     assert _status(contradicting["8"], "(c)") == "contradicts"  # linear growth
     vin = _vin(runs, "vin")
-    assert _status(C.CLAIMS[8](runs, _grow(runs, curves, vin, 1.0)), "(c)") == "contradicts"
+    assert _status(CLAIMS[8](runs, _grow(runs, curves, vin, 1.0)), "(c)") == "contradicts"
     edge = pd.Series(0.5 + SPREAD, index=SEEDS)
-    assert _status(C.CLAIMS[8](runs, _grow(runs, curves, vin, edge)), "(c)") == "undecided"
-    assert _status(C.CLAIMS[8](runs, None), "(c)") == "undecided"
+    assert _status(CLAIMS[8](runs, _grow(runs, curves, vin, edge)), "(c)") == "undecided"
+    assert _status(CLAIMS[8](runs, None), "(c)") == "undecided"
 
 
 def test_claim_8_d_less_data(tables, contradicting):
     runs, curves = tables
     vin8, res16 = _vin(runs, "vin", 8), _vin(runs, "resnet", 16)
     name = "(d) log(err VIN at n_train=8 / ResNet at n_train=16)"
-    d = _part(C.CLAIMS[8](runs, curves), name)
+    d = _part(CLAIMS[8](runs, curves), name)
     assert d.status == "holds" and d.kind == "at most" and d.margin == "1.25x"
     assert _status(contradicting["8"], "(d)") == "contradicts"
-    v = C.CLAIMS[8](_set_ratio(runs, vin8, res16, 2.0), curves)
+    v = CLAIMS[8](_set_ratio(runs, vin8, res16, 2.0), curves)
     assert _status(v, name) == "contradicts"
-    v = C.CLAIMS[8](_set_ratio(runs, vin8, res16, _spread(1.25)), curves)
+    v = CLAIMS[8](_set_ratio(runs, vin8, res16, _spread(1.25)), curves)
     assert _status(v, name) == "undecided"
 
 
 def test_claim_8_d_at_every_pair_of_consecutive_sizes_at_quick():
     runs, curves = synthetic_tables("quick", experiments=("vin",))
-    v = C.CLAIMS[8](runs, curves)
+    v = CLAIMS[8](runs, curves)
     assert v.verdict == R.REPRODUCED, v.detail
     d = [p.name for p in v.parts if p.name.startswith("(d)")]
     assert d == [
@@ -1340,7 +1342,7 @@ def test_claim_8_d_at_every_pair_of_consecutive_sizes_at_quick():
     ]
     # VIN at 32 no better than 2x the ResNet at 128: the second pair is contradicted
     slow = _set_ratio(runs, _vin(runs, "vin", 32), _vin(runs, "resnet", 128), 2.0)
-    v = C.CLAIMS[8](slow, curves)
+    v = CLAIMS[8](slow, curves)
     assert _status(v, "n_train=32 / ResNet") == "contradicts"
     assert _status(v, "n_train=8 / ResNet") == "holds"
     assert v.verdict == R.PARTLY
@@ -1353,11 +1355,11 @@ def test_every_claim_counts_a_diverged_run(tables):
     runs, curves = tables
     base = {v.key: v.n_failed for v in _claims(runs, curves)}
     checked = 0
-    for study in C.claim_studies():
+    for study in R.claim_studies():
         if str(study.claim) in OWN_TABLES:
             continue
         names = {e.name for e in study.experiments}
-        trained = ~runs["model"].isin(C.TRIVIAL_MODELS) & runs["experiment"].isin(names)
+        trained = ~runs["model"].isin(R.TRIVIAL_MODELS) & runs["experiment"].isin(names)
         if not trained.any():
             continue
         counted = False

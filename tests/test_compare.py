@@ -170,8 +170,7 @@ def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):
     from types import SimpleNamespace
 
     import bench._compare as C
-    import bench.studies.paper._replication as replication
-    import bench.studies.paper._rules as rules
+    from bench import kit
 
     def verdict(key, text, detail):
         return SimpleNamespace(key=key, claim=int(key), verdict=text, detail=detail, parts=[])
@@ -180,9 +179,9 @@ def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):
         "a": {"1": verdict("1", "inconclusive", "part: undecided"), "2": verdict("2", "x", "d")},
         "b": {"1": verdict("1", "inconclusive", "no runs"), "2": verdict("2", "y", "d")},
     }
-    monkeypatch.setattr(rules, "restrict_all", lambda runs, profile: {1: runs, 2: runs})
+    monkeypatch.setattr(kit, "restrict_all", lambda runs, profile: {1: runs, 2: runs})
     monkeypatch.setattr(
-        replication,
+        kit,
         "judge",
         lambda runs, curves, profile, restricted: SimpleNamespace(
             final=list(sides[profile].values()), primary=sides[profile]

@@ -104,7 +104,7 @@ def test_card_names_every_parameter_one_way(exported):
     names = systems.parameters(SYSTEM)
     top = card["system"]["parameters"]
     assert list(top) == names and top["k"] == K and top["g"] == 9.81
-    for name, e in card["datasets"].items():
+    for e in card["datasets"].values():
         params = e["parameters"]
         assert list(params) == names
         built = systems.make(SYSTEM, **dict(e["config"]["system_params"]))

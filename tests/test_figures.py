@@ -17,16 +17,18 @@ from _synthetic import synthetic_tables
 from bench._report import figure_stem, make_figures, write_report
 from bench._tables import discrimination_groups
 from bench.core._query import experiment_rows, load_tables
-from bench.studies.paper import FIGURES
-from bench.studies.paper._comparison import comparison_rows, comparison_section, load_other
-from bench.studies.paper.kit import (
-    INCONCLUSIVE,
-    NOT_REPRODUCED,
-    PARTLY,
-    REPRODUCED,
-    VERDICTS,
-    Verdict,
-)
+from bench.core._studies import studies
+from bench.kit import INCONCLUSIVE, NOT_REPRODUCED, PARTLY, REPRODUCED, VERDICTS, Verdict
+from bench.studies.paper import PAPER_EXPERIMENTS
+from bench.studies.paper.report._comparison import comparison_rows, comparison_section, load_other
+
+# experiment name -> figure function of the studies whose runs the synthetic tables hold
+FIGURES = {
+    s.name: s.figure
+    for s in studies()
+    if s.figure is not None
+    and {e.name for e in s.experiments} <= {e.name for e in PAPER_EXPERIMENTS}
+}
 
 
 def _store(d, runs, curves):
@@ -235,7 +237,7 @@ def test_a_figure_saved_twice_has_the_same_bytes(tmp_path):
 
     import matplotlib.pyplot as plt
 
-    from bench.studies._figure import save_figure
+    from bench.kit._figure import save_figure
 
     def draw(d):
         fig, ax = plt.subplots()
@@ -293,7 +295,7 @@ def test_a_demoted_reading_that_agrees_in_direction_is_named_as_stability_not_bu
     """Quick's seeds 0-4 read *not reproduced*, as the paper budget does, but its verdict
     changes without a seed: the cause is the reading's stability, and the budget is not named.
     Where the demoted reading's own seeds differ from the other folder, both are named."""
-    from bench.studies.paper._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
+    from bench.kit._replication import CHANGES_WITHOUT_A_SEED, DOES_NOT_REPLICATE
 
     def v(verdict, claim, primary=None, readings=""):
         return Verdict(
@@ -355,8 +357,7 @@ def test_report_names_no_folder_by_its_absolute_path(tmp_path):
 def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_claims(
     results, judged
 ):
-    from bench.studies.paper import policy
-    from bench.studies.paper.kit import margin_ranges
+    from bench.kit import margin_ranges, policy
 
     _, _, text = results
     verdicts, _ = judged
@@ -377,7 +378,7 @@ def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_cla
 
 
 def test_figures_are_drawn_without_pyplot():
-    """Every figure is a ``Figure`` saved by ``bench.studies._figure``: no module of the suite
+    """Every figure is a ``Figure`` saved by ``bench.kit``'s figure helpers: no module of the suite
     goes through pyplot's global state or switches the backend."""
     root = Path(__file__).resolve().parents[1]
     offenders = [

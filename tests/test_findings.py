@@ -102,7 +102,7 @@ def test_claims_table_reads_every_column_and_refuses_a_report_without_one():
 
 def test_the_seeds_protocols_come_from_each_claims_section():
     from bench import findings as F
-    from bench.studies.paper._protocols import HEADER, ROWS, Protocol, protocol_table
+    from bench.kit._protocols import HEADER, ROWS, Protocol, protocol_table
 
     assert F.PROTOCOL_HEADER == HEADER
     rows = dict.fromkeys(ROWS, "-")
@@ -208,9 +208,9 @@ def test_margin_dependent_readings_of_one_claim_are_counted():
 
 
 def test_a_pending_claim_is_not_called_margin_dependent():
-    from bench.studies.paper._sections import _dependence_section
-    from bench.studies.paper._sensitivity import Dependence
-    from bench.studies.paper.kit import Verdict
+    from bench.kit import Verdict
+    from bench.kit._sensitivity import Dependence
+    from bench.studies.paper.report._sections import _dependence_section
 
     def v(key, pending=None):
         return Verdict(int(key), "t", "inconclusive", 0.0, 0.0, 0.0, 5, "", pending=pending)

@@ -1,12 +1,12 @@
-"""Each claim's headline table and figure (bench.studies.paper._headlines) on synthetic
+"""Each claim's headline table and figure (bench.kit._headlines) on synthetic
 verdicts."""
 
 import math
 
 import numpy as np
 
-from bench.studies.paper import _headlines as H
-from bench.studies.paper.kit import Part, greater, margin, verdict
+from bench.kit import Part, greater, margin, verdict
+from bench.kit import _headlines as H
 
 ERR = margin("error")
 

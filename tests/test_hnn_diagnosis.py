@@ -12,7 +12,7 @@ import models
 from bench.core._build import build_run
 from bench.core._fit import train_config
 from bench.core._train import train
-from bench.studies.paper import _hnn_diagnosis as D
+from bench.studies.paper.hnn_diagnosis import _diagnosis as D
 from models._mlp import MLP
 
 

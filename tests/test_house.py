@@ -110,3 +110,22 @@ def test_no_history_in_the_code():
 )
 def test_the_history_check_reads_lines_as_meant(line, history):
     assert bool(HISTORY.search(line)) is history
+
+
+def test_every_data_file_of_the_packages_ships_with_them():
+    # A file that a package reads at import (not a .py) must be named in pyproject.toml's
+    # package-data, or a wheel and a non-editable install go without it.
+    import fnmatch
+    import tomllib
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    shipped = config["tool"]["setuptools"].get("package-data", {})
+    missing = []
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*")):
+            if not path.is_file() or path.suffix in (".py", ".pyc") or "__pycache__" in path.parts:
+                continue
+            owner = ".".join(path.parent.relative_to(ROOT).parts)
+            if not any(fnmatch.fnmatch(path.name, p) for p in shipped.get(owner, ())):
+                missing.append(str(path.relative_to(ROOT)))
+    assert missing == []

@@ -68,15 +68,17 @@ def test_import_models_loads_no_bench():
 
 
 # ----------------------------------------------------------------------------- inside bench
-# Layers inside bench: core <- studies <- the CLI, the report and the package's
-# entry points. A module may import its own layer or a lower one, and no import cycle may join
-# bench's modules (lazy imports inside functions count: they are cycles all the same).
+# Layers inside bench: core <- kit <- studies <- the CLI, the report and the package's entry
+# points. A module may import its own layer or a lower one, and no import cycle may join bench's
+# modules (lazy imports inside functions count: they are cycles all the same).
+LAYERS = ("bench.core", "bench.kit", "bench.studies")
+
+
 def _layer(module: str) -> int:
-    if module == "bench.core" or module.startswith("bench.core."):
-        return 0
-    if module == "bench.studies" or module.startswith("bench.studies."):
-        return 1
-    return 2
+    for i, layer in enumerate(LAYERS):
+        if module == layer or module.startswith(layer + "."):
+            return i
+    return len(LAYERS)
 
 
 def _module_name(path: Path, root: Path) -> str:
@@ -154,6 +156,7 @@ def test_bench_has_no_import_cycle():
 def test_bench_layers_point_one_way():
     graph = _module_graph()
     assert "bench.core._runner" in graph and "bench.studies.paper.energy" in graph
+    assert "bench.kit._verdict" in graph
     assert not _upward(graph), "upward imports: " + "; ".join(_upward(graph))
 
 
@@ -220,3 +223,106 @@ def test_the_lower_packages_have_no_import_cycle(package):
     graph = _module_graph(ROOT, package)
     assert f"{package}._registry" in graph or f"{package}._base" in graph, sorted(graph)[:5]
     assert not _cycles(graph), _cycles(graph)
+
+
+# ----------------------------------------------------------------------------- the studies' house
+# The claims kit (bench.kit) is reached through its face: outside it, a module imports the names
+# of ``bench.kit.__all__``, never one of its private modules. A study of the paper is a folder
+# (bench/studies/paper/<study>/) holding its experiments, rule, figure and report section; beside
+# the studies stand only what they share (``_common``), the report's sections and the campaign.
+PAPER = ROOT / "bench" / "studies" / "paper"
+
+
+def _folder(module: str) -> str:
+    """The folder a module stands in as a room of the house: bench.kit, a study's folder under
+    bench.studies.paper, or the module's own package elsewhere."""
+    parts = module.split(".")
+    if parts[:2] == ["bench", "kit"]:
+        return "bench.kit"
+    if parts[:3] == ["bench", "studies", "paper"] and len(parts) > 3:
+        return ".".join(parts[:4])
+    return module
+
+
+def _folder_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    out: dict[str, set[str]] = {}
+    for a, targets in graph.items():
+        out.setdefault(_folder(a), set()).update(
+            _folder(b) for b in targets if _folder(b) != _folder(a)
+        )
+    return out
+
+
+def test_no_cycle_joins_the_kit_the_studies_and_their_folders():
+    folders = _folder_graph(_module_graph())
+    assert "bench.kit" in folders and "bench.studies.paper.pixels" in folders
+    assert not _cycles(folders), _cycles(folders)
+
+
+def test_the_folder_check_sees_a_cycle_between_two_studies():
+    graph = {
+        "bench.studies.paper.a": {"bench.studies.paper.b._rule"},
+        "bench.studies.paper.b._rule": {"bench.studies.paper.a._figure"},
+        "bench.studies.paper.a._figure": set(),
+    }
+    assert _cycles(_folder_graph(graph)) == [["bench.studies.paper.a", "bench.studies.paper.b"]]
+
+
+def _kit_imports(path: Path, root: Path = ROOT) -> list[tuple[str, str, int]]:
+    """The ``from bench.kit... import name`` of ``path``: (module, name, line)."""
+    return [
+        (mod, name, line)
+        for mod, name, line in _from_imports(path, root)
+        if mod == "bench.kit" or mod.startswith("bench.kit.")
+    ]
+
+
+def test_the_studies_reach_the_kit_through_its_public_names():
+    import bench.kit
+
+    public = set(bench.kit.__all__)
+    bad = []
+    for path in sorted((ROOT / "bench").rglob("*.py")):
+        if path.is_relative_to(ROOT / "bench" / "kit"):
+            continue
+        for mod, name, line in _kit_imports(path):
+            if mod != "bench.kit" or name not in public:
+                bad.append(f"{path.relative_to(ROOT)}:{line} imports {name} from {mod}")
+    assert not bad, "; ".join(bad)
+
+
+def test_the_kit_exports_what_it_names():
+    import bench.kit
+
+    assert len(set(bench.kit.__all__)) == len(bench.kit.__all__)
+    assert [n for n in bench.kit.__all__ if not hasattr(bench.kit, n)] == []
+    for name in ("verdict", "evaluate_claims", "judge", "policy", "save_figure", "fmt"):
+        assert name in bench.kit.__all__
+
+
+def test_the_kit_check_sees_a_private_module(tmp_path):
+    bad = tmp_path / "bench" / "studies" / "x.py"
+    bad.parent.mkdir(parents=True)
+    bad.write_text("from ..kit._stats import greater\nfrom ..kit import verdict\n")
+    got = _kit_imports(bad, tmp_path)
+    assert got == [("bench.kit._stats", "greater", 1), ("bench.kit", "verdict", 2)]
+
+
+def test_each_study_of_the_paper_is_a_folder():
+    from bench.core import _studies
+
+    flat = sorted(p.name for p in PAPER.glob("*.py") if p.name not in ("__init__.py", "_common.py"))
+    assert flat == [], f"modules beside the study folders: {flat}"
+    for study in _studies.studies():
+        parts = [
+            f.__module__
+            for f in (study.rule, study.figure, study.results_figure, study.section)
+            if f is not None
+        ]
+        mine = {m for m in parts if m.startswith("bench.studies.paper.")}
+        if not mine:
+            continue
+        folders = {_folder(m) for m in mine}
+        assert len(folders) == 1, (study.name, sorted(mine))
+        (folder,) = folders
+        assert (ROOT / Path(*folder.split(".")) / "__init__.py").exists(), (study.name, folder)

@@ -10,13 +10,13 @@ import pandas as pd
 import pytest
 
 import models
+from bench.kit import evaluate_claims
 from bench.studies._along import SCORES
 from bench.studies.learning import (
     settling,
     settling_table,
     verdicts_along_curve,
 )
-from bench.studies.paper import evaluate_claims
 from tests._synthetic import synthetic_tables
 
 PROFILE = "smoke"

@@ -1,14 +1,15 @@
-"""The claims at every number of links (bench.studies.paper._links) on synthetic stored runs of
-the paper profile's Fig. 5 cells at k = 1..4, seeds 0-9 (no training)."""
+"""The claims at every number of links (bench.studies.paper.report._links) on synthetic stored
+runs of the paper profile's Fig. 5 cells at k = 1..4, seeds 0-9 (no training)."""
 
 import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
 
+from bench import kit as R
 from bench.core._experiments import expand
-from bench.studies.paper import _links as L
-from bench.studies.paper import evaluate_claims
-from bench.studies.paper import kit as R
+from bench.kit import evaluate_claims
+from bench.studies.paper.coordinates import fig_links
+from bench.studies.paper.report import _links as L
 
 
 @pytest.fixture(scope="module")
@@ -71,10 +72,10 @@ def test_the_section_names_pending_readings_and_seeds(fig5):
 def test_the_figure_draws_error_against_k(fig5, tmp_path):
     runs, _ = fig5
     runs.to_parquet(tmp_path / "runs.parquet", index=False)
-    paths = L.fig_links(tmp_path)
+    paths = fig_links(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"} and all(p.exists() for p in paths)
     # one k only: nothing to draw
     other = tmp_path / "one"
     other.mkdir()
     runs[runs["k"] == 2].to_parquet(other / "runs.parquet", index=False)
-    assert L.fig_links(other) == []
+    assert fig_links(other) == []

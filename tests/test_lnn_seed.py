@@ -20,9 +20,9 @@ import systems
 from bench.core import _store
 from bench.core._experiments import expand
 from bench.core._train import TrainConfig, train
-from bench.studies.paper import _lnn_diagnosis as D
+from bench.kit import policy
 from bench.studies.paper import lnn_seed as S
-from bench.studies.paper import policy
+from bench.studies.paper.lnn_seed import _diagnosis as D
 from models._mlp import MLP
 from models._scalar import velocity_hessian
 
@@ -402,7 +402,7 @@ def test_the_paper_core_diagnosis_reads_the_campaigns_own_pure_lnns():
     LNNs of the seed's two protocols exactly as the campaign runs them (their cached
     parameters), with no init part, rollout-trained LNNs or ablations."""
     from bench.core._experiments import expand, get
-    from bench.studies.paper import _lnn_diagnosis as D
+    from bench.studies.paper.lnn_seed import _diagnosis as D
 
     got = D._trained_models("paper-core", None)
     want = {

@@ -14,9 +14,9 @@ import pytest
 import systems
 from bench.core import _store
 from bench.core._experiments import RunConfig, expand
-from bench.studies.paper import _mujoco_rule as R
+from bench.kit import policy
 from bench.studies.paper import mujoco as X
-from bench.studies.paper import policy
+from bench.studies.paper.mujoco import _rule as R
 from systems import mujoco_data as D
 
 SEEDS = (0, 1, 2, 3, 4)
@@ -122,7 +122,8 @@ def test_quick_runs_one_task_and_every_profile_reads_the_files_size(monkeypatch,
 
 
 def test_the_study_is_registered_with_its_rule_figure_and_section():
-    from bench.studies.paper import CLAIM_TITLES, claim_studies
+    from bench.kit import claim_studies
+    from bench.studies.paper import CLAIM_TITLES
 
     study = next(s for s in claim_studies() if s.claim == 16)
     assert study is X.STUDY and study.rule is X.claim_16 and study.experiments == X.EXPERIMENTS
@@ -298,7 +299,7 @@ def test_models_worse_than_holding_the_velocity_on_their_training_data_are_named
     """A trained model whose training MSE is above the constant-velocity predictor's fits its
     own training data worse than holding the velocity (a finite loss, so not flagged
     diverged): the section names its seeds; models below the predictor are not named."""
-    from bench.studies.paper._mujoco_section import worse_than_trivial_in_training
+    from bench.studies.paper.mujoco._section import worse_than_trivial_in_training
 
     runs = _tables()
     assert worse_than_trivial_in_training(runs) == []

@@ -3,6 +3,7 @@ cells share config hashes, and the budgets stay within what each profile promise
 
 import pytest
 
+from bench import kit
 from bench.core import _experiments as E
 from bench.studies import paper as P
 
@@ -85,7 +86,7 @@ def test_every_experiment_has_a_trivial_predictor_at_every_seed(name, profile):
     seeds = {c.seed for c in runs}
     trivial = {c.seed for c in runs if c.model == "constant_velocity"}
     assert trivial == seeds
-    assert all(c.model_options == () for c in runs if c.model in P.TRIVIAL_MODELS)
+    assert all(c.model_options == () for c in runs if c.model in kit.TRIVIAL_MODELS)
 
 
 def test_relativistic_variants():

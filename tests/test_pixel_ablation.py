@@ -16,7 +16,7 @@ import pytest
 import models
 from bench.core import _pixels
 from bench.core._experiments import expand
-from bench.studies.paper import _pixel_ablation as D
+from bench.studies.paper.pixels import _ablation as D
 
 
 def _latent_vin(dtype="float64"):

@@ -18,10 +18,10 @@ import systems
 from bench.core import _store
 from bench.core._experiments import RunConfig, expand
 from bench.core._runnable import check_runnable
-from bench.studies.paper import _pixel_section as S
+from bench.kit import policy
 from bench.studies.paper import pixels as P
-from bench.studies.paper import policy
 from bench.studies.paper import vin_blog as V
+from bench.studies.paper.pixels import _section as S
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32

@@ -1,4 +1,4 @@
-"""The margin policy: every rule reads its margins from bench.studies.paper.policy.
+"""The margin policy: every rule reads its margins from bench.kit.policy.
 
 A margin typed into a rule (a number, a log of a number, a Margin built by hand) fails here:
 statically, no part constructor in the rule modules receives a literal, and no rule module
@@ -13,23 +13,24 @@ from pathlib import Path
 import pytest
 from _synthetic import synthetic_tables
 
+from bench import kit as R
+from bench.kit import policy
 from bench.studies import paper as C
-from bench.studies.paper import kit as R
-from bench.studies.paper import policy
 
-RULES = Path(C.__file__).parent
+STUDIES = Path(C.__file__).parent
+KIT = Path(R.__file__).parent
 CONSTRUCTORS = {"greater", "at_most", "equivalent", "band", "below", "share", "_part"}
 # the kit's modules that build parts and gates
-KIT = {"_stats.py", "_gates.py", "_discrimination.py", "_rules.py"}
+KIT_RULES = {"_stats.py", "_gates.py", "_discrimination.py", "_claims.py"}
+# the paper's folders that hold no rule: its campaigns and its report's sections
+NOT_RULES = {"campaign", "report"}
 
 
 def _rule_modules():
-    """The modules that hold rules: the studies (public names) and the kit that builds parts."""
-    return sorted(
-        p
-        for p in RULES.glob("*.py")
-        if (not p.name.startswith("_") and p.name not in ("policy.py", "kit.py")) or p.name in KIT
-    )
+    """The modules that hold rules: every module of the studies' folders and the kit's modules
+    that build parts."""
+    studies = (p for p in STUDIES.rglob("*.py") if p.relative_to(STUDIES).parts[0] not in NOT_RULES)
+    return sorted([*studies, *(KIT / name for name in KIT_RULES)])
 
 
 def _is_number(node) -> bool:
@@ -40,7 +41,9 @@ def _is_number(node) -> bool:
     return isinstance(node, ast.BinOp) and _is_number(node.left) and _is_number(node.right)
 
 
-@pytest.mark.parametrize("path", _rule_modules(), ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path", _rule_modules(), ids=lambda p: str(p.relative_to(STUDIES.parents[2]))
+)
 def test_no_rule_types_a_margin(path):
     tree = ast.parse(path.read_text())
     for node in ast.walk(tree):
@@ -50,12 +53,12 @@ def test_no_rule_types_a_margin(path):
         if name in CONSTRUCTORS:
             margin = [*node.args[2:], *(k.value for k in node.keywords if k.arg == "mg")]
             for arg in margin:
-                assert not _is_number(arg), f"{path.name}:{node.lineno}: a typed margin"
+                assert not _is_number(arg), f"{path}:{node.lineno}: a typed margin"
                 assert not (isinstance(arg, ast.Call) and getattr(arg.func, "attr", "") == "log")
         if name == "log" and node.args and _is_number(node.args[0]):
-            raise AssertionError(f"{path.name}:{node.lineno}: log of a number (a margin?)")
+            raise AssertionError(f"{path}:{node.lineno}: log of a number (a margin?)")
         if name == "Margin":
-            raise AssertionError(f"{path.name}:{node.lineno}: a Margin built outside the policy")
+            raise AssertionError(f"{path}:{node.lineno}: a Margin built outside the policy")
 
 
 def test_the_policy_table():
@@ -91,7 +94,7 @@ def _margins(verdicts):
 
 def test_every_part_has_a_margin_of_the_policy(tables):
     stated = {(m.quantity, m.value) for m in policy.stated_margins()}
-    got = _margins(C.evaluate_claims(*tables))
+    got = _margins(R.evaluate_claims(*tables))
     assert len({k for k, *_ in got}) >= 8  # every claim of these tables has parts
     for key, name, q, value, label in got:
         base = policy.POLICY[q].margin
@@ -100,10 +103,10 @@ def test_every_part_has_a_margin_of_the_policy(tables):
 
 
 def test_every_part_moves_with_the_policy(tables):
-    before = _margins(C.evaluate_claims(*tables))
+    before = _margins(R.evaluate_claims(*tables))
     moved = {q: policy.POLICY[q].band[1] for q in policy.POLICY}
     with policy.override(**moved):
-        after = _margins(C.evaluate_claims(*tables))
+        after = _margins(R.evaluate_claims(*tables))
     assert [(k, q) for k, _, q, *_ in before] == [(k, q) for k, _, q, *_ in after]
     for (key, name, q, v0, label), (*_, v1, _l) in zip(before, after, strict=True):
         if "(stated:" in label:

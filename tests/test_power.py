@@ -1,12 +1,12 @@
-"""The engine's power (bench.studies.paper._power): a small simulation on synthetic parts."""
+"""The engine's power (bench.kit._power): a small simulation on synthetic parts."""
 
 import math
 
 import numpy as np
 import pytest
 
-from bench.studies.paper import _power as P
-from bench.studies.paper.kit import at_most, greater, margin, verdict
+from bench.kit import _power as P
+from bench.kit import at_most, greater, margin, verdict
 
 ERR = margin("error")  # 1.25x: log margin 0.223
 rng = np.random.default_rng(0)

@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 
 from bench.core._experiments import expand, get
-from bench.studies.paper._protocols import ROWS, Protocol, by_seed_set, protocol_table
-from bench.studies.paper.kit import Verdict
+from bench.kit import Verdict
+from bench.kit._protocols import ROWS, Protocol, by_seed_set, protocol_table
 
 EXPERIMENT = "relativistic_seed"
 CELLS = dict.fromkeys(ROWS, "-")

@@ -209,7 +209,7 @@ def test_a_frozen_state_as_conserving_as_the_hnn_is_said():
 
 
 def test_real_data_undecided_at_the_margin_or_unlearned():
-    from bench.studies.paper import policy
+    from bench.kit import policy
 
     margin = policy.margin("energy", squared=True).value
     v = P.claim_15(_tables(energy_ratio=margin, spread=1.0))

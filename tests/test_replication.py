@@ -1,4 +1,4 @@
-"""Verdicts that replicate (bench.studies.paper._replication.judge) on synthetic stored runs.
+"""Verdicts that replicate (bench.kit._replication.judge) on synthetic stored runs.
 
 The quick profile's claims are judged on its primary seeds (0-4), again on the replication
 seeds (5-9), and without each primary seed. The tables hold only the runs of the second_order
@@ -10,11 +10,10 @@ import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
 
+from bench import kit as R
 from bench.core._experiments import PROFILES, REPLICATION_SEEDS, expand
-from bench.studies._text import fmt
-from bench.studies.paper import evaluate_claims
-from bench.studies.paper import kit as R
-from bench.studies.paper._replication import (
+from bench.kit import evaluate_claims
+from bench.kit._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
     judge,
@@ -24,6 +23,7 @@ from bench.studies.paper._replication import (
     settled,
     why_not_replicated,
 )
+from bench.kit._text import fmt
 
 PROFILE = "quick"
 PRIMARY = (0, 1, 2, 3, 4)
@@ -330,7 +330,7 @@ def test_pooling_that_resolves_a_part_is_said(
     that each set left undecided, and read another verdict: the report names that part."""
     import dataclasses
 
-    from bench.studies.paper import _replication
+    from bench.kit import _replication
 
     runs, curves = _join(reproduce_primary, reproduce_replication)
     real = _replication.evaluate_claims
@@ -364,7 +364,7 @@ def test_pooling_that_resolves_a_part_is_said(
 def test_a_part_reversed_without_a_seed_demotes_the_verdict(reproduce_primary, monkeypatch):
     import dataclasses
 
-    from bench.studies.paper import _replication
+    from bench.kit import _replication
 
     runs, curves = reproduce_primary
     real = _replication.evaluate_claims
@@ -430,7 +430,7 @@ def test_a_claims_declared_runs_count_every_study_that_declares_its_experiments(
     with none of the seed protocol's runs stored)."""
     import pandas as pd
 
-    from bench.studies.paper._replication import stored_counts
+    from bench.kit._replication import stored_counts
 
     counts = stored_counts(pd.DataFrame({"config_hash": []}), "paper-core")
     ours = {c.config_hash for c in expand("relativistic", "paper-core")}

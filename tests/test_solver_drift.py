@@ -16,8 +16,8 @@ from _synthetic import synthetic_tables
 import models
 import systems
 from bench.core._experiments import expand
-from bench.studies.paper import _solver_drift as D
-from bench.studies.paper import policy
+from bench.kit import policy
+from bench.studies.paper.energy import _solver_drift as D
 from bench.studies.paper.energy import claim_1
 
 NAME = "(d) HNN+SO energy violation over the solver's own drift"

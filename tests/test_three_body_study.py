@@ -12,9 +12,9 @@ import pytest
 
 from bench.core import _store
 from bench.core._experiments import expand
-from bench.studies.paper import policy
+from bench.kit import policy
 from bench.studies.paper import three_body as T
-from bench.studies.paper._campaign import campaign_experiments
+from bench.studies.paper.campaign._campaign import campaign_experiments
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])

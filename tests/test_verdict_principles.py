@@ -7,8 +7,8 @@ voids only its own parts; a claim whose parts pool that system with others stays
 import numpy as np
 import pytest
 
-from bench.studies.paper import kit as R
-from bench.studies.paper.kit import Discrimination, greater, margin, verdict
+from bench import kit as R
+from bench.kit import Discrimination, greater, margin, verdict
 
 ERR = margin("error")
 CLEAR = np.log([3.0, 3.2, 2.9, 3.1, 3.3])  # a clear 3x edge on five seeds
@@ -100,7 +100,7 @@ def test_mirrored_effects_give_mirrored_statuses():
 def test_a_closed_gate_or_condition_never_contradicts():
     """A comparison whose model did not learn, or whose condition is contradicted, reads *not
     tested*, and a claim of such parts is inconclusive, never *not reproduced*."""
-    from bench.studies.paper.kit import Gate, gated, similar_fit
+    from bench.kit import Gate, gated, similar_fit
 
     closed = Gate("model", False, "model did not learn")
     fit, tied = similar_fit("(b) fit edge", np.log([40.0, 30.0, 35.0, 28.0, 33.0]), margin("loss"))

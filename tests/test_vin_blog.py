@@ -19,8 +19,8 @@ from bench.core import _embedding, _store
 from bench.core._experiments import RunConfig, expand
 from bench.core._frames import FRAME_METRICS, WindowDraws, seed_elbo
 from bench.core._runnable import check_runnable
+from bench.kit import policy
 from bench.studies.paper import pixels as P
-from bench.studies.paper import policy
 from bench.studies.paper import vin_blog as V
 
 SEEDS = (0, 1, 2, 3, 4)

@@ -71,7 +71,7 @@ def _schedule(todo: list[RunConfig], order: Callable[[RunConfig], float]) -> lis
     before the other has filled the persistent compilation cache: on a cold cache (a fresh
     clone) the second compile is wasted (4 of the 26 CPU minutes of compilation of quick's
     seeds 0-4 in one measured sweep). Sorting is stable: equal keys keep their order.
-    A key that is a tuple (``bench.studies.paper._campaign.priority``: claim rank, seconds)
+    A key that is a tuple (``bench.studies.paper.campaign._campaign.priority``: claim rank, seconds)
     keeps its leading parts first: the rule applies within each of their groups.
     """
     firsts: set[str] = set()

@@ -1,19 +1,19 @@
-"""The studies: each paper experiment with its verdict rule and figure, the trade-off, the
+"""The studies: each study of the paper in its folder (``paper/``), the trade-off, the
 stability study and the learning curves (registered here), and the performance benchmark
 (``perf``: its verb is registered here; its timing modules pin threads at import, so they load
 only when ``python -m bench perf`` measures).
 
 Importing this package registers every built-in study in :mod:`bench.core`'s registry
 (:func:`bench.core.studies`); the order of the imports is the report's order. A study imports
-``bench.core`` and other studies, never the CLI or the report. :func:`run_seconds` is the
-suite's estimate of one run's time (the paper budget's cost model): sweeps start the longest
-runs first by it.
+``bench.core``, the claims kit (``bench.kit``) and other studies, never the CLI or the report.
+:func:`run_seconds` is the suite's estimate of one run's time (the paper budget's cost model):
+sweeps start the longest runs first by it.
 """
 
 from . import paper, tradeoff  # noqa: I001 - registration order
 from . import stability
 from . import learning
 from . import perf
-from .paper._budget import run_seconds
+from .paper.campaign import run_seconds
 
 __all__ = ["learning", "paper", "perf", "run_seconds", "stability", "tradeoff"]

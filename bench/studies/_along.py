@@ -16,7 +16,7 @@ import pandas as pd
 import models
 
 from ..core._evaluate import CHECKPOINT_METRICS as SCORES  # what a checkpoint replaces
-from .paper._rules import claim_studies, evaluate_claims, restrict
+from ..kit import claim_studies, evaluate_claims, restrict
 
 __all__ = [
     "along_row",

@@ -18,6 +18,15 @@ from ..core._experiments import PROFILES, Experiment
 from ..core._query import load_tables, select
 from ..core._store import load_checkpoints
 from ..core._studies import Study, register_study
+from ..kit import (
+    COLORS,
+    MODEL_LABELS,
+    SYSTEM_LABELS,
+    claim_studies,
+    restrict,
+    save_figure,
+    subplots,
+)
 from ._along import (
     along_row,
     curves_at,
@@ -27,11 +36,7 @@ from ._along import (
     settling_table,
     verdicts_along_curve,
 )
-from ._figure import save_figure, subplots
-from .paper._common import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides
-from .paper._plot import COLORS, SYSTEM_LABELS
-from .paper._rules import claim_studies, restrict
-from .paper.kit import MODEL_LABELS
+from .paper import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides
 
 # The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
 # runs share system, k and model with them)

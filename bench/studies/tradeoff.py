@@ -22,7 +22,7 @@ from ..core._provenance import machine_key
 from ..core._query import experiment_rows, pick_profile
 from ..core._store import load_runs
 from ..core._studies import Study, register_study
-from ._figure import save_figure, subplots
+from ..kit import save_figure, subplots
 from ._pareto import ERROR, aggregate_seeds, cheapest_within, pareto_front
 
 MODELS = ("node", "node_so", "hnn_so", "lnn", "vin")
@@ -200,7 +200,7 @@ def estimate(
     """
     import math
 
-    from .paper._budget import MS_PER_STEP, PAPER_EXPERIMENTS
+    from .paper.campaign import MS_PER_STEP, PAPER_EXPERIMENTS
 
     ms = dict(MS_PER_STEP)
     ms.update(ms_per_step or {})

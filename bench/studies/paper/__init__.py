@@ -1,28 +1,25 @@
 """The experiments of the paper (Gruver et al. 2022, Figs. 2-9) and of the HNN/LNN/VIN seeds.
 
-One module per figure: its :class:`~bench.core.Experiment`, its claim's verdict rule and its
-figure, registered together as a :class:`~bench.core.Study` at import. Rules are built from
-the study kit (:mod:`.kit`). Trivial predictors, shared runs, the spring's initial states and
-the budgets: docs/studies/paper.md.
+One folder per study: its :class:`~bench.core.Experiment`\\ s, its claim's verdict rule, its
+figure and its report section (and its diagnosis where it has one), registered together as a
+:class:`~bench.core.Study` at import, the rules built from the claims kit (:mod:`bench.kit`).
+The registry (:func:`bench.core.studies`) is the one list of them: the figures and the claims
+are read from it. Beside the studies: what they share (``_common``), the paper's report
+sections (``report``) and its campaigns with their budget and verbs (``campaign``). Trivial
+predictors, shared runs, the spring's initial states and the budgets: docs/studies/paper.md.
 """
 
 # isort: off
 # The import order is the registration order: the report's and the figures' order.
-from . import energy, symplectic, second_order, coordinates, damped, loss
+from . import energy, symplectic, second_order, coordinates, damped, loss  # noqa: F401
 from . import relativistic, double_pendulum, lnn_seed, vin, hnn_seed  # noqa: F401
-from . import pixels, vin_blog, _hnn_diagnosis  # noqa: F401
+from . import pixels, vin_blog, hnn_diagnosis  # noqa: F401
 from . import rigid_bodies, three_body, real_pendulum, mujoco  # noqa: F401
-from . import _commands, _sections  # noqa: F401 - the paper's verbs and report sections
+from . import campaign, report  # noqa: F401 - the paper's verbs and report sections
 
 # isort: on
-from ._budget import (
-    MS_PER_STEP,
-    PAPER_EXPERIMENTS,
-    WALL_S,
-    estimate_seconds,
-    make_bench_seconds,
-)
 from ._common import (
+    CLAIM_TITLES,
     PAPER_MODELS,
     RELATIVISTIC_TEST_PARAMS,
     SHARED_OVERRIDES,
@@ -30,10 +27,10 @@ from ._common import (
     SPRING_PAPER,
     SYMREG_WEIGHTS,
     SYSTEMS,
-    TRIVIAL_MODELS,
+    initial_ok,
+    shared_overrides,
 )
-from ._rules import CLAIM_TITLES, claim_studies, evaluate_claims
-from .kit import MODEL_LABELS, TRIVIAL_FACTOR, VERDICTS, Verdict, discrimination, scored, succeeds
+from .campaign import MS_PER_STEP, PAPER_EXPERIMENTS, WALL_S, estimate_seconds, make_bench_seconds
 from .relativistic import (
     RELATIVISTIC_CELLS,
     RELATIVISTIC_EXTRAS,
@@ -41,20 +38,8 @@ from .relativistic import (
     velocity_scores,
 )
 
-_MODULES = (energy, symplectic, second_order, coordinates, damped, loss, relativistic)
-_MODULES += (double_pendulum, vin)
-_STUDIES = tuple(m.STUDY for m in _MODULES[:7]) + (relativistic.SEED_STUDY,)
-_STUDIES += tuple(m.STUDY for m in _MODULES[7:])
-# experiment name -> figure function, in the report's order
-FIGURES = {s.name: s.figure for s in _STUDIES}
-# claim number -> verdict rule
-CLAIMS = {m.STUDY.claim: m.STUDY.rule for m in _MODULES if m.STUDY.rule is not None}
-
 __all__ = [
-    "CLAIMS",
     "CLAIM_TITLES",
-    "FIGURES",
-    "MODEL_LABELS",
     "MS_PER_STEP",
     "PAPER_EXPERIMENTS",
     "PAPER_MODELS",
@@ -67,17 +52,10 @@ __all__ = [
     "SPRING_PAPER",
     "SYMREG_WEIGHTS",
     "SYSTEMS",
-    "TRIVIAL_FACTOR",
-    "TRIVIAL_MODELS",
-    "VERDICTS",
-    "Verdict",
     "WALL_S",
-    "claim_studies",
-    "discrimination",
     "estimate_seconds",
-    "evaluate_claims",
+    "initial_ok",
     "make_bench_seconds",
-    "scored",
-    "succeeds",
+    "shared_overrides",
     "velocity_scores",
 ]

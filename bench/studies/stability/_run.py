@@ -12,7 +12,7 @@ import numpy as np
 
 from ...core._errors import one_line
 from ...core._provenance import provenance
-from .._figure import save_figure, subplots
+from ...kit import save_figure, subplots
 from ._core import (
     COLUMNS,
     METHOD_NOTES,

@@ -1,0 +1,130 @@
+"""Claim evaluation over the registered studies: the rows each claim reads, and its verdicts.
+
+A claim is a registered :class:`~bench.core.Study` with a verdict rule; the rules themselves
+live with their studies (``bench.studies.paper.energy``: claim 1, ...), built from this kit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+import pandas as pd
+
+from ..core._query import experiment_rows, labelled
+from ..core._studies import studies
+from ._verdict import INCONCLUSIVE, Verdict
+
+__all__ = [
+    "claim_studies",
+    "claims_not_run",
+    "evaluate_claims",
+    "restrict",
+    "restrict_all",
+    "runs_at",
+]
+
+
+def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
+    """The rows a claim reads: those of its study's experiments (by config hash under
+    ``profile``) plus the stored rows tagged with an experiment in ``study.reads`` (results older
+    than today's declarations, whose cells no longer expand, still reach the claims that filter
+    them). The runs of other experiments that happen to match a claim's field filters, e.g.
+    VIN's NODE+SO on the pendulum, are left out."""
+    if profile is None or "config_hash" not in runs:
+        return runs
+    parts = [experiment_rows(runs, exp.name, profile) for exp in study.experiments]
+    if "experiment" in runs:
+        parts.append(runs[runs["experiment"].isin(study.reads) & labelled(runs, profile)])
+    # ignore_index: experiment_rows resets its index and the tagged rows keep the store's, so
+    # labels would repeat (and a rule that aligns on the index would fail)
+    return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
+
+
+def restrict_all(
+    runs: pd.DataFrame, profile: str | None, claims: Iterable[int] | None = None
+) -> dict[int, pd.DataFrame]:
+    """``{claim: the rows it reads}`` for every claim study (only ``claims`` where given;
+    :func:`restrict`): the rows a claim reads do not depend on the seed, so one restriction
+    serves every seed set."""
+    wanted = None if claims is None else set(claims)
+    return {
+        s.claim: _plain_columns(restrict(runs, s, profile))
+        for s in claim_studies()
+        if wanted is None or s.claim in wanted
+    }
+
+
+def _plain_columns(df: pd.DataFrame) -> pd.DataFrame:
+    """Arrow-backed string columns as plain objects: the rules slice a table thousands of
+    times, and taking rows of Arrow strings costs several times more."""
+    cols = {c: object for c in df.columns if pd.api.types.is_string_dtype(df[c].dtype)}
+    return df.astype(cols).copy() if cols else df  # the copy consolidates the columns
+
+
+def runs_at(study, profile: str | None) -> bool:
+    """Whether a study's claim is judged at ``profile``: one of its experiments runs there
+    (``Experiment.profiles``). Always with no profile."""
+    if profile is None or not study.experiments:
+        return True
+    return any(e.profiles is None or profile in e.profiles for e in study.experiments)
+
+
+def claims_not_run(profile: str | None) -> list:
+    """The claim studies not judged at ``profile`` (:func:`runs_at`), by claim number."""
+    return [s for s in claim_studies() if not runs_at(s, profile)]
+
+
+def claim_studies() -> list:
+    """The registered studies with a verdict rule, by claim number."""
+    return sorted((s for s in studies() if s.rule is not None), key=lambda s: s.claim)
+
+
+def evaluate_claims(
+    runs: pd.DataFrame,
+    curves: pd.DataFrame | None = None,
+    profile: str | None = None,
+    claims: Iterable[int] | None = None,
+    *,
+    seeds: Iterable[int] | None = None,
+    restricted: Mapping[int, pd.DataFrame] | None = None,
+) -> list[Verdict]:
+    """Every verdict (claim 4 gives several); a claim whose computation fails is
+    "inconclusive" with the error. With ``profile``, each claim sees only the runs of its
+    experiments (by config hash, plus older rows tagged with them) and its verdicts carry it;
+    a claim whose experiments do not run at ``profile`` has no verdict (:func:`claims_not_run`).
+    ``claims``: only these claim numbers; ``seeds``: only these seeds; ``restricted``: each
+    claim's rows already restricted (:func:`restrict_all`), for callers that judge one table on
+    many seed sets or margins.
+    """
+    import dataclasses
+
+    out = []
+    wanted = None if claims is None else set(claims)
+    for study in claim_studies():
+        n = study.claim
+        if wanted is not None and n not in wanted:
+            continue
+        if not runs_at(study, profile):
+            continue  # e.g. claim 6 at quick: no verdict, not an inconclusive one
+        try:
+            rows = restricted[n] if restricted is not None else restrict(runs, study, profile)
+            if seeds is not None and len(rows) and "seed" in rows:
+                rows = rows[rows["seed"].isin(list(seeds))].reset_index(drop=True)
+            got = study.rule(rows, curves)
+            got = got if isinstance(got, list) else [got]
+        except Exception as e:  # noqa: BLE001 - a report must still be written
+            got = [
+                Verdict(
+                    n,
+                    study.title,
+                    INCONCLUSIVE,
+                    math.nan,
+                    math.nan,
+                    math.nan,
+                    0,
+                    f"could not evaluate: {type(e).__name__}: {e}",
+                )
+            ]
+        out += [dataclasses.replace(v, profile=profile) for v in got]
+    return out

@@ -1,0 +1,184 @@
+"""The campaign's verbs of ``python -m bench``: ``estimate`` (runs and hours per claim of a
+profile's campaign) and ``campaign`` (its sweep, claim by claim). The studies' diagnoses
+register their own verbs, in their folders."""
+
+from __future__ import annotations
+
+from ....core._config import check_choice
+from ....core._experiments import PROFILES
+from ....core._studies import Command, register_command
+from ..._options import (
+    check_sweep_args,
+    int_arg,
+    run_experiments,
+    sweep_options,
+    usable_results,
+)
+
+
+def _estimate_arguments(p):
+    p.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
+    p.add_argument("--workers", type=int_arg("workers"), default=2, help="for the wall hours")
+
+
+def _estimate(args) -> int:
+    from ....core._experiments import SELECTIONS, replication_seeds
+    from ._campaign import (
+        CAMPAIGN_CLAIMS,
+        cheapest_first,
+        format_plan,
+        plan,
+        replication_order,
+        saved_trainings,
+        signed_claims,
+    )
+
+    check_choice("profile", args.profile, list(PROFILES))
+    if args.workers < 1:
+        raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
+    first = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
+    own = plan(args.profile, args.results, workers=args.workers, order=first)
+    print(f"results: {args.results}")
+    seeds = replication_seeds(args.profile)
+    if not (args.profile in SELECTIONS and seeds):
+        print(format_plan(own, args.profile, args.workers))
+        return 0
+    # make paper-core's three phases: the replication seeds of the signed verdicts, the
+    # profile's own seeds, the replication seeds of the rest
+    signed = signed_claims(args.results, args.profile)
+    order = replication_order(args.results, args.profile, signed)
+    rest = frozenset(CAMPAIGN_CLAIMS) - signed
+    for i, (title, df) in enumerate(
+        (
+            (f"signed verdicts ({_claims(signed)})", _rep(args, seeds, own, order, signed)),
+            (None, own),
+            (f"the other claims ({_claims(rest)})", _rep(args, seeds, own, order, rest)),
+        )
+    ):
+        print(f"{chr(10) if i else ''}phase {i + 1} of 3")
+        print(
+            format_plan(df, args.profile, args.workers, seeds=seeds if title else None, which=title)
+        )
+    saved = saved_trainings(args.profile, args.results)
+    if saved:
+        print("\ntrainings saved mid-way (the next start resumes them):")
+        print("\n".join(f"  {line}" for line in saved))
+    return 0
+
+
+def _claims(claims) -> str:
+    return ", ".join(map(str, sorted(claims))) or "none"
+
+
+def _rep(args, seeds, prior, order, claims):
+    from ._campaign import plan
+
+    return plan(
+        args.profile,
+        args.results,
+        workers=args.workers,
+        seeds=seeds,
+        prior=prior,
+        order=order,
+        claims=claims,
+    )
+
+
+def _campaign_arguments(p):
+    sweep_options(p, default_profile="paper-core")
+    p.add_argument(
+        "--replication",
+        action="store_true",
+        help="on the profile's replication seeds instead of its own "
+        "(quick, paper, paper-core: 5-9)",
+    )
+    p.add_argument(
+        "--signed",
+        action="store_true",
+        help="only the claims whose verdict on the profile's own seeds is stored and signed "
+        "(make paper-core replicates them first)",
+    )
+    p.add_argument(
+        "--claims",
+        default=None,
+        metavar="9,12",
+        help="only these claims' cells (with --signed: those of them that are signed); "
+        "make paper-core CAMPAIGN_FIRST=9 runs them before its phases",
+    )
+
+
+def _claim_list(text: str) -> frozenset:
+    """The claims of ``--claims`` (comma-separated numbers of the campaign's claims)."""
+    from ._campaign import CAMPAIGN_CLAIMS
+
+    out, allowed = set(), [str(c) for c in sorted(CAMPAIGN_CLAIMS)]
+    for part in str(text).split(","):
+        check_choice("claim", part.strip(), allowed)
+        out.add(int(part))
+    return frozenset(out)
+
+
+def _campaign(args) -> int:
+    from ....core._experiments import replication_seeds
+    from ._campaign import (
+        CAMPAIGN_CLAIMS,
+        campaign_experiments,
+        cheapest_first,
+        priority,
+        replication_order,
+        signed_claims,
+    )
+
+    check_sweep_args(args)
+    if not campaign_experiments(args.profile):
+        raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
+    seeds, order, claims = None, CAMPAIGN_CLAIMS, None
+    if args.replication:
+        seeds = replication_seeds(args.profile) or None
+        if seeds is None:
+            allowed = [p for p in PROFILES if replication_seeds(p)]
+            check_choice("profile with replication seeds", args.profile, allowed)
+    usable_results(args)
+    if args.signed:
+        claims = signed_claims(args.results, args.profile)
+    if args.claims is not None:
+        wanted = _claim_list(args.claims)
+        claims = wanted if claims is None else claims & wanted
+    if seeds:  # the claims with a signed verdict first (an inconclusive one cannot change)
+        order = replication_order(args.results, args.profile, claims)
+    else:  # the cheapest claims first: the most verdicts per hour
+        order = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
+    names = campaign_experiments(args.profile, order, claims)
+    if not names:
+        print(f"campaign {args.profile}: no claim with a signed verdict to run yet")
+        return 0
+    which = f" seeds {', '.join(map(str, seeds))}" if seeds else ""
+    kind = "signed verdicts: claims" if args.signed else "claims"
+    only = f" ({kind} {_claims(claims)})" if claims is not None else ""
+    print(f"campaign {args.profile}{which}{only} -> {args.results}: {', '.join(names)}", flush=True)
+    # claim by claim, longest runs first within a claim
+    key = priority(args.profile, seeds, order, claims)
+    res = run_experiments(args, names, order=key, seeds=seeds)
+    for name, rows in res.items():
+        print(f"{name}: {len(rows)} new runs", flush=True)
+    return 0
+
+
+COMMANDS = tuple(
+    register_command(c)
+    for c in (
+        Command(
+            "estimate",
+            "runs and hours per claim of a profile's campaign (stored, left)",
+            _estimate,
+            _estimate_arguments,
+        ),
+        Command(
+            "campaign",
+            "sweep a profile's claim experiments claim by claim (make paper-core runs it niced "
+            "in the background)",
+            _campaign,
+            _campaign_arguments,
+        ),
+    )
+)

@@ -1,0 +1,130 @@
+"""Fig. 5 in the paper's form: the error against the number of links k, per model, from the
+stored runs of the ``paper`` profile's cells at every k (the claims at every k: the report's
+section of ``bench.studies.paper.report``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..report import LINKS, PROFILE
+
+FIGURE_MODELS = ("node", "node_so", "hnn", "hnn_so")
+FIGURE_METRICS = {"rollout_error": "rollout error", "mse": "test MSE"}
+
+
+def link_rows(runs: pd.DataFrame) -> pd.DataFrame:
+    """The paper's undamped cells of Figs. 4 and 5 at every stored k: the four models and the
+    trivial predictors on the chain and on the spring from the paper's start, L2 loss, at the
+    ``paper`` profile's cells; failed rows kept (they are scored)."""
+    from ....core._query import experiment_rows, plain, select
+    from ....kit import paper_spring
+
+    if not len(runs):
+        return runs
+    rows = pd.concat(
+        [experiment_rows(runs, e, PROFILE) for e in ("coordinates", "second_order")],
+        ignore_index=True,
+    ).drop_duplicates("config_hash")
+    return paper_spring(select(plain(rows), ok=False, loss="l2"))
+
+
+def fig_links(results_dir) -> list:
+    """Fig. 5 in the paper's form: the error against the number of links k per model, the
+    chain (angles) and the spring (Cartesian) side by side, the rollout error above and the
+    test MSE (what the paper's plotting code draws) below. Geometric mean over the stored
+    seeds with its 90% t interval; failed and diverged runs enter at the worst error, as the
+    verdicts score them, and are marked (x, with their count). Nothing where the folder holds
+    runs at one k only."""
+    from pathlib import Path
+
+    from scipy import stats
+
+    from ....core._query import load_tables
+    from ....kit import (
+        COLORS,
+        MODEL_LABELS,
+        SYSTEM_LABELS,
+        TRIVIAL_STYLE,
+        bad_rows,
+        save_figure,
+        scored,
+        seed_span,
+        subplots,
+    )
+
+    runs, _, _ = load_tables(Path(results_dir))
+    rows = link_rows(runs)
+    if not len(rows) or rows["k"].dropna().nunique() < 2:
+        return []
+    systems = ("chain_pendulum", "spring_pendulum")
+    metrics = [m for m in FIGURE_METRICS if m in rows]
+    fig, axes = subplots(len(metrics), 2, figsize=(9, 3.8 * len(metrics)), squeeze=False)
+    for i, metric in enumerate(metrics):
+        for j, system in enumerate(systems):
+            ax = axes[i][j]
+            g = rows[rows["system"] == system]
+            for model in (*FIGURE_MODELS, *TRIVIAL_STYLE):
+                m = g[g["model"] == model]
+                if not len(m):
+                    continue
+                logs = np.log(scored(m, metric).astype(float))
+                bad = bad_rows(m, metric)
+                pts = []
+                for k, idx in m.groupby("k").groups.items():
+                    x = logs.loc[idx].dropna().to_numpy()
+                    if not len(x):
+                        continue
+                    mu = float(x.mean())
+                    half = (
+                        float(stats.t.ppf(0.95, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x)))
+                        if len(x) > 1
+                        else 0.0
+                    )
+                    pts.append((int(k), mu, half, int(bad.loc[idx].sum()), len(x)))
+                if not pts:
+                    continue
+                ks, mu, half, nbad, _ = (np.array(v) for v in zip(*pts, strict=True))
+                label = MODEL_LABELS.get(model, model)
+                if model in TRIVIAL_STYLE:
+                    color, style = TRIVIAL_STYLE[model]
+                    ax.plot(
+                        ks, np.exp(mu), style, marker="_", markersize=14, color=color, label=label
+                    )
+                    continue
+                ax.errorbar(
+                    ks,
+                    np.exp(mu),
+                    yerr=[np.exp(mu) - np.exp(mu - half), np.exp(mu + half) - np.exp(mu)],
+                    marker="o",
+                    capsize=3,
+                    color=COLORS.get(model),
+                    label=label,
+                )
+                for kk, y, nb in zip(ks, np.exp(mu), nbad, strict=True):
+                    if nb:
+                        ax.plot([kk], [y], "x", color="black", markersize=9)
+                        ax.annotate(
+                            f"{nb} failed",
+                            (kk, y),
+                            textcoords="offset points",
+                            xytext=(4, 4),
+                            fontsize=7,
+                        )
+            ax.set_yscale("log")
+            ax.set_xticks(list(LINKS))
+            ax.set_xlabel("number of links k")
+            ax.set_ylabel(f"{FIGURE_METRICS[metric]} (geometric mean, 90% CI)")
+            ax.set_title(
+                SYSTEM_LABELS.get(system, system)
+                + (" (angles)" if system == "chain_pendulum" else " (Cartesian)")
+            )
+            ax.grid(alpha=0.3)
+    axes[0][1].legend(fontsize=7, loc="best")
+    per_k = "; ".join(
+        f"k = {int(k)}: seeds {seed_span(sorted(int(s) for s in g['seed'].unique()))}"
+        for k, g in rows.groupby("k")
+    )
+    fig.suptitle(f"Fig. 5 over k: NODE+SO vs HNN+SO by coordinates\n({per_k})", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    return save_figure(fig, Path(results_dir) / "figures", "fig5_coordinates_links")
