@@ -10,7 +10,10 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 :func:`plugin_modules` (what another process needs to load the same plug-ins),
 :func:`acceleration_from_lagrangian` (the shared Euler-Lagrange solve) and
 :func:`velocity_hessian`, the :class:`MLP` every model is built from, :func:`n_parameters`,
-and the integrators (``Integrator``, ``rollout``, ...).
+and the integrators (``Integrator``, ``rollout``, ...). Parts to build a model of one's own
+from: :class:`CholeskyNet` (a learned positive-definite matrix of q, its floor
+:data:`INVERSE_MASS_JITTER`), :class:`CanonicalSecondOrderODE` (second-order structure in
+(q, p)), :func:`cholesky` and :func:`cho_solve` (the batched solves the models use).
 
 Controls: a :class:`Scene` with ``n_controls`` > 0 makes each model's ``args`` the
 concatenation (static args, u); ``rollout(..., controls=...)`` holds u_i on interval i.
@@ -19,6 +22,7 @@ concatenation (static args, u); ``rollout(..., controls=...)`` holds u_i on inte
 from ._autoencoder import Autoencoder
 from ._base import AbstractContinuousModel, AbstractDiscreteModel, AbstractModel
 from ._features import Features
+from ._hamiltonian import INVERSE_MASS_JITTER
 from ._implicit import implicit_tolerance
 from ._integrators import (
     DESCRIPTIONS,
@@ -30,7 +34,10 @@ from ._integrators import (
     rollout_batch,
 )
 from ._latent import LatentModel, latent_scene
+from ._linalg import cho_solve, cholesky
+from ._mass import CholeskyNet
 from ._mlp import MLP
+from ._node import CanonicalSecondOrderODE
 from ._position_latent import PositionLatentModel
 from ._registry import (
     MODULES_ENV,
@@ -52,6 +59,11 @@ from ._trivial import AbstractTrivialModel
 
 __all__ = [
     "AbstractContinuousModel",
+    "CanonicalSecondOrderODE",
+    "CholeskyNet",
+    "INVERSE_MASS_JITTER",
+    "cho_solve",
+    "cholesky",
     "Autoencoder",
     "DESCRIPTIONS",
     "Features",
