@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._seed import SeedCodeError
+from ._seed import SeedCodeError, check_checkout  # noqa: F401 (raised through check_checkout)
 
 EXPECTED = (
     "toy_systems.py",
@@ -45,21 +45,8 @@ PAPER_MINV_EPS = 1e-4  # M^-1 = L L^T + 1e-4 I in every paper class
 
 
 def check_paper_code(path) -> Path:
-    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError
-    with a one-line message."""
-    root = Path(path).expanduser()
-    if not root.is_dir():
-        raise SeedCodeError(
-            f"--seed-code {path}: not a directory; clone the paper's code first: "
-            "git clone https://github.com/ngruver/decon-hnn"
-        )
-    missing = [f for f in EXPECTED if not (root / f).is_file()]
-    if missing:
-        raise SeedCodeError(
-            f"--seed-code {path}: not a checkout of ngruver/decon-hnn "
-            f"(missing {', '.join(missing)})"
-        )
-    return root
+    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError."""
+    return check_checkout(path, "ngruver/decon-hnn", EXPECTED, whose="the paper's")
 
 
 # ------------------------------------------------------------------------ parameter mapping

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._seed import SeedCodeError
+from ._seed import SeedCodeError, check_checkout  # noqa: F401 (raised through check_checkout)
 
 EXPECTED = ("nn_models.py", "hnn.py", "utils.py", "experiment-pixels/train.py")
 REPO = "greydanus/hamiltonian-nn"
@@ -35,20 +35,8 @@ OUTPUT_BIAS = "dynamics output bias (ours only)"
 
 
 def check_seed_code(path) -> Path:
-    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError
-    with a one-line message."""
-    root = Path(path).expanduser()
-    if not root.is_dir():
-        raise SeedCodeError(
-            f"--seed-code {path}: not a directory; clone the seed's code first: "
-            f"git clone https://github.com/{REPO}"
-        )
-    missing = [f for f in EXPECTED if not (root / f).is_file()]
-    if missing:
-        raise SeedCodeError(
-            f"--seed-code {path}: not a checkout of {REPO} (missing {', '.join(missing)})"
-        )
-    return root
+    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError."""
+    return check_checkout(path, REPO, EXPECTED)
 
 
 def _net(model):

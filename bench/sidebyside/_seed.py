@@ -26,22 +26,26 @@ class SeedCodeError(ValueError):
     """--seed-code does not point at a usable checkout of the seed's code."""
 
 
-def check_seed_code(path) -> Path:
-    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError
-    with a one-line message."""
+def check_checkout(path, repo: str, expected, whose: str = "the seed's") -> Path:
+    """``path`` as a Path when it holds every file of ``expected`` (a checkout of ``repo``);
+    else SeedCodeError with a one-line message naming what is missing."""
     root = Path(path).expanduser()
     if not root.is_dir():
         raise SeedCodeError(
-            f"--seed-code {path}: not a directory; clone the seed's code first: "
-            "git clone https://github.com/MilesCranmer/lagrangian_nns"
+            f"--seed-code {path}: not a directory; clone {whose} code first: "
+            f"git clone https://github.com/{repo}"
         )
-    missing = [f for f in EXPECTED if not (root / f).is_file()]
+    missing = [f for f in expected if not (root / f).is_file()]
     if missing:
         raise SeedCodeError(
-            f"--seed-code {path}: not a checkout of MilesCranmer/lagrangian_nns "
-            f"(missing {', '.join(missing)})"
+            f"--seed-code {path}: not a checkout of {repo} (missing {', '.join(missing)})"
         )
     return root
+
+
+def check_seed_code(path) -> Path:
+    """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError."""
+    return check_checkout(path, "MilesCranmer/lagrangian_nns", EXPECTED)
 
 
 # ------------------------------------------------------------------------ the seed's code
