@@ -20,20 +20,31 @@ from . import (
     metrics,
     studies,  # registers the built-in studies
 )
-from .core._config import RunConfig
-from .core._ensemble import train_ensemble
-from .core._experiments import PROFILES, Experiment, available, expand, get, register
-from .core._provenance import (
+from .core import (
+    PROFILES,
     PROVENANCE_COLUMNS,
+    Experiment,
+    RunConfig,
+    Study,
+    TrainConfig,
+    TrainResult,
+    aggregate,
+    available,
     compare_provenance,
+    execute_run,
+    expand,
+    get,
+    load_curves,
+    load_runs,
     provenance_markdown,
+    register,
+    register_study,
+    runs_of,
+    sweep,
+    train,
+    train_ensemble,
 )
-from .core._query import aggregate
-from .core._runner import execute_run, sweep
-from .core._store import load_curves, load_runs, runs_of
-from .core._studies import Study, register_study
-from .core._studies import studies as registered_studies
-from .core._train import TrainConfig, TrainResult, train
+from .core import studies as registered_studies
 
 __all__ = [
     "PROFILES",

@@ -8,8 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from .core._config import RunConfig, check_choice, field_names
-from .core._experiments import PROFILES, profile_defaults
+from .core import PROFILES, RunConfig, check_choice, field_names, profile_defaults
 from .studies._options import float_arg, int_arg
 
 
@@ -82,12 +81,12 @@ def _print_row(row: dict) -> None:
 
 def run(args) -> int:
     """Run (or find stored) the configuration of the options and print its row."""
-    from .core._runner import sweep
+    from .core import sweep
 
     cfg = config_from_args(args)
     row = sweep([cfg], args.results, experiment="adhoc", profile=args.profile, progress=False)
     if not row:  # already stored: show the stored row
-        from .core._store import read_rows
+        from .core import read_rows
 
         row = [r for r in read_rows(args.results) if r["config_hash"] == cfg.config_hash]
         print("(already stored; delete its row file to rerun)")

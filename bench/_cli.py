@@ -21,9 +21,7 @@ from pathlib import Path
 
 from . import _adhoc, _score  # _score registers the verb score
 from ._compare import OWN_DIR, reference_dir
-from .core._config import check_choice
-from .core._experiments import PROFILES
-from .core._studies import commands
+from .core import PROFILES, check_choice, commands
 from .studies._options import (
     check_sweep_args,
     int_arg,
@@ -162,7 +160,7 @@ def _cmd_list(args) -> int:
     import models
     import systems
 
-    from .core._experiments import available
+    from .core import available
 
     print("systems:     " + ", ".join(systems.available()))
     print("models:      " + ", ".join(models.available()))
@@ -173,8 +171,7 @@ def _cmd_list(args) -> int:
 
 def paper_list(given: str | None) -> tuple[str, ...]:
     """``--papers A,B`` as a tuple of :data:`bench.core._experiments.PAPERS` (None: all)."""
-    from .core._config import check_choice
-    from .core._experiments import PAPERS
+    from .core import PAPERS, check_choice
 
     if given is None:
         return PAPERS
@@ -187,7 +184,7 @@ def paper_list(given: str | None) -> tuple[str, ...]:
 
 
 def _sweep_names(args) -> list[str]:
-    from .core._experiments import available, get
+    from .core import available, get
 
     if args.verb == "bench":
         papers = paper_list(getattr(args, "papers", None))
@@ -236,7 +233,7 @@ class NoRuns(Exception):
 
 def _stored_runs(args, verb: str, action: str):
     """The stored runs (NoRuns where none); warn about row files that did not read."""
-    from .core._store import (
+    from .core import (
         DAMAGED,
         ROWS,
         check_results_dir,
@@ -294,9 +291,7 @@ def _cmd_bench(args) -> int:
         check_sweep_args(args)
         print("no experiments yet")
         return 0
-    from .core._provenance import provenance
-    from .core._schema import SCHEMA_VERSION
-    from .core._store import done_hashes
+    from .core import SCHEMA_VERSION, done_hashes, provenance
 
     before = len(done_hashes(Path(args.results)))
     start = time.time()
@@ -403,7 +398,7 @@ def _cmd_compare(args) -> int:
     """Print the claims table and the one-line summary of ``compare`` (the whole comparison
     with ``--out``)."""
     from ._compare import compare
-    from .core._query import load_tables
+    from .core import load_tables
 
     b = Path(args.b or args.results)
     a = args.a
@@ -432,7 +427,7 @@ def _cmd_compare(args) -> int:
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
-    from .core._store import DamagedRowWarning
+    from .core import DamagedRowWarning
 
     if issubclass(category, DamagedRowWarning):
         print(f"warning: {message}", file=sys.stderr if file is None else file)
@@ -445,8 +440,7 @@ _show_warning = warnings.showwarning
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (2 for bad input, 1 for no runs or a failed write)."""
-    from .core._env import setup_process
-    from .core._errors import StorageError, WorkerDied
+    from .core import StorageError, WorkerDied, setup_process
 
     setup_process()
     if hasattr(signal, "SIGXFSZ"):  # a file-size limit: an OSError (EFBIG), not a core dump

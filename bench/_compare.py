@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .core._store import OWN_DIR, REFERENCE_DIRS, REFERENCE_ROOT, reference_dir  # noqa: F401
+from .core import OWN_DIR, REFERENCE_DIRS, REFERENCE_ROOT, reference_dir  # noqa: F401
 
 
 def schema_version(results_dir) -> int | None:
@@ -194,7 +194,7 @@ def _cell_label(row: pd.Series) -> str:
 
 
 def _cells(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
-    from .core._query import row_cell_keys
+    from .core import row_cell_keys
     from .kit import scored
 
     def prep(df):
@@ -310,9 +310,7 @@ def _claims_with_runs(restricted: dict[int, pd.DataFrame]) -> set[int]:
 def compare(a, b) -> Comparison:
     """Compare results folder ``b`` against the reference ``a`` (see the module docstring).
     ValueError (one line) for a folder without runs or of another schema version."""
-    from .core._query import load_tables
-    from .core._schema import SCHEMA_VERSION
-    from .core._store import ROWS
+    from .core import ROWS, SCHEMA_VERSION, load_tables
 
     a, b = Path(a), Path(b)
     warnings = []

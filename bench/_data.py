@@ -33,8 +33,7 @@ import systems
 from systems import MAX_STEPS
 
 from . import data_loader, metrics
-from .core._config import RunConfig
-from .core._experiments import available, expand, profile_defaults
+from .core import RunConfig, available, expand, profile_defaults
 
 DAMPED_PREFIX = "damped_"
 LOADER_NAME = "decon_data.py"
@@ -87,7 +86,7 @@ def select(system: str, profile: str, k=None, seeds=None) -> tuple[dict, list[st
     """(DatasetConfig -> the experiments using it, notes) for ``system`` at ``profile``."""
     import systems
 
-    from .core._config import check_choice
+    from .core import check_choice
 
     check_choice("system", system, systems.available())
     damped = system.startswith(DAMPED_PREFIX)
@@ -138,8 +137,7 @@ def export(
     """Write the datasets of ``system`` at ``profile`` to ``out``; returns the card."""
     import systems
 
-    from .core._config import check_choice
-    from .core._provenance import provenance
+    from .core import check_choice, provenance
 
     check_choice("format", fmt, data_loader.FORMATS)
     out = Path(out)

@@ -16,8 +16,7 @@ import dataclasses
 import time
 from collections.abc import Callable, Iterable
 
-from .core._config import RunConfig
-from .core._experiments import Experiment, expand, get
+from .core import Experiment, RunConfig, expand, get
 
 __all__ = ["cells", "preflight"]
 
@@ -61,8 +60,7 @@ def preflight(
     """Run every cell of ``experiments`` at ``profile`` for ``steps`` training steps (at most
     its own) and return their rows (``experiment`` and ``seconds`` added; never stored).
     ``echo`` gets one line per cell as it ends."""
-    from .core._env import bound_compiled_programs, configure_numerics
-    from .core._execute import execute_run
+    from .core import bound_compiled_programs, configure_numerics, execute_run
 
     configure_numerics()  # the precisions a sweep's workers have
     if steps < 1:

@@ -31,20 +31,24 @@ from ._tables import (
     _perf_section,
     _table_variant,
 )
-from .core._env import cpu_count
-from .core._experiments import get
-from .core._params import BLOW_UP_RISE
-from .core._provenance import compare_provenance, provenance_markdown
-from .core._query import (
+from .core import (
+    BLOW_UP_RISE,
+    ReportContext,
     chosen_profile,
+    compare_folders,
+    compare_provenance,
+    cpu_count,
     describe_profiles,
     experiment_rows,
+    get,
+    load_runs,
     load_tables,
     profile_counts,
+    provenance_markdown,
+    report_sections,
     select,
+    studies,
 )
-from .core._store import compare_folders, load_runs
-from .core._studies import ReportContext, report_sections, studies
 from .kit import folder_label, md_escape
 
 __all__ = ["write_report"]
@@ -250,7 +254,7 @@ def report_profile(args, runs: pd.DataFrame, doing: str) -> str | None:
     ``bench`` just swept (``args.swept_profile``) where its rows are stored, else the one with
     the most rows, named in one line beside the others, so that a smaller profile's rows are
     not left out unseen."""
-    from .core._query import check_profile, pick_profile
+    from .core import check_profile, pick_profile
 
     given = getattr(args, "report_profile", None)
     if given is not None:

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from . import data_loader, metrics
-from .core._studies import Command, register_command
+from .core import Command, register_command
 
 METRICS = (
     "rollout_error",
@@ -81,7 +81,7 @@ def score(predictions, data, model: str | None = None, dataset: str | None = Non
     :func:`suite_scores`. ValueError (one line) for an unknown system or bad predictions."""
     import systems
 
-    from .core._config import check_choice
+    from .core import check_choice
 
     card = data_loader.read_card(data)
     check_choice("system", card["system"]["name"], systems.available())
@@ -167,7 +167,7 @@ def reference_cells(runs: pd.DataFrame, systems_: set[str]) -> pd.DataFrame:
     """Per reference row of ``systems_`` with a state dataset: ``cell_hash`` (:func:`cell_hash`
     of its dataset) and ``label``, its model and the fields (the data's aside) where its
     configuration differs from most rows on the same data."""
-    from .core._config import RunConfig
+    from .core import RunConfig
 
     out = {}
     for i, row in runs[runs["system"].isin(systems_)].iterrows():
@@ -234,8 +234,7 @@ def beside(scores: pd.DataFrame, reference, min_seeds: int = 2) -> tuple[str, di
     """(Markdown, cell hash -> table): per dataset cell of ``scores``, the scored models and
     the reference's model cells with at least ``min_seeds`` seeds on the same data, ranked by
     their median rollout error over seeds."""
-    from .core._query import row_cell_keys
-    from .core._store import load_runs
+    from .core import load_runs, row_cell_keys
     from .kit import scored
 
     if not Path(reference).is_dir():
@@ -424,7 +423,7 @@ def compare_verb(fallback):
     def run(args) -> int:
         if not getattr(args, "scores", None):
             return fallback(args)
-        from .core._store import reference_dir
+        from .core import reference_dir
 
         if args.b:
             raise ValueError(f"compare --scores takes one folder, the reference; got also {args.b}")

@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .core._experiments import expand
-from .core._query import cell_key, option, params_of, parse_pairs, row_cell_keys, variant
+from .core import cell_key, expand, option, params_of, parse_pairs, row_cell_keys, variant
 from .kit import MODEL_LABELS, TRIVIAL_MODELS, discrimination, several_rates
 from .kit import fmt as _fmt
 from .kit import md_escape as _md_escape

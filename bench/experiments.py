@@ -1,10 +1,15 @@
 """Experiments and run configurations: declare one with :class:`Experiment`, add it with
 :func:`register`, expand it into :class:`RunConfig` s at a profile with :func:`expand`."""
 
-from .core._config import COORDINATES, DTYPES, LOSSES, OBSERVATIONS, TRAIN_TARGETS, RunConfig
-from .core._experiments import (
+from .core import (
+    COORDINATES,
+    DTYPES,
+    LOSSES,
+    OBSERVATIONS,
     PROFILES,
+    TRAIN_TARGETS,
     Experiment,
+    RunConfig,
     available,
     expand,
     get,

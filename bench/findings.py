@@ -219,7 +219,7 @@ PAPER_NAMES = {
 
 def claim_papers() -> dict[int, str]:
     """Claim number -> the paper it comes from (its experiments' ``paper``)."""
-    from .core._experiments import available, get
+    from .core import available, get
 
     out: dict[int, str] = {}
     for name in available():

@@ -1,7 +1,7 @@
 """The metrics of the suite: rollout error, energy violation, valid prediction time and the
 symplectic error, on numpy arrays (see :mod:`bench.core._metrics` for their definitions)."""
 
-from .core._metrics import (
+from .core import (
     CLAMP,
     energies,
     energy_mse,

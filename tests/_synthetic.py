@@ -31,9 +31,7 @@ import numpy as np
 import pandas as pd
 
 import models
-from bench.core import _store
-from bench.core._experiments import expand
-from bench.core._query import parse_pairs
+from bench.core import _store, expand, parse_pairs
 from bench.studies.paper import PAPER_EXPERIMENTS
 
 TRIVIAL_ERROR = 0.6

@@ -15,7 +15,7 @@ os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 
 import pytest  # noqa: E402
 
-from bench.core._env import setup_process  # noqa: E402
+from bench.core import setup_process  # noqa: E402
 
 setup_process()
 

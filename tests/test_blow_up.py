@@ -10,8 +10,7 @@ import numpy as np
 import pandas as pd
 
 from bench import _report
-from bench.core._params import BLOW_UP_RISE, loss_rise, result_meta
-from bench.core._train import TrainResult
+from bench.core import BLOW_UP_RISE, TrainResult, loss_rise, result_meta
 
 
 def _result(losses) -> TrainResult:
@@ -35,8 +34,7 @@ def test_loss_rise_is_one_at_the_best_and_large_after_a_finite_blow_up():
 
 
 def test_a_run_that_trains_is_not_flagged_and_the_meta_carries_the_rise(tmp_path):
-    from bench.core._execute import execute_run
-    from bench.core._experiments import expand
+    from bench.core import execute_run, expand
 
     c = next(c for c in expand("energy", "smoke") if c.model == "node")
     row = execute_run(c, cache_root=tmp_path)

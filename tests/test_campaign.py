@@ -362,7 +362,7 @@ def test_status_names_the_trainings_saved_mid_way(tmp_path):
     as restarting where other code saved it; stored runs and unsaved ones are not listed."""
     import json
 
-    from bench.core._params import DATA_TAG, RESUME, code_fingerprint, params_dir
+    from bench.core import DATA_TAG, RESUME, code_fingerprint, params_dir
 
     runs = C.campaign_runs("paper-core")
     (name, first), (_, second) = runs[:2]

@@ -11,11 +11,19 @@ import numpy as np
 import pytest
 
 import models
-from bench.core import _execute, _fit, _store
-from bench.core._ensemble import train_ensemble
-from bench.core._experiments import RunConfig
-from bench.core._fit import checkpoint_steps
-from bench.core._train import Batches, TrainConfig, loss_fn, prepare, train
+from bench.core import (
+    Batches,
+    RunConfig,
+    TrainConfig,
+    _execute,
+    _fit,
+    _store,
+    checkpoint_steps,
+    loss_fn,
+    prepare,
+    train,
+    train_ensemble,
+)
 
 
 def test_checkpoint_grid_halves_and_snaps_to_blocks():

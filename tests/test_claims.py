@@ -18,7 +18,7 @@ from _synthetic import synthetic_tables
 from scipy import stats
 
 from bench import kit as R
-from bench.core._query import initial_state, option, params_of
+from bench.core import initial_state, option, params_of
 from bench.kit import policy
 from bench.studies.paper import relativistic as REL
 

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from bench._cli import main
-from bench.core._experiments import REPLICATION_SEEDS
+from bench.core import REPLICATION_SEEDS
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -189,7 +189,7 @@ def test_bench_papers_selects_the_declared_experiments():
     from argparse import Namespace
 
     from bench._cli import _sweep_names
-    from bench.core._experiments import PAPERS, available, get
+    from bench.core import PAPERS, available, get
 
     seeds = _sweep_names(Namespace(verb="bench", papers="hnn,lnn,vin"))
     paper = _sweep_names(Namespace(verb="bench", papers="deconstructing"))

@@ -11,9 +11,7 @@ import pytest
 
 import systems._dataset as _dataset
 from bench import execute_run
-from bench.core import _params
-from bench.core._ensemble import plan_groups
-from bench.core._experiments import RunConfig, profile_defaults
+from bench.core import RunConfig, _params, plan_groups, profile_defaults
 from systems._dataset import DatasetConfig, make_dataset, source_fingerprint
 
 

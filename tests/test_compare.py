@@ -12,7 +12,7 @@ from _synthetic import synthetic_tables
 
 from bench._cli import main
 from bench._compare import compare
-from bench.core._schema import SCHEMA_VERSION
+from bench.core import SCHEMA_VERSION
 
 
 def _folder(path, runs, curves, schema=SCHEMA_VERSION):
@@ -109,7 +109,7 @@ def test_cli_bad_folders_get_one_line(tmp_path, tables, capsys):
 
 
 def test_compare_folders_lists_references_then_subfolders_not_itself(tmp_path):
-    from bench.core._store import compare_folders
+    from bench.core import compare_folders
 
     refs = tmp_path / "reference"
     for name in ("quick", "paper", "empty"):
@@ -196,8 +196,7 @@ def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):
 
 
 def test_row_cell_keys_equal_the_uncached_keys_on_a_second_call(tables):
-    from bench.core._config import RunConfig
-    from bench.core._query import cell_key, row_cell_keys
+    from bench.core import RunConfig, cell_key, row_cell_keys
 
     runs, _ = tables
     want = [cell_key(RunConfig.from_dict(r)) for r in runs.to_dict("records")]

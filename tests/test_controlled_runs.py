@@ -12,13 +12,8 @@ import numpy as np
 import pytest
 
 import models
+from bench.core import RunConfig, check_runnable, execute_run, expand, load_runs, sweep
 from bench.core import _controlled as C
-from bench.core._config import RunConfig
-from bench.core._execute import execute_run
-from bench.core._experiments import expand
-from bench.core._runnable import check_runnable
-from bench.core._runner import sweep
-from bench.core._store import load_runs
 from bench.studies.paper import mujoco as X
 from systems import mujoco_data as D
 
@@ -162,7 +157,7 @@ def test_the_scene_is_the_raw_state_with_the_tasks_controls():
 
 
 def test_controlled_runs_train_as_an_ensemble_whose_members_are_the_single_runs(tmp_path, capsys):
-    from bench.core._ensemble import group_key, plan_groups
+    from bench.core import group_key, plan_groups
 
     # two seeds at one rate form one ensemble; the paper's rate sets another cosine floor
     # (LR_END / lr), so its run trains alone; the trivial predictor too
@@ -210,8 +205,7 @@ def test_a_killed_controlled_training_resumes_for_the_same_data_only(tmp_path, m
     import dataclasses
     import shutil
 
-    from bench.core import _params
-    from bench.core._resume import RECORD
+    from bench.core import RECORD, _params
 
     c = RunConfig(**{**SMOKE, "steps": 23}, model="node")
     real_config, real_point = C.train_config, _params.resume_point

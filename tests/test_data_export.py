@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from bench import _cli, _data, data_loader
-from bench.core._experiments import expand
+from bench.core import expand
 
 SYSTEM, K, PROFILE = "chain_pendulum", 2, "smoke"
 

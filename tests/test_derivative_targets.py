@@ -11,9 +11,7 @@ import pytest
 
 import models
 import systems
-from bench.core._config import RunConfig, _hash
-from bench.core._runnable import check_runnable
-from bench.core._train import TrainConfig, loss_fn, prepare, train
+from bench.core import RunConfig, TrainConfig, _config, check_runnable, loss_fn, prepare, train
 
 DERIV = TrainConfig(
     steps=300, batch=32, lr=1e-2, steps_per_call=50, log_every=50, target="derivative"
@@ -126,14 +124,14 @@ def test_the_new_field_leaves_existing_hashes_alone():
         "train_box",
         "standardise",
     )
-    old = _hash({a: b for a, b in c.to_dict().items() if a not in new})
+    old = _config._hash({a: b for a, b in c.to_dict().items() if a not in new})
     assert c.config_hash == old
     d = dataclasses.replace(c, train_target="derivative")
     assert d.config_hash != c.config_hash and d.train_hash != c.train_hash
 
 
 def test_a_derivative_run_trains_and_is_evaluated_on_rollouts(tmp_path):
-    from bench.core._execute import execute_run
+    from bench.core import execute_run
 
     cfg = RunConfig(
         system="chain_pendulum",
@@ -158,7 +156,7 @@ def test_a_derivative_run_trains_and_is_evaluated_on_rollouts(tmp_path):
 def test_noisy_inputs_get_the_true_field_at_the_clean_states(tmp_path):
     """The HNN seed's protocol: noise on the observed states, targets the true dz/dt where
     the system was (its data.py adds the noise after computing dz/dt)."""
-    from bench.core._build import build_run
+    from bench.core import build_run
 
     cfg = RunConfig(
         system="mass_spring",

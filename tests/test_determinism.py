@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from bench import execute_run
-from bench.core._experiments import RunConfig, profile_defaults
+from bench.core import RunConfig, profile_defaults
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -10,10 +10,17 @@ import pytest
 
 import bench.core._runner as runner
 import models
-from bench.core import _params, _store
-from bench.core._ensemble import enabled, group_key, plan_groups, train_ensemble
-from bench.core._experiments import RunConfig
-from bench.core._train import TrainConfig, train
+from bench.core import (
+    RunConfig,
+    TrainConfig,
+    _params,
+    _store,
+    ensemble_enabled,
+    group_key,
+    plan_groups,
+    train,
+    train_ensemble,
+)
 
 STEPS = 20
 
@@ -129,10 +136,10 @@ def test_grouping_puts_exactly_the_shape_compatible_runs_together(tmp_path):
 
 
 def test_ensemble_modes():
-    assert enabled("on") and not enabled("off")
-    assert enabled("auto") == (jax.default_backend() != "cpu")
+    assert ensemble_enabled("on") and not ensemble_enabled("off")
+    assert ensemble_enabled("auto") == (jax.default_backend() != "cpu")
     with pytest.raises(ValueError, match="allowed: auto, on, off"):
-        enabled("yes")
+        ensemble_enabled("yes")
 
 
 def _sweep(configs, root, mode, executor="local", cache=None):

@@ -29,10 +29,16 @@ import pytest
 import bench.core._execute as execute
 import bench.core._runner as runner
 from bench._cli import main
-from bench.core import _store
-from bench.core._errors import StorageError, storage_error
-from bench.core._experiments import Experiment, RunConfig, expand, register
-from bench.core._runnable import check_runnable
+from bench.core import (
+    Experiment,
+    RunConfig,
+    StorageError,
+    _store,
+    check_runnable,
+    expand,
+    register,
+    storage_error,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -295,7 +301,7 @@ def test_integrator_rule_follows_model_capabilities(tmp_path):
 
 @pytest.mark.slow  # ~100 distinct (model, scene, integrator) traces: about a minute
 def test_every_experiment_run_is_runnable():
-    from bench.core._experiments import available
+    from bench.core import available
 
     for profile in ("smoke", "quick", "paper"):
         for name in available():

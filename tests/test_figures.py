@@ -16,8 +16,7 @@ from _synthetic import synthetic_tables
 
 from bench._report import figure_stem, make_figures, write_report
 from bench._tables import discrimination_groups
-from bench.core._query import experiment_rows, load_tables
-from bench.core._studies import studies
+from bench.core import experiment_rows, load_tables, studies
 from bench.kit import INCONCLUSIVE, NOT_REPRODUCED, PARTLY, REPRODUCED, VERDICTS, Verdict
 from bench.studies.paper import PAPER_EXPERIMENTS
 from bench.studies.paper.report._comparison import comparison_rows, comparison_section, load_other
@@ -181,7 +180,7 @@ def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_st
     """A paper-core folder under way: claim 6 (every run of the loss experiment stored) has its
     verdict; claims that read other experiments say pending (n of m runs), in the folder's own
     claims table; one run fewer makes claim 6 pending too."""
-    from bench.core._experiments import expand
+    from bench.core import expand
 
     runs, curves = synthetic_tables("paper-core", experiments=("loss",))
     assert set(runs["profile"]) == {"paper-core"}
@@ -222,7 +221,7 @@ def test_symplectic_figure_draws_from_weight_zero_runs_only(tmp_path):
     from bench.studies.paper.symplectic import fig_symplectic
 
     runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2, 3, 4), experiments=("symplectic",))
-    from bench.core._query import option
+    from bench.core import option
 
     zero = runs[option(runs, "weight").astype(float) == 0]
     assert len(zero) and len(zero) < len(runs)

@@ -9,9 +9,7 @@ import pandas as pd
 import pytest
 
 import models
-from bench.core._build import build_run
-from bench.core._fit import train_config
-from bench.core._train import train
+from bench.core import build_run, train, train_config
 from bench.studies.paper.hnn_diagnosis import _diagnosis as D
 from models._mlp import MLP
 

@@ -10,8 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bench.core import _store
-from bench.core._experiments import expand
+from bench.core import _store, expand
 from bench.kit import policy
 from bench.studies.paper import hnn_seed as H
 

@@ -9,6 +9,7 @@
 import ast
 import pathlib
 import re
+import subprocess
 import sys
 
 import pytest
@@ -38,24 +39,29 @@ def _crossings(path):
     top-level package's private modules (inside one top-level package, private modules are
     shared, as in equinox and diffrax)."""
     package = _package(path)
+    for node, parts, names in _imports(path):
+        private = [i for i, part in enumerate(parts) if _private(part)]
+        if private and parts[0] != package[0]:
+            yield f"{path.relative_to(ROOT)}:{node.lineno} imports {'.'.join(parts)}"
+        owner = tuple(parts[: private[0]]) if private else tuple(parts)
+        for name in names:
+            if _private(name) and owner != package:
+                yield f"{path.relative_to(ROOT)}:{node.lineno} imports {name}"
+
+
+def _imports(path):
+    """(node, the module's parts, the names imported from it) of every import in ``path``,
+    relative ones resolved (``import a.b`` imports no names)."""
+    package = _package(path)
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
-            targets = [(alias.name.split("."), []) for alias in node.names]
+            for alias in node.names:
+                yield node, alias.name.split("."), []
         elif isinstance(node, ast.ImportFrom):
             parts = (node.module or "").split(".") if node.module else []
             if node.level:
                 parts = list(package[: len(package) - node.level + 1]) + parts
-            targets = [(parts, [alias.name for alias in node.names])]
-        else:
-            continue
-        for parts, names in targets:
-            private = [i for i, part in enumerate(parts) if _private(part)]
-            if private and parts[0] != package[0]:
-                yield f"{path.relative_to(ROOT)}:{node.lineno} imports {'.'.join(parts)}"
-            owner = tuple(parts[: private[0]]) if private else tuple(parts)
-            for name in names:
-                if _private(name) and owner != package:
-                    yield f"{path.relative_to(ROOT)}:{node.lineno} imports {name}"
+            yield node, parts, [alias.name for alias in node.names]
 
 
 def _private(name):
@@ -77,6 +83,97 @@ def test_the_crossing_check_catches_a_private_import(tmp_path, monkeypatch):
     monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
     found = list(_crossings(bad))
     assert len(found) == 2 and "models._mlp" in found[0] and "_private" in found[1]
+
+
+# ----------------------------------------------------------------------------- the core's face
+# Outside bench/core/, the core is reached through the names of ``bench.core.__all__``, which
+# load their private module on first access. A test may take a private module whole (to patch
+# or probe it: ``from bench.core import _runner``), never a name out of it.
+CORE = ROOT / "bench" / "core"
+
+
+def _core_privates(path):
+    """Imports in ``path`` of a name out of one of ``bench.core``'s private modules, and, in the
+    packages, of such a module whole."""
+    whole = _package(path)[0] not in PACKAGES  # tests and examples may take a module whole
+    for node, parts, names in _imports(path):
+        if parts[:2] != ["bench", "core"]:
+            continue
+        if len(parts) > 2 and (names or not whole):
+            yield f"{path.relative_to(ROOT)}:{node.lineno} imports {'.'.join(parts)}"
+        elif len(parts) == 2 and not whole:
+            for name in filter(_private, names):
+                yield f"{path.relative_to(ROOT)}:{node.lineno} imports {name}"
+
+
+def _outside_the_core():
+    return [p for p in _sources(*PACKAGES, "tests", "examples") if not p.is_relative_to(CORE)]
+
+
+def test_the_core_is_reached_through_its_names():
+    assert [c for path in _outside_the_core() for c in _core_privates(path)] == []
+
+
+def test_the_core_check_catches_a_private_module(tmp_path, monkeypatch):
+    study, test = tmp_path / "bench" / "studies" / "x.py", tmp_path / "tests" / "test_x.py"
+    for path in (study, test):
+        path.parent.mkdir(parents=True)
+    study.write_text(
+        "from ..core._config import RunConfig\nfrom ..core import _store, expand\n"
+        "def f():\n    import bench.core._runner\n    from ..core import sweep\n"
+    )
+    test.write_text(
+        "from bench.core._config import RunConfig\nfrom bench.core import _store, expand\n"
+        "import bench.core._runner as runner\n"
+    )
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    imported = [c.split(" imports ")[1] for c in _core_privates(study)]
+    assert imported == ["bench.core._config", "_store", "bench.core._runner"]
+    assert [c.split(" imports ")[1] for c in _core_privates(test)] == ["bench.core._config"]
+
+
+def _unresolved(core):
+    """The names of ``core.__all__`` that do not resolve."""
+    return [name for name in core.__all__ if not hasattr(core, name)]
+
+
+def test_the_core_exports_what_it_names(monkeypatch):
+    import bench.core
+
+    assert len(set(bench.core.__all__)) == len(bench.core.__all__)
+    assert _unresolved(bench.core) == []
+    assert set(bench.core.__all__) <= set(dir(bench.core))
+    monkeypatch.setitem(bench.core._WHERE, "no_such_name", ("_config", "no_such_name"))
+    monkeypatch.setattr(bench.core, "__all__", [*bench.core.__all__, "no_such_name"])
+    assert _unresolved(bench.core) == ["no_such_name"]
+
+
+def test_every_name_the_core_exports_is_imported_outside_it():
+    import bench.core
+
+    imported = {
+        name
+        for path in _outside_the_core()
+        for _, parts, names in _imports(path)
+        if parts == ["bench", "core"]
+        for name in names
+    }
+    assert sorted(set(bench.core.__all__) - imported) == []
+
+
+def test_importing_the_core_imports_none_of_its_modules():
+    # ``import bench`` registers the studies, so loads the core's modules and jax: a bare
+    # parent package leaves ``bench.core``'s own import alone.
+    code = (
+        "import sys, types; "
+        "bench = sys.modules['bench'] = types.ModuleType('bench'); bench.__path__ = ['bench']; "
+        "import bench.core; "
+        "loaded = [m for m in sys.modules if m.startswith('bench.core.') or m == 'jax']; "
+        "assert not loaded, loaded; "
+        "bench.core.PROFILES; "
+        "assert 'bench.core._experiments' in sys.modules"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
 
 
 @pytest.mark.parametrize("path", list(_sources(*PACKAGES)), ids=lambda p: str(p.relative_to(ROOT)))

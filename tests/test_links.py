@@ -6,7 +6,7 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench import kit as R
-from bench.core._experiments import expand
+from bench.core import expand
 from bench.kit import evaluate_claims
 from bench.studies.paper.coordinates import fig_links
 from bench.studies.paper.report import _links as L

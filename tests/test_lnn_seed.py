@@ -17,9 +17,7 @@ import pytest
 
 import models
 import systems
-from bench.core import _store
-from bench.core._experiments import expand
-from bench.core._train import TrainConfig, train
+from bench.core import TrainConfig, _store, expand, train
 from bench.kit import policy
 from bench.studies.paper import lnn_seed as S
 from bench.studies.paper.lnn_seed import _diagnosis as D
@@ -401,7 +399,7 @@ def test_the_paper_core_diagnosis_reads_the_campaigns_own_pure_lnns():
     """At paper-core the Hessian diagnosis trains nothing of its own: its models are the pure
     LNNs of the seed's two protocols exactly as the campaign runs them (their cached
     parameters), with no init part, rollout-trained LNNs or ablations."""
-    from bench.core._experiments import expand, get
+    from bench.core import expand, get
     from bench.studies.paper.lnn_seed import _diagnosis as D
 
     got = D._trained_models("paper-core", None)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bench.core import _metrics as M
-from bench.core._query import aggregate
+from bench.core import aggregate
 
 
 def test_relative_error_known_value():

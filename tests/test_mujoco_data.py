@@ -309,7 +309,7 @@ def test_every_declared_cell_finds_its_windows_in_the_committed_files(profile):
     file's episodes (a Hopper policy that falls early holds too few 201-state test windows,
     hence its shorter test trajectories, mujoco.SHORT_TEST_CHUNKS)."""
     from bench.core import _controlled as C
-    from bench.core._experiments import expand
+    from bench.core import expand
     from systems import mujoco_data as D
 
     cells = {

@@ -12,8 +12,7 @@ import pandas as pd
 import pytest
 
 import systems
-from bench.core import _store
-from bench.core._experiments import RunConfig, expand
+from bench.core import RunConfig, _store, expand
 from bench.kit import policy
 from bench.studies.paper import mujoco as X
 from bench.studies.paper.mujoco import _rule as R
@@ -263,8 +262,7 @@ def test_no_runs_give_a_section_without_a_table_and_no_figure(tmp_path):
 # --------------------------------------------------------------------------- end to end
 @pytest.mark.slow
 def test_the_smoke_profile_runs_and_reports_on_the_stand_in(tmp_path):
-    from bench.core._runner import sweep
-    from bench.core._store import load_runs
+    from bench.core import load_runs, sweep
 
     sweep(expand(X.EXPERIMENT, "smoke"), tmp_path / "res", experiment=X.EXPERIMENT.name,
           profile="smoke", progress=False, cache_root=tmp_path / "cache")  # fmt: skip

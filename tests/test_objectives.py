@@ -14,10 +14,15 @@ import pytest
 
 import models
 import systems
-from bench.core._box import BoxObjective, BoxStates
-from bench.core._experiments import RunConfig
-from bench.core._optim import lr_schedule, optimizer
-from bench.core._train import TrainConfig, train
+from bench.core import (
+    BoxObjective,
+    BoxStates,
+    RunConfig,
+    TrainConfig,
+    lr_schedule,
+    optimizer,
+    train,
+)
 
 BOX = (0.0, 2 * math.pi, -10.0, 10.0)
 

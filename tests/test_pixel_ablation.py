@@ -14,8 +14,7 @@ import pandas as pd
 import pytest
 
 import models
-from bench.core import _pixels
-from bench.core._experiments import expand
+from bench.core import _pixels, expand
 from bench.studies.paper.pixels import _ablation as D
 
 

@@ -15,9 +15,7 @@ import pytest
 
 import models
 import systems
-from bench.core import _store
-from bench.core._experiments import RunConfig, expand
-from bench.core._runnable import check_runnable
+from bench.core import RunConfig, _store, check_runnable, expand
 from bench.kit import policy
 from bench.studies.paper import pixels as P
 from bench.studies.paper import vin_blog as V
@@ -373,7 +371,7 @@ def _seed(**kw):
 
 
 def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
-    from bench.core._pixels import train_config
+    from bench.core import pixel_train_config
 
     for profile in ("paper", "paper-core", "quick"):
         cfgs = expand(P.PIXEL_HNN_SEED, profile)
@@ -398,7 +396,7 @@ def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
         )
     paper = expand(P.PIXEL_HNN_SEED, "paper")[0]
     assert (paper.batch, paper.width) == (200, 200)
-    tc = train_config(paper)
+    tc = pixel_train_config(paper)
     assert (tc.optimizer, tc.schedule, tc.weight_decay, tc.integrator.method) == (
         "adam_l2",
         "constant",
@@ -412,7 +410,7 @@ def test_the_seeds_protocol_is_declared_as_the_seed_ran_it():
 
 
 def test_the_seeds_latent_step_is_z_plus_f_of_z():
-    from bench.core._pixels import seed_loss
+    from bench.core import seed_loss
 
     c = expand(P.PIXEL_HNN_SEED, "smoke")[0]
     integ = models.Integrator(c.train_integrator, substeps=c.train_substeps)
@@ -440,7 +438,7 @@ class _SumEncoder(eqx.Module):
 
 
 def test_the_seeds_latent_map_is_the_affine_least_squares_fit_at_each_first_frame():
-    from bench.core._pixel_eval import _mapped, latent_map
+    from bench.core import _pixel_eval, latent_map
 
     rng = np.random.default_rng(2)
     enc = _SumEncoder(jnp.asarray(rng.normal(size=(6, 6))), jnp.asarray(rng.normal(size=(6, 6))))
@@ -449,7 +447,7 @@ def test_the_seeds_latent_map_is_the_affine_least_squares_fit_at_each_first_fram
     z = np.asarray(jax.vmap(jax.vmap(enc.encode))(jnp.asarray(obs)))  # (5, 6, 2)
     w_true = np.array([[0.3, -1.2], [2.0, 0.5], [0.1, -0.4]])  # (z0, z1, 1) -> (q, qdot)
     states = np.full((5, 7, 2), 1e6)  # the last frame starts no observation: left out
-    states[:, :-1] = _mapped(z, w_true)
+    states[:, :-1] = _pixel_eval._mapped(z, w_true)
     w = latent_map(enc, frames, states, "float64")
     np.testing.assert_allclose(w, w_true, rtol=1e-8, atol=1e-10)
 

@@ -13,12 +13,15 @@ from pathlib import Path
 import pytest
 
 import models
-from bench.core._config import RunConfig
-from bench.core._experiments import profile_defaults
-from bench.core._params import cache_key, params_dir
-from bench.core._record import base_row
-from bench.core._runner import sweep
-from bench.core._store import read_rows
+from bench.core import (
+    RunConfig,
+    base_row,
+    cache_key,
+    params_dir,
+    profile_defaults,
+    read_rows,
+    sweep,
+)
 from models import _registry as registry
 
 ROOT = Path(__file__).resolve().parents[1]

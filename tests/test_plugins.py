@@ -149,7 +149,7 @@ def test_a_registered_plugin_is_swept_beside_the_trivial_predictor(
     models and the experiment's trivial predictor stays."""
     import bench.core._runner as runner
     from bench._cli import main
-    from bench.core._record import base_row
+    from bench.core import base_row
 
     _example_class()
     monkeypatch.setattr(runner, "execute_run", lambda c, **kw: {**base_row(c), "status": "ok"})
@@ -164,7 +164,7 @@ def test_expansions_follow_a_model_registered_again_as_first_order(clean_registr
     from the model registry (whether a model is second order, which decides its leapfrog runs)
     is asked again at every call. (An ``include`` that asks whether a data file is there:
     tests/test_real_pendulum.py, tests/test_mujoco_study.py.)"""
-    from bench.core._experiments import Experiment, expand
+    from bench.core import Experiment, expand
 
     cls = _example_class()  # registers drag_so, second order
     exp = Experiment(
@@ -192,8 +192,7 @@ def test_a_model_module_plugin_trains_on_ray_workers(clean_registry, tmp_path, m
     the driver has on its path) is built on the Ray workers, which import nothing of it."""
     pytest.importorskip("ray")
     from bench.core import _runner as runner
-    from bench.core import _store
-    from bench.core._experiments import expand
+    from bench.core import _store, expand
 
     site = _install(tmp_path / "site", "ray_only_plugin", "ray_only_so", entry_point=False)
     monkeypatch.syspath_prepend(str(site))  # this process only: not in $PYTHONPATH

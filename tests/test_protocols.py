@@ -4,7 +4,7 @@ seed set, a campaign's reading pending until its declared runs are stored."""
 import pandas as pd
 import pytest
 
-from bench.core._experiments import expand, get
+from bench.core import expand, get
 from bench.kit import Verdict
 from bench.kit._protocols import ROWS, Protocol, by_seed_set, protocol_table
 

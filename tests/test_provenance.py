@@ -146,7 +146,7 @@ def test_backfill_records_what_is_known_and_the_rest_as_unknown(tmp_path):
 
 def test_every_row_of_execute_run_carries_provenance(tmp_path):
     from bench import execute_run
-    from bench.core._experiments import RunConfig
+    from bench.core import RunConfig
 
     # A configuration that fails at once: the row is written all the same, with provenance.
     config = RunConfig(system="chain_pendulum", k=1, model="no_such_model", steps=1)

@@ -15,8 +15,7 @@ import pytest
 
 import models
 from bench.core import _runner as runner
-from bench.core import _store
-from bench.core._experiments import expand
+from bench.core import _store, expand
 from tests.test_plugins import _install
 
 # a row's numbers that depend on where and when it ran, not on what it computed

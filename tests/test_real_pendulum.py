@@ -12,9 +12,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from bench.core import _schema, _store
-from bench.core._execute import execute_run
-from bench.core._experiments import RunConfig, expand
+from bench.core import RunConfig, _schema, _store, execute_run, expand
 from bench.studies.paper import real_pendulum as P
 from systems import _real_pendulum as R
 

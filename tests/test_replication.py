@@ -11,7 +11,7 @@ import pytest
 from _synthetic import synthetic_tables
 
 from bench import kit as R
-from bench.core._experiments import PROFILES, REPLICATION_SEEDS, expand
+from bench.core import PROFILES, REPLICATION_SEEDS, expand
 from bench.kit import evaluate_claims
 from bench.kit._replication import (
     CHANGES_WITHOUT_A_SEED,

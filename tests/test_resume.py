@@ -17,11 +17,7 @@ import numpy as np
 import pytest
 
 import models
-from bench.core import _params
-from bench.core._box import BoxObjective
-from bench.core._config import RunConfig
-from bench.core._resume import RECORD, ResumePoint
-from bench.core._train import TrainConfig, train
+from bench.core import RECORD, BoxObjective, ResumePoint, RunConfig, TrainConfig, _params, train
 
 
 class Killed(Exception):
@@ -165,7 +161,7 @@ def test_the_cache_resumes_then_removes_the_state(tmp_path):
 
 
 def test_the_row_counts_the_interrupted_cpu_time_only_where_it_trained():
-    from bench.core._record import training_columns
+    from bench.core import training_columns
 
     meta = {
         "status": "ok",
@@ -218,8 +214,7 @@ import systems
 systems.enable_x64()
 import bench.core._resume as R
 R.EVERY_S = 0.0
-from bench.core._execute import execute_run
-from bench.core._experiments import expand, get
+from bench.core import execute_run, expand, get
 cfg = [c for c in expand(get("lnn_seed_notebook"), "smoke") if c.model == "lnn"][0]
 from bench.studies.paper.lnn_seed import notebook_lr
 steps = int(sys.argv[2])

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from _synthetic import cell_tables
 
-from bench.core._experiments import expand
+from bench.core import expand
 from bench.studies.paper import rigid_bodies as R
 
 # the paper's picture: SO closes most of the gyroscope's gap; the NODE leads on the other two

@@ -6,8 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from bench.core import _store
-from bench.core._experiments import RunConfig
+from bench.core import RunConfig, _store
 
 REFERENCE = Path(__file__).resolve().parents[1] / "results" / "reference"
 FOLDERS = sorted(d for d in REFERENCE.iterdir() if (d / _store.ROWS).is_dir())

@@ -18,9 +18,7 @@ import pytest
 
 import bench.core._runner as runner
 import models
-from bench.core import _store
-from bench.core._env import cpu_count
-from bench.core._experiments import Experiment, RunConfig, expand, register
+from bench.core import Experiment, RunConfig, _store, cpu_count, expand, register
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -357,12 +355,10 @@ def test_smoke_every_model_and_system(executor, tmp_path):
 def test_schedule_starts_one_run_of_every_cell_before_the_other_seeds():
     """Seeds of one cell compile the same programs: the first of each cell goes first
     (longest first among them), then the rest longest first; a tuple key keeps its groups."""
-    from bench.core._runner import _schedule
-
     long = [RunConfig(system="chain_pendulum", k=2, model="hnn_so", seed=s) for s in range(3)]
     short = [RunConfig(system="chain_pendulum", k=2, model="node", seed=s) for s in range(3)]
     cost = {"hnn_so": 10.0, "node": 1.0}
-    got = _schedule(long + short, lambda c: cost[c.model])
+    got = runner._schedule(long + short, lambda c: cost[c.model])
     assert [(c.model, c.seed) for c in got] == [
         ("hnn_so", 0),
         ("node", 0),
@@ -372,7 +368,7 @@ def test_schedule_starts_one_run_of_every_cell_before_the_other_seeds():
         ("node", 2),
     ]
     # a (rank, seconds) key: node's group first, the rule inside each group
-    got = _schedule(long + short, lambda c: (c.model == "node", cost[c.model]))
+    got = runner._schedule(long + short, lambda c: (c.model == "node", cost[c.model]))
     assert [(c.model, c.seed) for c in got] == [
         ("node", 0),
         ("node", 1),
@@ -418,8 +414,7 @@ def test_a_pool_worker_that_dies_raises_instead_of_hanging():
     """multiprocessing.Pool replaced a dead worker and waited forever for its task (a niced
     campaign would have hung unseen); the sweep's pool raises WorkerDied, one line, and
     cancels what had not started."""
-    from bench.core._errors import WorkerDied
-    from bench.core._runner import imap_unordered, worker_pool
+    from bench.core import WorkerDied, imap_unordered, worker_pool
 
     with worker_pool(2) as pool:
         assert sorted(imap_unordered(pool, _die_on_2, [0, 1, 3])) == [0, 1, 3]

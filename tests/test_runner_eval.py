@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import systems
-from bench.core._experiments import RunConfig
-from bench.core._runner import execute_run, to_velocity
+from bench.core import RunConfig, execute_run, to_velocity
 
 SMOKE = dict(
     n_generated=12, n_train=8, n_test=3, test_chunks=4, width=8, steps=5, batch=4, dtype="float64"

@@ -7,14 +7,17 @@ from pathlib import Path
 
 import pytest
 
-from bench.core import _schema, _store
-from bench.core._controlled import METRIC_COLUMNS as CONTROLLED_COLUMNS
-from bench.core._execute import execute_run
-from bench.core._experiments import RunConfig
-from bench.core._frames import FRAME_METRICS
-from bench.core._measured import METRIC_COLUMNS
-from bench.core._pixels import PIXEL_METRICS
-from bench.core._runnable import check_runnable
+from bench.core import (
+    CONTROLLED_COLUMNS,
+    FRAME_METRICS,
+    MEASURED_COLUMNS,
+    PIXEL_METRICS,
+    RunConfig,
+    _schema,
+    _store,
+    check_runnable,
+    execute_run,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = dict(
@@ -26,7 +29,7 @@ OPTIONAL = {"error", "diverged_step", "experiment", "profile", "ensemble_size"}
 # Pixel, frames, measured and controlled runs' own columns: stored by the sweeps of
 # tests/test_pixels.py, tests/test_vin_blog.py, tests/test_real_pendulum.py and
 # tests/test_controlled_runs.py.
-OPTIONAL |= set(PIXEL_METRICS) | set(FRAME_METRICS) | set(METRIC_COLUMNS) | set(CONTROLLED_COLUMNS)
+OPTIONAL |= {*PIXEL_METRICS, *FRAME_METRICS, *MEASURED_COLUMNS, *CONTROLLED_COLUMNS}
 OPTIONAL.add("plugin_source")  # plug-in models' rows only: tests/test_plugin_source.py
 
 

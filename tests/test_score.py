@@ -21,8 +21,7 @@ from _synthetic import synthetic_tables
 
 import systems
 from bench import _cli, _data, _score, data_loader, metrics
-from bench.core._evaluate import _score as run_score
-from bench.core._schema import SCHEMA_VERSION
+from bench.core import SCHEMA_VERSION, _evaluate
 
 SYSTEM, K, PROFILE = "chain_pendulum", 2, "smoke"
 
@@ -67,7 +66,7 @@ def test_the_scorer_gives_the_numbers_of_a_run_evaluation(export, predicted):
         data = systems.make_dataset(config)
         system = systems.make(config.system, **dict(config.system_params))
         how = types.SimpleNamespace(coordinates=config.coordinates, random_args=config.random_args)
-        expected, *_ = run_score(how, system, data, preds[row["dataset"]])
+        expected, *_ = _evaluate._score(how, system, data, preds[row["dataset"]])
         for metric, value in expected.items():
             np.testing.assert_allclose(row[metric], value, rtol=1e-12, err_msg=metric)
         assert 0 < row["rollout_error"] < 1 and 0 < row["energy_violation"] < 1

@@ -38,7 +38,7 @@ def test_sweep_runs_the_seeds_of_a_range(tmp_path, monkeypatch, capsys):
     that runs backwards stops the sweep in one line (exit code 2) before anything is stored."""
     import bench.core._runner as runner
     from bench._cli import main
-    from bench.core._record import base_row
+    from bench.core import base_row
 
     monkeypatch.setattr(runner, "execute_run", lambda c, **kw: {**base_row(c), "status": "ok"})
     argv = ["sweep", "second_order", "--profile", "smoke", "--models", "node", "--no-progress"]

@@ -121,7 +121,7 @@ def test_the_hnns_unused_first_output_does_not_matter():
 
 
 def test_batches_are_the_runs_and_windows_gather():
-    from bench.core._pixels import PixelObjective
+    from bench.core import PixelObjective
 
     frames = np.arange(3 * 7 * 2 * 2, dtype=np.float32).reshape(3, 7, 2, 2)
     cfg = types.SimpleNamespace(batch=4, seed=3, steps_per_call=5, steps=100)

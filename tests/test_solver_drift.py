@@ -15,7 +15,7 @@ from _synthetic import synthetic_tables
 
 import models
 import systems
-from bench.core._experiments import expand
+from bench.core import expand
 from bench.kit import policy
 from bench.studies.paper.energy import _solver_drift as D
 from bench.studies.paper.energy import claim_1

@@ -15,9 +15,8 @@ import numpy as np
 import pytest
 
 import models
+from bench.core import RunConfig, expand
 from bench.core import _controlled as C
-from bench.core._config import RunConfig
-from bench.core._experiments import expand
 from bench.studies.paper import mujoco as X
 from models import Scene, Standardisation
 

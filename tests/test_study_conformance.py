@@ -10,8 +10,7 @@ verb has a help line and answers ``--help`` in-process.
 import pytest
 
 from bench._cli import main
-from bench.core import _studies
-from bench.core._studies import Command, ReportSection, commands, report_sections, studies
+from bench.core import Command, ReportSection, _studies, commands, report_sections, studies
 
 # Studies that lean on a sibling today: what each lacks, and why. The test below fails when a
 # gap closes (remove it here) or a new one opens.

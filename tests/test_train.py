@@ -14,7 +14,7 @@ import pytest
 import bench.core._train as train_mod
 import models
 import systems
-from bench.core._train import TrainConfig, train
+from bench.core import TrainConfig, train
 from models import Integrator, rollout, rollout_batch
 from models._base import AbstractContinuousModel
 

@@ -15,10 +15,16 @@ import pytest
 
 import models
 import systems
-from bench.core import _embedding, _store
-from bench.core._experiments import RunConfig, expand
-from bench.core._frames import FRAME_METRICS, WindowDraws, seed_elbo
-from bench.core._runnable import check_runnable
+from bench.core import (
+    FRAME_METRICS,
+    RunConfig,
+    WindowDraws,
+    _embedding,
+    _store,
+    check_runnable,
+    expand,
+    seed_elbo,
+)
 from bench.kit import policy
 from bench.studies.paper import pixels as P
 from bench.studies.paper import vin_blog as V

@@ -11,8 +11,7 @@ from collections.abc import Iterable, Mapping
 
 import pandas as pd
 
-from ..core._query import experiment_rows, labelled
-from ..core._studies import studies
+from ..core import experiment_rows, labelled, studies
 from ._verdict import INCONCLUSIVE, Verdict
 
 __all__ = [

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..core._query import parse_pairs
+from ..core import parse_pairs
 from . import policy
 from ._gates import Gate, learned
 from ._models import MODEL_LABELS, TRIVIAL_MODELS

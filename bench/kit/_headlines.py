@@ -48,7 +48,7 @@ def headline_rows(verdicts) -> pd.DataFrame:
 
 def write_headlines(results_dir, verdicts) -> Path:
     """``<results_dir>/headlines.csv`` from the report's final verdicts."""
-    from ..core._atomic import atomic_write
+    from ..core import atomic_write
 
     out = Path(results_dir) / FILE
     table = headline_rows(verdicts)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from ..core._query import aggregate, variant  # noqa: E402
+from ..core import aggregate, variant  # noqa: E402
 from ._figure import save_figure, subplots  # noqa: E402
 from ._models import MODEL_LABELS, TRIVIAL_MODELS  # noqa: E402
 from ._seeds import bad_rows, scored  # noqa: E402

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ..core._experiments import SELECTIONS, expand, get
+from ..core import SELECTIONS, expand, get
 from ._seeds import required_seeds, seed_sets, seed_span
 from ._verdict import Verdict
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ..core._experiments import PROFILES, expand
+from ..core import PROFILES, expand
 from ._claims import claim_studies, evaluate_claims, restrict_all
 from ._seeds import min_seeds, required_seeds, seed_sets, seed_span
 from ._stats import ALPHA
@@ -153,7 +153,7 @@ def stored_counts(
     where given) are in ``runs``; {} for an unknown profile."""
     if profile not in PROFILES:
         return {}
-    from ..core._studies import studies
+    from ..core import studies
 
     done = set(runs["config_hash"]) if len(runs) and "config_hash" in runs else set()
     judged = {s.claim for s in claim_studies()}

@@ -13,8 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from ..core._experiments import SELECTIONS, profile_defaults, replication_seeds
-from ..core._query import initial_state, option, select
+from ..core import SELECTIONS, initial_state, option, profile_defaults, replication_seeds, select
 
 __all__ = [
     "BOUNDED_SLOPE",

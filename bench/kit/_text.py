@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..core._store import REFERENCE_ROOT
+from ..core import REFERENCE_ROOT
 
 __all__ = ["fmt", "folder_label", "md_escape"]
 

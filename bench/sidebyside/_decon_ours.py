@@ -19,8 +19,7 @@ class Ours:
         import jax
         import jax.numpy as jnp
 
-        from bench.core._optim import optimizer
-        from bench.core._train import make_step
+        from bench.core import make_step, optimizer
         from models import Integrator, rollout_batch
 
         params, self.static = eqx.partition(model, eqx.is_inexact_array)
@@ -69,7 +68,7 @@ def loss_and_grad(model, z, ts, tcfg, first_point: bool = False):
     import equinox as eqx
     import jax.numpy as jnp
 
-    from bench.core._train import loss_fn
+    from bench.core import loss_fn
 
     dtype = jnp.dtype(tcfg.dtype)
     zz, tt = jnp.asarray(z, dtype), jnp.asarray(ts, dtype)
@@ -89,7 +88,7 @@ def paper_metric(pred, true, t0: bool = False) -> float:
     over windows and times from t = 1 on, or with ``t0`` from t = 0 as the paper reports it
     (where a prediction's t = 0 error of 1e-4, ``MechanicsNN``'s, against the 1e-7 clamp of an
     exact start, moves the mean over 100 points by e^{ln(1000) / 100}, 7 %)."""
-    from bench.core._metrics import geometric_mean, relative_error
+    from bench.core import geometric_mean, relative_error
 
     err = relative_error(pred, true, reference_compatible=True)
     return float(geometric_mean(err if t0 else err[..., 1:]))

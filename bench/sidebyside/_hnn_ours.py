@@ -48,7 +48,7 @@ def our_model(c, system, dtype: str | None = None):
     import jax
 
     import models
-    from bench.core._config import PIXEL_SIZE
+    from bench.core import PIXEL_SIZE
 
     return models.LatentModel(
         c.model,
@@ -90,7 +90,7 @@ def _terms_fn():
     import jax
     import jax.numpy as jnp
 
-    from bench.core._pixels import seed_loss
+    from bench.core import seed_loss
 
     @eqx.filter_jit
     def terms(model, windows, integ):
@@ -122,7 +122,7 @@ def our_grad(model, windows, integ):
     import equinox as eqx
     import jax.numpy as jnp
 
-    from bench.core._pixels import seed_loss
+    from bench.core import seed_loss
 
     w = jnp.asarray(windows, model.autoencoder.dtype)
     g = eqx.filter_grad(lambda m: seed_loss(m, w, integ)[0])(model)
@@ -138,9 +138,7 @@ class Ours:
         import jax
         import jax.numpy as jnp
 
-        from bench.core._optim import optimizer
-        from bench.core._pixels import PixelObjective
-        from bench.core._train import make_step
+        from bench.core import PixelObjective, make_step, optimizer
 
         self.objective = PixelObjective(chunk=chunk)
         params, self.static = eqx.partition(model, eqx.is_inexact_array)
@@ -169,7 +167,7 @@ class Ours:
 
 def claim_metric(c, system, data, model) -> dict:
     """The claim's test metrics (``evaluate_pixels`` of the committed rows)."""
-    from bench.core._pixel_eval import evaluate_pixels
+    from bench.core import evaluate_pixels
 
     m, _ = evaluate_pixels(c, system, data, model)
     keys = ("pixel_mse", "pixel_mse_static", "recon_mse", "seed_energy_mse")

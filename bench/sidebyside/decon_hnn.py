@@ -117,9 +117,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     """Every check of model ``name``; returns the verdict lines."""
     import jax
 
-    from bench.core._build import build_run
-    from bench.core._fit import train_config
-    from bench.core._train import Batches
+    from bench.core import Batches, build_run, train_config
     from systems import cache_root
 
     config = run_config(name, a.seed)
@@ -251,7 +249,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     print("\n".join(lines), flush=True)
 
     # (c) the curves
-    from bench.core._train import prepare
+    from bench.core import prepare
 
     arrays = prepare(suite_model, data, tcfg)
     sides = {}
@@ -425,7 +423,7 @@ def main(argv=None) -> int:
         )
         return 2
 
-    from bench.core._env import setup_process
+    from bench.core import setup_process
 
     setup_process(n=1)
     for name in names:

@@ -176,12 +176,11 @@ def main(argv=None) -> int:
         )
         return 2
 
-    from bench.core._env import setup_process
+    from bench.core import setup_process
 
     setup_process()
     import systems
-    from bench.core._pixels import PixelObjective
-    from bench.core._pixels import train_config as pixel_train_config
+    from bench.core import PixelObjective, pixel_train_config
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

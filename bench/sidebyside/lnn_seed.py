@@ -111,7 +111,7 @@ def our_model(config, seed_input: bool):
 
 def _box_stream(config, batch: int, seed: int):
     import systems
-    from bench.core._box import BoxStates
+    from bench.core import BoxStates
 
     system = systems.make(config.system, **config.system_kwargs())
     return BoxStates(system, config.train_box, batch, seed, config.dtype), system
@@ -126,9 +126,7 @@ class Ours:
         import jax
         import jax.numpy as jnp
 
-        from bench.core._fit import objective
-        from bench.core._optim import optimizer
-        from bench.core._train import make_step
+        from bench.core import make_step, objective, optimizer
 
         self.objective = objective(config)
         self.tcfg = tcfg
@@ -292,12 +290,12 @@ def main(argv=None) -> int:
         print(f"error: {msg}", file=sys.stderr)
         return 2
 
-    from bench.core._env import setup_process
+    from bench.core import setup_process
 
     setup_process()
     import jax
 
-    from bench.core._fit import train_config
+    from bench.core import train_config
 
     overrides = {"hidden_dim": a.width, "batch_size": a.batch}
     seed = load_seed(root, **{k: v for k, v in overrides.items() if v is not None})

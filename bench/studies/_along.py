@@ -15,7 +15,7 @@ import pandas as pd
 
 import models
 
-from ..core._evaluate import CHECKPOINT_METRICS as SCORES  # what a checkpoint replaces
+from ..core import CHECKPOINT_METRICS as SCORES  # what a checkpoint replaces
 from ..kit import claim_studies, evaluate_claims, restrict
 
 __all__ = [

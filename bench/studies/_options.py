@@ -11,8 +11,7 @@ import math
 import re
 from pathlib import Path
 
-from ..core._config import check_choice
-from ..core._experiments import PROFILES
+from ..core import PROFILES, check_choice
 
 __all__ = [
     "SEEDS_FORMS",
@@ -92,7 +91,7 @@ def check_sweep_args(args):
 
 def usable_results(args) -> Path:
     """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
-    from ..core._store import check_results_dir
+    from ..core import check_results_dir
 
     return check_results_dir(args.results, create=True)
 
@@ -134,7 +133,7 @@ def model_list(args) -> list[str] | None:
 
 def run_experiments(args, names, *, order, seeds=None) -> dict:
     """One sweep of ``names`` with the :func:`sweep_options` of ``args``."""
-    from ..core._runner import run_experiments as run
+    from ..core import run_experiments as run
 
     return run(
         names,

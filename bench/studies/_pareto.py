@@ -7,8 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from ..core._config import field_names
-from ..core._query import aggregate
+from ..core import aggregate, field_names
 
 __all__ = ["COSTS", "ERROR", "aggregate_seeds", "cheapest_within", "pareto_front"]
 

@@ -14,10 +14,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core._experiments import PROFILES, Experiment
-from ..core._query import load_tables, select
-from ..core._store import load_checkpoints
-from ..core._studies import Study, register_study
+from ..core import (
+    PROFILES,
+    Experiment,
+    Study,
+    load_checkpoints,
+    load_tables,
+    register_study,
+    select,
+)
 from ..kit import (
     COLORS,
     MODEL_LABELS,
@@ -77,7 +82,7 @@ def verdicts_along_learning(
     its own rule on those runs and the trivial predictors of the same cells, at each of their
     checkpoints. Verdicts with fewer than 2 seeds (a cell the experiment does not have) are left
     out. Same columns as :func:`verdicts_along_curve`."""
-    from ..core._query import experiment_rows
+    from ..core import experiment_rows
 
     cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
     learn = experiment_rows(runs, LEARNING.name, profile) if len(runs) else runs
@@ -144,7 +149,7 @@ def _curve_runs(runs: pd.DataFrame, cp: pd.DataFrame) -> pd.DataFrame:
 def _paper_reference(results_dir: Path) -> pd.DataFrame:
     """Final errors of the paper-budget runs of the report's other folders (the committed
     ``results/reference/paper*/`` and ``<results>/paper*/``), if any."""
-    from ..core._store import compare_folders
+    from ..core import compare_folders
 
     parts = []
     for d in compare_folders(results_dir):
@@ -333,7 +338,7 @@ def _learning_lines(runs: pd.DataFrame, cp: pd.DataFrame, results_dir: Path, pro
     """The dedicated experiment, per cell: the error of each model at each checkpoint over
     seeds, the NODE+SO / HNN+SO ratio, the same seeds' full-schedule runs at the profile's own
     budget, and the paper-budget runs stored beside."""
-    from ..core._query import experiment_rows
+    from ..core import experiment_rows
 
     rows = experiment_rows(runs, LEARNING.name, profile)
     rows = rows[rows["config_hash"].isin(cp["config_hash"])] if len(rows) else rows

@@ -16,12 +16,18 @@ import pandas as pd
 
 import models
 
-from ..core._config import RunConfig
-from ..core._experiments import PROFILES, Experiment, expand
-from ..core._provenance import machine_key
-from ..core._query import experiment_rows, pick_profile
-from ..core._store import load_runs
-from ..core._studies import Study, register_study
+from ..core import (
+    PROFILES,
+    Experiment,
+    RunConfig,
+    Study,
+    expand,
+    experiment_rows,
+    load_runs,
+    machine_key,
+    pick_profile,
+    register_study,
+)
 from ..kit import save_figure, subplots
 from ._pareto import ERROR, aggregate_seeds, cheapest_within, pareto_front
 

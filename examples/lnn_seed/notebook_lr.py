@@ -10,7 +10,7 @@ Runs stored in RESULTS_DIR as experiment ``lnn_notebook_lr`` (not a claim's), th
 import dataclasses
 import sys
 
-from bench.core._env import setup_process
+from bench.core import setup_process
 
 LRS = (1e-5, 1e-4, 1e-3, 3e-3)
 

@@ -10,7 +10,7 @@ import sys
 
 from _probe import on_task, score
 
-from bench.core._experiments import expand
+from bench.core import expand
 from bench.studies.paper.mujoco import TASKS
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 2000

@@ -10,7 +10,7 @@ import sys
 
 from _probe import score
 
-from bench.core._experiments import expand
+from bench.core import expand
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 5000
 cells = [

@@ -21,7 +21,7 @@ acceleration (q1 = q0 + dt * (v0 + v1) / 2, exact for constant acceleration).
 import numpy as np
 
 from bench.core import _controlled as C
-from bench.core._experiments import expand
+from bench.core import expand
 
 
 def floor(q1_hat, q1, scale_q):

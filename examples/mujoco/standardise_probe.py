@@ -10,7 +10,7 @@ import sys
 from _probe import score
 
 from bench.core import _controlled as C
-from bench.core._experiments import expand
+from bench.core import expand
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else None
 for c in (c for c in expand("mujoco", "quick") if c.seed == 0 and c.lr == 2e-4):

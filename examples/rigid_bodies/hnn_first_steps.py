@@ -15,7 +15,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
-from bench.core._env import setup_process
+from bench.core import setup_process
 
 setup_process(1)
 
@@ -25,11 +25,15 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import systems  # noqa: E402
-from bench.core._build import build_run  # noqa: E402
-from bench.core._experiments import expand  # noqa: E402
-from bench.core._fit import train_config  # noqa: E402
-from bench.core._optim import optimizer  # noqa: E402
-from bench.core._train import Batches, compiled_block, prepare  # noqa: E402
+from bench.core import (  # noqa: E402
+    Batches,
+    build_run,
+    compiled_block,
+    expand,
+    optimizer,
+    prepare,
+    train_config,
+)
 
 
 def main(system: str, seed: int, lr: float, n_steps: int) -> None:

@@ -6,7 +6,7 @@ from collections.abc import Mapping
 
 import models
 
-from ...core._config import RunConfig
+from ...core import RunConfig
 
 # The Deconstructing paper's claims (1-8); each seed's study adds its own claims' titles.
 CLAIM_TITLES = {

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...core._studies import Command, register_command
+from ...core import Command, register_command
 from .._options import usable_results
 
 

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import jax
 
-from ...core._env import cpu_count
-from ...core._train import TrainConfig
+from ...core import TrainConfig, cpu_count
 from ._timing import (
     BATCH,
     DEPTH,
@@ -48,8 +47,7 @@ def ensemble_table(names=ENSEMBLE_MODELS, sizes=ENSEMBLE_SIZES, steps=None, say=
     """
     import models
 
-    from ...core._ensemble import train_ensemble
-    from ...core._train import train
+    from ...core import train, train_ensemble
 
     accel = jax.default_backend() != "cpu"
     width, batch, n = (WIDTH, BATCH, N_TRAIN) if accel else (128, 100, 200)

@@ -13,8 +13,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ...core._env import cpu_count
-from ...core._train import TrainConfig
+from ...core import TrainConfig, cpu_count
 from ._ensemble import (
     ENSEMBLE_MODELS,
     ENSEMBLE_SIZES,

@@ -8,7 +8,7 @@ import subprocess
 import sys
 import time
 
-from ...core._env import setup_process
+from ...core import setup_process
 
 THREADS = setup_process()  # an entry point's module: imported only to measure
 
@@ -19,8 +19,7 @@ import numpy as np  # noqa: E402
 
 from models import Integrator, rollout_batch  # noqa: E402
 
-from ...core._optim import optimizer  # noqa: E402
-from ...core._train import Batches, compiled_block, loss_fn, train_block  # noqa: E402
+from ...core import Batches, compiled_block, loss_fn, optimizer, train_block  # noqa: E402
 
 # ms per step and per 40 x 100-step rollout of the PyTorch reference (mean of its two runs).
 REFERENCE = {
@@ -107,7 +106,7 @@ def step_flops(model, data, config) -> float:
 
 
 def _prepare(model, dataset, config):
-    from ...core._train import prepare
+    from ...core import prepare
 
     data = prepare(model, dataset, config)
     params, static = eqx.partition(model, eqx.is_inexact_array)

@@ -25,7 +25,7 @@ dynamics), ``_lnn`` (the Euler-Lagrange solve), ``_learned`` (small learned mode
 (running, figure, report section).
 """
 
-from ...core._studies import Study, register_study
+from ...core import Study, register_study
 from ._core import (
     BOUND_FACTOR,
     COLUMNS,

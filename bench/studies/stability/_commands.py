@@ -4,9 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...core._config import check_choice
-from ...core._experiments import PROFILES
-from ...core._studies import Command, register_command
+from ...core import PROFILES, Command, check_choice, register_command
 from .._options import int_arg, usable_results
 
 
@@ -22,7 +20,7 @@ def _arguments(p):
 
 
 def _run(args) -> int:
-    from ...core._env import cpu_count
+    from ...core import cpu_count
     from ._run import CASES, run_stability
 
     check_choice("profile", args.profile, list(PROFILES))

@@ -24,13 +24,8 @@ import numpy as np
 
 from models import DESCRIPTIONS, METHODS
 
-from ...core._errors import one_line
-from ...core._metrics import (
-    energies,
-    energy_violation_curve,
-    valid_prediction_time,
-)
-from ...core._metrics import relative_error as _relative_error
+from ...core import energies, energy_violation_curve, one_line, valid_prediction_time
+from ...core import relative_error as _relative_error
 
 OUTCOMES = ("ok", "diverged", "failed")
 DT = 0.03

@@ -11,7 +11,7 @@ import numpy as np
 
 import systems
 
-from ...core._errors import one_line
+from ...core import one_line
 from ._core import (
     METHOD_NOTES,
     Row,
@@ -43,7 +43,7 @@ def _train_small(name: str, size: StabilitySize):
     model = models.make(name, scene, key=jax.random.PRNGKey(0), width=size.width)
     info = "untrained"
     if size.train_steps > 0:
-        from ...core._train import TrainConfig, train
+        from ...core import TrainConfig, train
 
         ds = systems.make_dataset(
             systems.DatasetConfig(

@@ -9,7 +9,7 @@ import numpy as np
 
 import systems
 
-from ...core._errors import one_line
+from ...core import one_line
 from ._core import Row, _cast, _size
 
 SOLVES = ("solve", "pinv", "regularised")

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core._errors import one_line
-from ...core._provenance import provenance
+from ...core import one_line, provenance
 from ...kit import save_figure, subplots
 from ._core import (
     COLUMNS,
@@ -57,7 +56,7 @@ _ORDER = ("long_horizon", "stiffness", "dt_sweep", "precision", "lnn_singular", 
 
 def _run_job(job) -> list[tuple[str, int, list[Row], float]]:
     """A pool task: ``(case, part, size)`` triples run in order, each inside :func:`guard`."""
-    from ...core._env import bound_compiled_programs, configure_compilation_cache
+    from ...core import bound_compiled_programs, configure_compilation_cache
 
     configure_compilation_cache()
     out = []
@@ -112,7 +111,7 @@ def run_cases(profile="quick", cases=None, progress: bool = True, workers: int =
         for job in jobs:
             report(_run_job(job))
     else:
-        from ...core._runner import imap_unordered, worker_pool
+        from ...core import imap_unordered, worker_pool
 
         with worker_pool(workers) as pool:
             for done in imap_unordered(pool, _run_job, jobs):
@@ -285,7 +284,7 @@ def main(argv=None) -> int:
     parser.add_argument("--results", default="results")
     parser.add_argument("--case", action="append", choices=list(CASES))
     ns = parser.parse_args(argv)
-    from ...core._env import setup_process
+    from ...core import setup_process
 
     setup_process()
     df = run_stability(ns.results, ns.profile, ns.case)

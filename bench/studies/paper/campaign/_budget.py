@@ -8,8 +8,7 @@ from pathlib import Path
 
 import models
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment, expand
+from ....core import Experiment, RunConfig, expand
 from ....kit import TRIVIAL_MODELS
 from ..coordinates import COORDINATES
 from ..damped import DAMPED
@@ -202,7 +201,7 @@ def make_bench_seconds(profile: str = "quick", workers: int = 2, papers=None) ->
     cases run with the Deconstructing paper). ``make bench`` is ``papers=("deconstructing",)``,
     ``make bench-seeds`` the three seeds. (The learning-curve experiment is read from the
     registry: ``bench.studies.learning`` imports this package, not the reverse.)"""
-    from ....core._experiments import PAPERS, available, get
+    from ....core import PAPERS, available, get
 
     papers = PAPERS if papers is None else tuple(papers)
     extra = tuple(get(n) for n in ("learning_curves",) if n in available())

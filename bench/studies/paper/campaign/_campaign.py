@@ -14,8 +14,7 @@ import pandas as pd
 
 import systems
 
-from ....core._experiments import available, expand, get, replication_seeds
-from ....core._store import done_hashes, holds_runs, read_rows
+from ....core import available, done_hashes, expand, get, holds_runs, read_rows, replication_seeds
 from ._budget import data_seconds, run_seconds, total_seconds
 
 # The row columns summed as the campaign's training and evaluation time (the "CPU
@@ -78,7 +77,7 @@ def signed_claims(results_dir, profile: str = "paper-core") -> frozenset:
     is signed (reproduced, partly reproduced or not reproduced): the campaign replicates them
     first. A claim with runs still to store is not signed, even where one of its readings is
     (claim 7's rollout-loss reading, while the seed's protocol that decides it is pending)."""
-    from ....core._query import load_tables
+    from ....core import load_tables
     from ....kit import NOT_REPRODUCED, PARTLY, REPRODUCED, judge, stored_counts
 
     if results_dir is None or not holds_runs(Path(results_dir)):
@@ -353,8 +352,7 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
 
     import systems
 
-    from ....core._params import RESUME, params_dir, saved_by_this_code
-    from ....core._resume import RECORD
+    from ....core import RECORD, RESUME, params_dir, saved_by_this_code
 
     cache_root = Path(cache_root or systems.cache_root())
     done = done_hashes(Path(results_dir)) if results_dir and Path(results_dir).exists() else set()

@@ -4,9 +4,7 @@ register their own verbs, in their folders."""
 
 from __future__ import annotations
 
-from ....core._config import check_choice
-from ....core._experiments import PROFILES
-from ....core._studies import Command, register_command
+from ....core import PROFILES, Command, check_choice, register_command
 from ..._options import (
     check_sweep_args,
     int_arg,
@@ -22,7 +20,7 @@ def _estimate_arguments(p):
 
 
 def _estimate(args) -> int:
-    from ....core._experiments import SELECTIONS, replication_seeds
+    from ....core import SELECTIONS, replication_seeds
     from ._campaign import (
         CAMPAIGN_CLAIMS,
         cheapest_first,
@@ -119,7 +117,7 @@ def _claim_list(text: str) -> frozenset:
 
 
 def _campaign(args) -> int:
-    from ....core._experiments import replication_seeds
+    from ....core import replication_seeds
     from ._campaign import (
         CAMPAIGN_CLAIMS,
         campaign_experiments,

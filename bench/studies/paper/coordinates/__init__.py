@@ -7,10 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._query import initial_state, plain, select
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, initial_state, plain, register_study, select
 from ....kit import (
     Part,
     Verdict,

@@ -17,7 +17,7 @@ def link_rows(runs: pd.DataFrame) -> pd.DataFrame:
     """The paper's undamped cells of Figs. 4 and 5 at every stored k: the four models and the
     trivial predictors on the chain and on the spring from the paper's start, L2 loss, at the
     ``paper`` profile's cells; failed rows kept (they are scored)."""
-    from ....core._query import experiment_rows, plain, select
+    from ....core import experiment_rows, plain, select
     from ....kit import paper_spring
 
     if not len(runs):
@@ -40,7 +40,7 @@ def fig_links(results_dir) -> list:
 
     from scipy import stats
 
-    from ....core._query import load_tables
+    from ....core import load_tables
     from ....kit import (
         COLORS,
         MODEL_LABELS,

@@ -9,11 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._provenance import machine_key
-from ....core._query import select, variant
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, machine_key, register_study, select, variant
 from ....kit import (
     MODEL_ORDER,
     SYSTEM_ORDER,

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, register_study
 from ....kit import model_bars
 from .._common import UNIT_DOUBLE_PENDULUM
 

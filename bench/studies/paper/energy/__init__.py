@@ -9,8 +9,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ....core._experiments import Experiment
-from ....core._studies import Study, register_study
+from ....core import Experiment, Study, register_study
 from ....kit import (
     ALPHA,
     LINEAR_SLOPE,

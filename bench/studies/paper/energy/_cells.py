@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ....core._query import plain, select
+from ....core import plain, select
 from ....kit import TRIVIAL_MODELS, non_trivial, paper_spring, scored, t_bounds_jackknife
 from .._common import PAPER_MODELS
 

@@ -86,8 +86,7 @@ def compute(config, cache_root: Path | None = None) -> float:
 
     import systems
 
-    from ....core._evaluate import eval_integrator
-    from ....core._metrics import energies, energy_violation_curve, geometric_mean
+    from ....core import energies, energy_violation_curve, eval_integrator, geometric_mean
 
     if config.coordinates != "velocity" or config.observation != "state":
         return math.nan
@@ -117,8 +116,7 @@ def compute(config, cache_root: Path | None = None) -> float:
 def _cached(config, cache_root: Path | None) -> float:
     import systems
 
-    from ....core._atomic import write_json
-    from ....core._params import code_fingerprint
+    from ....core import code_fingerprint, write_json
 
     key = _key(config)
     if key in _MEMO:
@@ -142,7 +140,7 @@ def _cached(config, cache_root: Path | None) -> float:
 
 def _configs(runs: pd.DataFrame) -> list:
     """Each row's run configuration (None where a row does not parse into one)."""
-    from ....core._config import RunConfig, field_names
+    from ....core import RunConfig, field_names
 
     names = [c for c in runs.columns if c in field_names()]
     out = []

@@ -3,7 +3,7 @@ replayed and probed, into ``<results>/hnn_diagnosis.csv``."""
 
 from __future__ import annotations
 
-from ....core._studies import Command, register_command
+from ....core import Command, register_command
 from ..._options import int_arg, usable_results
 
 
@@ -15,7 +15,7 @@ def _arguments(p):
 
 
 def _run(args) -> int:
-    from ....core._store import read_rows, rows_frame
+    from ....core import read_rows, rows_frame
     from ._diagnosis import FILE, diagnose, summary
 
     results = usable_results(args)

@@ -15,9 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import expand
-from ....core._studies import Study, register_study
+from ....core import RunConfig, Study, expand, register_study
 from .._common import SPRING_PAPER
 from ..hnn_seed import fmt as _f
 
@@ -118,10 +116,7 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
     import jax
     import jax.numpy as jnp
 
-    from ....core._build import build_run
-    from ....core._fit import train_config
-    from ....core._optim import optimizer
-    from ....core._train import Batches, compiled_block, prepare
+    from ....core import Batches, build_run, compiled_block, optimizer, prepare, train_config
 
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {', '.join(VARIANTS)}; got {variant!r}")
@@ -189,13 +184,13 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
 
 def _worker(cores: int) -> None:
     """A replay process's initializer: ``cores`` cores, then the compilation cache."""
-    from ....core._env import setup_process
+    from ....core import setup_process
 
     setup_process(n=cores)
 
 
 def _replay_job(cfg_dict: dict, variant: str, n_steps: int, cache_root: str) -> list[dict]:
-    from ....core._env import cpu_count
+    from ....core import cpu_count
 
     rows = _replay(RunConfig.from_dict(cfg_dict), variant, n_steps, Path(cache_root))
     return [{**r, "cores": cpu_count()} for r in rows]
@@ -304,7 +299,7 @@ def summary(df: pd.DataFrame, runs: pd.DataFrame | None = None) -> str:
 
 def section(results_dir) -> str:
     """The report's section: the table where the folder has ``hnn_diagnosis.csv``."""
-    from ....core._store import read_rows, rows_frame
+    from ....core import read_rows, rows_frame
 
     head = ["## Plain HNN on the spring: the first training steps (claims 1 and 3)", ""]
     path = Path(results_dir) / FILE

@@ -15,11 +15,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._query import experiment_rows, pick_profile, select
-from ....core._store import load_runs
-from ....core._studies import Study, register_study
+from ....core import (
+    Experiment,
+    RunConfig,
+    Study,
+    experiment_rows,
+    load_runs,
+    pick_profile,
+    register_study,
+    select,
+)
 from ....kit import (
     Protocol,
     bad_rows,

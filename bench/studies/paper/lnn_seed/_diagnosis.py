@@ -16,8 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import expand, get, profile_defaults
+from ....core import RunConfig, expand, get, profile_defaults
 from ..double_pendulum import DOUBLE_PENDULUM_ENERGY
 
 COND_LIMIT = 1e3
@@ -123,7 +122,7 @@ def _init_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ....core._build import build_run
+    from ....core import build_run
 
     seeds, _, steps = SIZES[profile]
     rows = []
@@ -244,8 +243,7 @@ def _trained_rows(profile: str, cache_root) -> list[dict]:
 
     import models
 
-    from ....core._build import build_run
-    from ....core._fit import train_cached
+    from ....core import build_run, train_cached
 
     rows = []
     for label, cfg in _trained_models(profile, cache_root):

@@ -16,9 +16,7 @@ from pathlib import Path
 import systems
 from systems import mujoco_data
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, register_study
 from ....kit import draw_bars, save_figure, subplots, trivial_lines
 from .._common import CLAIM_TITLES
 from ._rule import (

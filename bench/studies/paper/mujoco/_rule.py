@@ -14,7 +14,7 @@ import pandas as pd
 
 import systems
 
-from ....core._query import params_of
+from ....core import params_of
 from ....kit import (
     Discrimination,
     at_lr,

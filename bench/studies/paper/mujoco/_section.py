@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._query import aggregate, experiment_rows, pick_profile
-from ....core._store import load_runs
+from ....core import aggregate, experiment_rows, load_runs, pick_profile
 from ..hnn_seed import fmt, geometric_mean
 from ._rule import (
     CODE_LR,

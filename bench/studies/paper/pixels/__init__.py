@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ....core._studies import Study, register_study
+from ....core import Study, register_study
 from ....kit import new_figure, save_figure
 from .._common import CLAIM_TITLES
 from ..hnn_seed import geometric_mean

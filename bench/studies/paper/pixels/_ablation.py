@@ -50,10 +50,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._experiments import expand
-from ....core._pixel_eval import evaluate_pixels
-from ....core._pixels import CC_LOSS, build, train_pixels
-from ....core._store import read_rows
+from ....core import CC_LOSS, build_pixels, evaluate_pixels, expand, read_rows, train_pixels
 from ....kit import bad_rows, policy
 from ....kit import gmean as _gm
 
@@ -147,7 +144,7 @@ ABLATIONS = (VIN, HNN_SEED)
 
 def _run(c, aux_weight: float) -> dict:
     """Train and evaluate one pixel run with the auxiliary weight ``aux_weight``."""
-    system, data, model = build(c)
+    system, data, model = build_pixels(c)
     t0 = time.perf_counter()
     model, meta = train_pixels(c, model, data, aux_weight=aux_weight)
     seconds = time.perf_counter() - t0

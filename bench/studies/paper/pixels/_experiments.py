@@ -7,9 +7,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ....core._experiments import Experiment
-from ....core._query import experiment_rows, pick_profile
-from ....core._store import read_rows
+from ....core import Experiment, experiment_rows, pick_profile, read_rows
 
 # The HNN seed's pixel-pendulum row (greydanus/hamiltonian-nn README, baseline -> HNN)
 SEED_ENERGY_MSE = (9.27e-3, 1.53e-4)
@@ -127,7 +125,7 @@ SHORT = {"hnn": "HNN", "node": "MLP", "vin": "VIN", "resnet": "ResNet"}
 def _rows(results_dir, experiments=None) -> tuple[list[dict], pd.DataFrame, str | None]:
     """(row dicts with their curves, runs table, profile) of ``experiments`` (default: the
     pixel experiments, the seed's protocol included)."""
-    from ....core._store import load_runs
+    from ....core import load_runs
 
     experiments = ALL_EXPERIMENTS if experiments is None else experiments
     runs = load_runs(results_dir)

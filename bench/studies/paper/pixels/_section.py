@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._experiments import Experiment
+from ....core import Experiment
 from ....kit import Protocol, bad_rows, by_seed_set, learned_text, policy, protocol_table
 from ..hnn_seed import fmt, geometric_mean
 from . import _ablation
@@ -114,7 +114,7 @@ _INITS = {
 
 
 def _config(exp: Experiment, profile: str | None):
-    from ....core._experiments import expand
+    from ....core import expand
 
     for p in (profile, "paper"):
         try:
@@ -130,7 +130,7 @@ def protocols(t: pd.DataFrame, profile: str | None) -> list[str]:
     """Claim 11 under our protocol and under the seed's, side by side: what each trains on,
     how, what it scores, and its verdict (from the rows ``t``; the configurations are the
     experiments' at ``profile``)."""
-    from ....core._pixels import AE_LOSS, CC_LOSS, DYN_LOSS, WEIGHT_DECAY
+    from ....core import AE_LOSS, CC_LOSS, DYN_LOSS, WEIGHT_DECAY
 
     is_seed = seed_protocol(t) if len(t) else pd.Series(False, index=t.index)
     cols = {"ours": _config(PIXEL_HNN, profile), "seed": _config(PIXEL_HNN_SEED, profile)}

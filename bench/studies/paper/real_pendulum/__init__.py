@@ -16,11 +16,15 @@ import pandas as pd
 
 from systems import real_pendulum as R
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._query import experiment_rows, pick_profile
-from ....core._store import load_runs
-from ....core._studies import Study, register_study
+from ....core import (
+    Experiment,
+    RunConfig,
+    Study,
+    experiment_rows,
+    load_runs,
+    pick_profile,
+    register_study,
+)
 from ....kit import (
     bad_rows,
     gated,
@@ -262,7 +266,7 @@ def figure(results_dir) -> list[Path]:
     """The test rollout of the lowest seed in phase space and the seed's energy along it, per
     model, for the data used (the measured file's where present, else the stand-in's, so
     titled)."""
-    from ....core._store import load_curves
+    from ....core import load_curves
 
     rows, _ = _rows(Path(results_dir))
     curves = load_curves(Path(results_dir))

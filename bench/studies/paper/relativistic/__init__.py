@@ -23,8 +23,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ....core._query import option
-from ....core._studies import Study, register_study
+from ....core import Study, option, register_study
 from ....kit import (
     draw_bars,
     model_label,

@@ -5,8 +5,7 @@ each runs. What the seed's protocol keeps and changes: :mod:`bench.studies.paper
 
 from __future__ import annotations
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
+from ....core import Experiment, RunConfig
 from .._common import RELATIVISTIC_TEST_PARAMS
 
 # (model, coordinates, model_options) of the relativistic test; the extras run at seed 0 only

@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from ....core._query import select
+from ....core import select
 from ....kit import (
     TRIVIAL_MODELS,
     Verdict,

@@ -9,9 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment, expand
-from ....core._train import TrainConfig
+from ....core import Experiment, RunConfig, TrainConfig, expand
 from ....kit import Protocol, bad_rows, by_seed_set, cell_rows, protocol_table
 from ._experiments import RELATIVISTIC, RELATIVISTIC_SEED
 from ._rule import _HNN_P, _NAIVE, _PURE_LNN, ROLLOUT_VARIANT, _particle_rows, velocity_scores
@@ -97,7 +95,7 @@ def _errors(runs: pd.DataFrame, target: str) -> dict[str, str]:
 
 def comparison_section(results_dir) -> str:
     """Claim 7's two protocols side by side: what each trains on and how, and its verdicts."""
-    from ....core._query import load_tables
+    from ....core import load_tables
     from ....kit import evaluate_claims
 
     runs, curves, profile = load_tables(Path(results_dir))

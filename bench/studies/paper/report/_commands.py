@@ -4,7 +4,7 @@ the report reads it there)."""
 
 from __future__ import annotations
 
-from ....core._studies import Command, register_command
+from ....core import Command, register_command
 from ..._options import int_arg
 
 
@@ -20,7 +20,7 @@ def _arguments(p):
 def _run(args) -> int:
     from pathlib import Path
 
-    from ....core._query import load_tables
+    from ....core import load_tables
     from ....kit import judge, power_lines, power_table
 
     results = Path(args.results)

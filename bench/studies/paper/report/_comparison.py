@@ -8,8 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ....core._experiments import SELECTIONS
-from ....core._query import load_tables
+from ....core import SELECTIONS, load_tables
 from ....kit import folder_label, judge, md_escape, stored_counts
 
 __all__ = [

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from ....core._experiments import expand, get
+from ....core import expand, get
 from ....kit import Judgement, claim_studies, judge, seed_sets, seed_span, stored_counts
 
 LINKS = (1, 2, 3, 4)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....core._studies import ReportContext, ReportSection, register_section
+from ....core import ReportContext, ReportSection, register_section
 from ....kit import (
     TRIVIAL_FACTOR,
     fmt,

@@ -15,10 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._query import plain, select
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, plain, register_study, select
 from ....kit import (
     at_lr,
     cell_rows,

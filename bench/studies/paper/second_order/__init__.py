@@ -6,9 +6,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ....core._experiments import Experiment
-from ....core._query import plain, select
-from ....core._studies import Study, register_study
+from ....core import Experiment, Study, plain, register_study, select
 from ....kit import (
     Verdict,
     cell_rows,

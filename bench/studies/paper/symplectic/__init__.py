@@ -10,10 +10,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._query import option, select
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, option, register_study, select
 from ....kit import (
     ALPHA,
     INCONCLUSIVE,

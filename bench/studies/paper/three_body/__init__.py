@@ -13,9 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._config import RunConfig
-from ....core._experiments import Experiment
-from ....core._studies import Study, register_study
+from ....core import Experiment, RunConfig, Study, register_study
 from ....kit import (
     bad_rows,
     gated,

@@ -20,10 +20,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core._experiments import Experiment
-from ....core._query import experiment_rows, pick_profile
-from ....core._store import load_runs, read_rows
-from ....core._studies import Study, register_study
+from ....core import (
+    Experiment,
+    Study,
+    experiment_rows,
+    load_runs,
+    pick_profile,
+    read_rows,
+    register_study,
+)
 from ....kit import (
     Gate,
     Protocol,
