@@ -13,7 +13,8 @@ parameter-free reference predictors), :func:`coordinates` (what a model accepts)
 and the integrators (``Integrator``, ``rollout``, ...). Parts to build a model of one's own
 from: :class:`CholeskyNet` (a learned positive-definite matrix of q, its floor
 :data:`INVERSE_MASS_JITTER`), :class:`CanonicalSecondOrderODE` (second-order structure in
-(q, p)), :func:`cholesky` and :func:`cho_solve` (the batched solves the models use).
+(q, p)), :class:`MomentumSecondOrderODE` (the same reached from (q, qdot) through the
+learned inverse mass), :func:`cholesky` and :func:`cho_solve` (the batched solves the models use).
 
 Controls: a :class:`Scene` with ``n_controls`` > 0 makes each model's ``args`` the
 concatenation (static args, u); ``rollout(..., controls=...)`` holds u_i on interval i.
@@ -37,7 +38,7 @@ from ._latent import LatentModel, latent_scene
 from ._linalg import cho_solve, cholesky
 from ._mass import CholeskyNet
 from ._mlp import MLP
-from ._node import CanonicalSecondOrderODE
+from ._node import CanonicalSecondOrderODE, MomentumSecondOrderODE
 from ._position_latent import PositionLatentModel
 from ._registry import (
     MODULES_ENV,
@@ -60,6 +61,7 @@ from ._trivial import AbstractTrivialModel
 __all__ = [
     "AbstractContinuousModel",
     "CanonicalSecondOrderODE",
+    "MomentumSecondOrderODE",
     "CholeskyNet",
     "INVERSE_MASS_JITTER",
     "cho_solve",

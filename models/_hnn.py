@@ -15,9 +15,9 @@ import jax.random as jr
 from ._base import AbstractContinuousModel, as_dtype, split
 from ._dissipation import Dissipation
 from ._features import Features
-from ._hamiltonian import GeneralHamiltonian, SeparableHamiltonian
+from ._hamiltonian import INVERSE_MASS_JITTER, GeneralHamiltonian, SeparableHamiltonian
 from ._linalg import cho_solve, cholesky
-from ._mass import MASS_EPS, CholeskyNet
+from ._mass import MASS_EPS, CholeskyNet, InverseMass
 from ._mlp import MLP
 from ._scalar import hamiltonian_field
 from ._scene import Scene
@@ -30,7 +30,9 @@ class HNN(AbstractContinuousModel):
     ``momentum_map=False`` too, on z = (q, qdot): H(q, qdot) with qdot standing in for p (the
     LNN seed's naive HNN baseline, no learned momentum map). Otherwise z = (q, qdot)
     and p = M(q) qdot with a learned mass matrix M = C C^T (C lower-triangular from an MLP,
-    softplus diagonal + 1e-3); the Hamiltonian flow is pushed forward to (q, qdot):
+    softplus diagonal + 1e-3), or with ``inverse_mass`` M = (L L^T + 1e-4 I)^-1, L from the
+    MLP (:class:`InverseMass`: the Deconstructing paper's parametrisation); the Hamiltonian
+    flow is pushed forward to (q, qdot):
 
         dq/dt = dH/dp,   dp/dt = -dH/dq + Q,   dqdot/dt = M^-1 (dp/dt - (dM/dt) qdot),
 
@@ -46,7 +48,7 @@ class HNN(AbstractContinuousModel):
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     hamiltonian_part: GeneralHamiltonian | SeparableHamiltonian
-    mass: CholeskyNet | None
+    mass: CholeskyNet | InverseMass | None
     dissipation: Dissipation | None
 
     def __init__(
@@ -62,6 +64,7 @@ class HNN(AbstractContinuousModel):
         dissipation=False,
         momentum_map=True,
         init="orthogonal",
+        inverse_mass=False,
     ):
         self.scene, self.dtype = scene, dtype
         kh, km, kd = jr.split(key, 3)
@@ -72,15 +75,27 @@ class HNN(AbstractContinuousModel):
             self.hamiltonian_part = SeparableHamiltonian(
                 features, width, depth, activation, dtype, key=kh
             )
-        else:  # init: H's network (the mass and dissipation networks keep the default)
+        else:  # init: H's network, and the mass network's with "paper" (dissipation: default)
             self.hamiltonian_part = GeneralHamiltonian(
                 features, width, depth, activation, dtype, key=kh, init=init
             )
-        self.mass = (
-            None
-            if scene.canonical or not momentum_map
-            else CholeskyNet(features, width, depth, activation, dtype, key=km, eps=MASS_EPS)
-        )
+        # init "paper" starts the mass network as the paper's code does too
+        mass_init = "paper" if init == "paper" else "orthogonal"
+        if scene.canonical or not momentum_map:
+            self.mass = None
+        elif inverse_mass:
+            self.mass = InverseMass(
+                CholeskyNet(
+                    *(features, width, depth, activation, dtype),
+                    key=km,
+                    jitter=INVERSE_MASS_JITTER,
+                    init=mass_init,
+                )
+            )
+        else:
+            self.mass = CholeskyNet(
+                *(features, width, depth, activation, dtype), key=km, eps=MASS_EPS, init=mass_init
+            )
         self.dissipation = (
             Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None
         )

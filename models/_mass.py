@@ -38,6 +38,7 @@ class CholeskyNet(eqx.Module):
     """A positive-definite A(q) = C(q) C(q)^T (+ jitter I), C lower-triangular from an MLP.
 
     ``state_dependent=False`` makes C a free constant parameter instead (VIN mass, damping).
+    ``init``: the MLP's (:class:`MLP`); the output layer's bias starts at zero whatever it is.
     """
 
     features: Features | None
@@ -59,6 +60,7 @@ class CholeskyNet(eqx.Module):
         state_dependent=True,
         eps=0.0,
         jitter=0.0,
+        init="orthogonal",
     ):
         self.dof = features.dof
         self.eps = eps
@@ -66,9 +68,18 @@ class CholeskyNet(eqx.Module):
         n_raw = self.dof * (self.dof + 1) // 2
         if state_dependent:  # a mass or damping matrix never depends on a control input
             self.features = features.without_controls()
-            self.net = MLP(
-                self.features.size(False), n_raw, width, depth, activation, dtype, key=key
+            net = MLP(
+                self.features.size(False),
+                n_raw,
+                width,
+                depth,
+                activation,
+                dtype,
+                key=key,
+                init=init,
             )
+            # the Deconstructing paper's mass networks end in a layer without a bias
+            self.net = eqx.tree_at(lambda m: m.biases[-1], net, jnp.zeros_like(net.biases[-1]))
             self.raw = None
         else:
             self.features = None
@@ -87,3 +98,20 @@ class CholeskyNet(eqx.Module):
         if self.jitter:
             a = a + self.jitter * jnp.eye(self.dof, dtype=a.dtype)
         return a
+
+
+class InverseMass(eqx.Module):
+    """A mass matrix learned through its inverse: M^-1(q) = L L^T + jitter I from a
+    :class:`CholeskyNet`, and ``factor(q)`` = C with C C^T = M = (M^-1)^-1 (the Deconstructing
+    paper's non-separable HNN, whose network gives M^-1; the suite's HNN learns C itself)."""
+
+    inverse: CholeskyNet
+
+    def factor(self, q: Array, args: Array) -> Array:
+        """C(q), the Cholesky factor of M = (M^-1)^-1."""
+        minv = self.inverse.matrix(q, args)
+        return jnp.linalg.cholesky(jnp.linalg.inv(minv))
+
+    def matrix(self, q: Array, args: Array) -> Array:
+        """M(q) = (M^-1(q))^-1."""
+        return jnp.linalg.inv(self.inverse.matrix(q, args))

@@ -18,7 +18,7 @@ ACTIVATIONS = {
     "silu": jax.nn.silu,
     "sigmoid": jax.nn.sigmoid,
 }
-INITS = ("orthogonal", "lnn", "lnn_notebook", "hnn_seed")
+INITS = ("orthogonal", "lnn", "lnn_notebook", "hnn_seed", "paper")
 # The LNN seed's notebook (DoublePendulum.ipynb) divides every appendix-B parameter by 200
 LNN_NOTEBOOK_SCALE = 1.0 / 200.0
 DTYPES = ("float32", "float64")
@@ -43,6 +43,9 @@ class MLP(eqx.Module):
     ``init="hnn_seed"``: the HNN seed's MLP (greydanus/hamiltonian-nn, nn_models.py) as PyTorch
     builds it: orthogonal weights at gain 1, PyTorch's default biases U(-1/sqrt(fan_in),
     1/sqrt(fan_in)) on the hidden layers, none on the output layer (zero here).
+    ``init="paper"``: the Deconstructing paper's networks as its code builds them: the
+    orthogonal weights of ``"orthogonal"`` (gain 0.5, the same draw), and PyTorch's default
+    biases U(-1/sqrt(fan_in), 1/sqrt(fan_in)) on every layer.
     """
 
     weights: tuple[Array, ...]
@@ -69,7 +72,7 @@ class MLP(eqx.Module):
         keys = jr.split(key, n_layers)
         weights = []
         for i, (k, a, b) in enumerate(zip(keys, sizes[:-1], sizes[1:], strict=True)):
-            if init == "orthogonal":
+            if init in ("orthogonal", "paper"):
                 w = jax.nn.initializers.orthogonal(scale=gain)(k, (a, b), dtype)
             elif init == "hnn_seed":
                 w = jax.nn.initializers.orthogonal(scale=1.0)(k, (a, b), dtype)
@@ -86,6 +89,12 @@ class MLP(eqx.Module):
                 jr.uniform(k, (b,), dtype, -1.0 / math.sqrt(a), 1.0 / math.sqrt(a))
                 for k, a, b in zip(bkeys[:-1], sizes[:-2], sizes[1:-1], strict=True)
             ) + (self.biases[-1],)
+        elif init == "paper":  # every layer's bias; their keys apart from the weights'
+            bkeys = jr.split(jr.fold_in(key, 1), n_layers)
+            self.biases = tuple(
+                jr.uniform(k, (b,), dtype, -1.0 / math.sqrt(a), 1.0 / math.sqrt(a))
+                for k, a, b in zip(bkeys, sizes[:-1], sizes[1:], strict=True)
+            )
         self.activation = activation
 
     def __call__(self, x: Array) -> Array:

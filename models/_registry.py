@@ -6,6 +6,7 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 | ------------ | ------------------------------------------------------------------------ |
 | node         | ODE: dz/dt = MLP(z)                                                      |
 | node_so      | ODE + second order: dq/dt = qdot, dqdot/dt = MLP(q, qdot)               |
+| node_so_pq   | node_so as the Deconstructing paper builds it: (q, p) via a learned M^-1  |
 | hnn          | ODE + energy + exact symplectic: J grad H, general H(q, p)               |
 | hnn_so       | hnn + second order: separable H = 1/2 p^T M^-1(q) p + V(q)               |
 | mixture_hnn  | the paper's damped comparator: hnn_so field + a free MLP field in (q, p) |
@@ -23,7 +24,9 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
 in for p and dz/dt = J grad H on (q, qdot). ``hnn_force`` takes ``inverse_mass_floor``
 (default 1e-4: the floor under its M^-1's spectrum). ``hnn`` (its H network), ``node`` and
-``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation).
+``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation;
+``paper``: the Deconstructing paper's, node_so_pq's default); ``hnn`` also ``inverse_mass``
+(learn M^-1 = L L^T + 1e-4 I, as that paper's code does, instead of M's factor).
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
@@ -47,7 +50,8 @@ from ._forced import ForcedHNN
 from ._hnn import HNN, MixtureHNN, SeparableHNN
 from ._lnn import LNN
 from ._mlp import ACTIVATIONS, DTYPES, INITS
-from ._node import CanonicalSecondOrderODE, NeuralODE, SecondOrderODE
+from ._node import CanonicalSecondOrderODE, MomentumSecondOrderODE, NeuralODE, SecondOrderODE
+from ._options import _boolean, _choice, _positive_float, _positive_int, _strictly_positive_float
 from ._resnet import ResNet
 from ._scalar import SOLVES
 from ._scene import Scene
@@ -55,52 +59,16 @@ from ._trivial import AtRest, ConstantVelocity
 from ._vin import VIN, ImplicitVIN
 
 
-def _positive_float(name):
-    def check(x):
-        if isinstance(x, bool) or not isinstance(x, int | float) or not x >= 0:
-            raise ValueError(f"option {name} must be a number >= 0, got {x!r}")
-        return float(x)
-
-    return check
-
-
-def _choice(name, allowed):
-    def check(x):
-        if x not in allowed:
-            raise ValueError(f"option {name} must be one of {allowed}, got {x!r}")
-        return x
-
-    return check
-
-
-def _strictly_positive_float(name):
-    def check(x):
-        if isinstance(x, bool) or not isinstance(x, int | float) or not x > 0:
-            raise ValueError(f"option {name} must be a number > 0, got {x!r}")
-        return float(x)
-
-    return check
-
-
-def _positive_int(name):
-    def check(x):
-        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
-            raise ValueError(f"option {name} must be an int >= 1, got {x!r}")
-        return x
-
-    return check
-
-
-def _boolean(name):
-    def check(x):
-        if not isinstance(x, bool):
-            raise ValueError(f"option {name} must be True or False, got {x!r}")
-        return x
-
-    return check
-
-
-def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True, init="orthogonal"):
+def _build_hnn(
+    scene,
+    *a,
+    key,
+    dissipation,
+    separable=False,
+    momentum_map=True,
+    init="orthogonal",
+    inverse_mass=False,
+):
     if separable and not scene.canonical:
         return SeparableHNN(scene, *a, key=key, dissipation=dissipation)
     return HNN(
@@ -111,6 +79,7 @@ def _build_hnn(scene, *a, key, dissipation, separable=False, momentum_map=True, 
         dissipation=dissipation,
         momentum_map=momentum_map,
         init=init,
+        inverse_mass=inverse_mass,
     )
 
 
@@ -147,10 +116,20 @@ _V, _P = "velocity", "momentum"
 _REGISTRY = {
     "node": _Entry(NeuralODE, _plain(NeuralODE), {"init": _choice("init", INITS)}),
     "node_so": _Entry(SecondOrderODE, _plain(SecondOrderODE)),
+    "node_so_pq": _Entry(
+        MomentumSecondOrderODE,
+        _plain(MomentumSecondOrderODE),
+        {"init": _choice("init", INITS)},
+        needs=_V,
+    ),
     "hnn": _Entry(
         HNN,
         _build_hnn,
-        {"momentum_map": _boolean("momentum_map"), "init": _choice("init", INITS)},
+        {
+            "momentum_map": _boolean("momentum_map"),
+            "init": _choice("init", INITS),
+            "inverse_mass": _boolean("inverse_mass"),
+        },
         True,
     ),
     "hnn_so": _Entry(

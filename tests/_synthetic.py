@@ -102,7 +102,8 @@ def _error(c, scenario: str) -> tuple[float, float, str]:
         return (base * 1.5 if w >= 1e3 else base), 0.3, "linear"
     if c.model == "lnn":
         return 0.02, 0.05, "linear"
-    err = PAPER_CELLS[(c.system, key)][c.model] * 1.2 ** ((c.k or 2) - 2)
+    model = "node_so" if c.model == "node_so_pq" else c.model  # the same NODE+SO, other form
+    err = PAPER_CELLS[(c.system, key)][model] * 1.2 ** ((c.k or 2) - 2)
     if c.loss == "l1":
         err = 1e-5 / err if contradict else err * 1.02
     ratio = 0.003 if contradict and c.model in ("hnn", "hnn_so") else 0.3

@@ -998,6 +998,43 @@ def test_claim_4_spring_must_be_shown_to_match(tables, contradicting):
     assert got[CLAIM_4].verdict == R.INCONCLUSIVE
 
 
+def _with_paper_form(runs, seeds=None):
+    """``runs`` plus a copy of its NODE+SO rows as ``node_so_pq`` (the paper's form; on
+    ``seeds`` only where given), each with its own hash."""
+    so = runs[(runs["model"] == "node_so") & (runs["seed"].isin(seeds) if seeds else True)]
+    pq = so.assign(model="node_so_pq", config_hash=so["config_hash"] + "pq")
+    return pd.concat([runs, pq], ignore_index=True)
+
+
+PAPER_FORM = "4 (geometric-mean error, spring from paper, the paper's NODE+SO)"
+
+
+def test_claim_4_is_read_with_each_form_of_node_so_apart(tables):
+    """The paper's NODE+SO (``node_so_pq``) gets its own verdicts, from the paper's spring start
+    and on the rows without the suite's ``node_so``: each form can pass, fail or stay undecided
+    whatever the other does."""
+    runs, curves = tables
+    assert not any("paper's NODE+SO" in v.key for v in CLAIMS[4](runs, curves))  # none stored
+    both = _with_paper_form(runs)
+    got = {v.key: v for v in CLAIMS[4](both, curves)}
+    assert got[PAPER_FORM].verdict == got[CLAIM_4].verdict == R.REPRODUCED
+    assert not any("equilibrium, the paper's" in k for k in got)
+    # the suite's NODE+SO as good as HNN+SO on the chain: its reading fails, the paper's holds
+    so = _paper(both, "chain_pendulum", "node_so")
+    hs = _paper(both, "chain_pendulum", "hnn_so")
+    got = {v.key: v for v in CLAIMS[4](_set_ratio(both, so, hs, 1.0), curves)}
+    assert _status(got[CLAIM_4], "chain") == "contradicts"
+    assert got[PAPER_FORM].verdict == R.REPRODUCED
+    # and the other way round
+    pq = _paper(both, "chain_pendulum", "node_so_pq")
+    got = {v.key: v for v in CLAIMS[4](_set_ratio(both, pq, hs, 1.0), curves)}
+    assert _status(got[PAPER_FORM], "chain") == "contradicts"
+    assert got[CLAIM_4].verdict == R.REPRODUCED
+    # the paper's form on two seeds only: too few to sign
+    few = {v.key: v for v in CLAIMS[4](_with_paper_form(runs, seeds=[0, 1]), curves)}
+    assert few[PAPER_FORM].verdict == R.INCONCLUSIVE and few[PAPER_FORM].n_seeds == 2
+
+
 # ----------------------------------------------------------------------------- claim 5
 
 

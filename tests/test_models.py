@@ -92,6 +92,27 @@ def test_conformance_float64_and_vmap_matches_unbatched(name):
         np.testing.assert_allclose(acc, single[2:], rtol=1e-10, atol=1e-12)
 
 
+@pytest.mark.parametrize("name", TRAINABLE)
+def test_conformance_integrator_coordinates_carry_the_same_flow(name):
+    """Every continuous model's rollout coordinates y = encode(z) carry its field:
+    decode(encode(z)) = z and internal_field(t, encode(z)) = D encode(z) vector_field(t, z)
+    (float64, one jvp; identity maps pass trivially), so that a rollout in y is the flow of
+    vector_field."""
+    model = _forward64(name)[0]
+    if not isinstance(model, AbstractContinuousModel):
+        pytest.skip("a discrete model has no vector field")
+    zs = 0.5 * _states(jr.PRNGKey(3), 4, 2)
+    for z in zs:
+        y = model.encode(z, None)
+        np.testing.assert_allclose(model.decode(y, None), z, rtol=1e-10, atol=1e-12)
+        pushed = jax.jvp(
+            lambda z_: model.encode(z_, None), (z,), (model.vector_field(0.0, z, None),)
+        )[1]
+        np.testing.assert_allclose(
+            model.internal_field(0.0, y, None), pushed, rtol=1e-9, atol=1e-11
+        )
+
+
 @functools.cache
 def _variant(name):
     """A damped scene with one args input, mixed coordinates, canonical where allowed."""
@@ -137,7 +158,8 @@ def test_spec_agrees_with_the_built_models():
     assert [n for n in models.available() if models.spec(n).trivial] == models.trivial_models()
     hnn, lnn, vin, node = (models.spec(n) for n in ("hnn", "lnn", "vin", "node"))
     assert hnn.hamiltonian and lnn.lagrangian and vin.lagrangian and node.structure is None
-    assert vin.discrete and not vin.continuous and hnn.options == ("init", "momentum_map")
+    assert vin.discrete and not vin.continuous
+    assert hnn.options == ("init", "inverse_mass", "momentum_map")
     with pytest.raises(ValueError, match="unknown model 'nope'"):
         models.spec("nope")
 
@@ -146,6 +168,7 @@ def test_registry_and_errors():
     assert models.available() == [
         "node",
         "node_so",
+        "node_so_pq",
         "hnn",
         "hnn_so",
         "mixture_hnn",
@@ -201,3 +224,50 @@ def test_parameter_count_and_inits():
     stds = [float(jnp.std(x)) for x in lnn.net.weights]  # LNN seed appendix B, eq. 3
     np.testing.assert_allclose(stds[:2], [2.2 / 8, 0.58 / 8], rtol=0.1)
     assert 5 < stds[2] < 11  # output layer sigma = sqrt(64) = 8 (64 samples)
+
+
+def test_hnn_learning_the_inverse_mass_is_still_a_hamiltonian_flow():
+    """``hnn`` with ``inverse_mass``: M(q) is the inverse of the network's L L^T + 1e-4 I, the
+    learned H is conserved along the field (dH/dt = grad H . F = 0 up to rounding), and the
+    rollout coordinates carry the same flow (as the conformance test checks for defaults)."""
+    scene = _scene_for("hnn")
+    model = models.make(
+        "hnn", scene, key=jr.PRNGKey(5), width=W, dtype="float64", inverse_mass=True
+    )
+    assert "inverse_mass" in models.spec("hnn").options
+    for z in 0.5 * _states(jr.PRNGKey(6), 3, 2):
+        q = z[:2]
+        minv = model.mass.inverse.matrix(q, None)
+        c = model.mass.factor(q, None)
+        np.testing.assert_allclose(c @ c.T @ minv, np.eye(2), atol=1e-10)
+        assert minv[0, 0] >= 1e-4
+        f = model.vector_field(0.0, z, None)
+        dh = jax.grad(lambda z_: model.hamiltonian(z_, None))(z) @ f
+        assert abs(float(dh)) < 1e-9 * (1 + float(jnp.linalg.norm(f))), dh
+        y = model.encode(z, None)
+        np.testing.assert_allclose(model.decode(y, None), z, rtol=1e-10, atol=1e-12)
+        pushed = jax.jvp(lambda z_: model.encode(z_, None), (z,), (f,))[1]
+        np.testing.assert_allclose(
+            model.internal_field(0.0, y, None), pushed, rtol=1e-9, atol=1e-11
+        )
+
+
+def test_the_paper_init_is_pytorch_bias_over_the_orthogonal_draw():
+    """``init="paper"``: the orthogonal weights of the default (the same draw) and PyTorch's
+    default biases U(+-1/sqrt(fan_in)) on every layer, but a mass network's last (zero, as the
+    paper's code builds it); node_so_pq starts so by default."""
+    key = jr.PRNGKey(3)
+    a = models.MLP(6, 4, 256, 2, "tanh", "float64", key=key)
+    b = models.MLP(6, 4, 256, 2, "tanh", "float64", key=key, init="paper")
+    for wa, wb in zip(a.weights, b.weights, strict=True):
+        np.testing.assert_array_equal(wa, wb)
+    assert all(not np.any(x) for x in a.biases)
+    for fan_in, bias in zip((6, 256, 256), b.biases, strict=True):
+        lim = 1 / np.sqrt(fan_in)
+        assert np.all(np.abs(bias) <= lim) and np.std(bias) > 0.4 * lim  # U(-l, l): std l/sqrt 3
+    pq = models.make("node_so_pq", CHAIN2, key=key, width=W)
+    assert np.any(pq.inner.net.biases[0]) and np.any(pq.inner.net.biases[-1])
+    assert not np.any(pq.inner.inverse_mass.net.biases[-1])
+    assert np.any(pq.inner.inverse_mass.net.biases[0])
+    plain = models.make("node_so_pq", CHAIN2, key=key, width=W, init="orthogonal")
+    assert not any(np.any(x) for x in plain.inner.net.biases)

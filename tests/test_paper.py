@@ -52,9 +52,12 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     paper_init = {
         c.config_hash
         for c in E.expand("coordinates", profile)
-        if c.system_params != P.SPRING_EQUILIBRIUM
+        if c.system_params != P.SPRING_EQUILIBRIUM and c.model != "node_so_pq"
     }
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
+    # the paper's own form of NODE+SO: at its budget, for claim 4 alone
+    pq = {c.system_params for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
+    assert pq == ({(), P.SPRING_PAPER} if profile.startswith("paper") else set())
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
     # claim 6 is not run at quick, nor at paper-k (which sweeps k in Figs. 2-5 only)

@@ -29,7 +29,9 @@ one-line verdicts:
 - (c) the curves over ``--steps`` steps of ``paper``, ``mapped``, ``suite`` (the suite's
   model as the campaign builds it: the run's first steps) and ``suite_mapped`` (the suite's
   model with the paper's network where one has a place in it,
-  :data:`~bench.sidebyside._decon.SUITE_PLACES`): the training loss, and every
+  :data:`~bench.sidebyside._decon.SUITE_PLACES`) and ``registered`` (the registered model in
+  the paper's parametrisation and initialisation, its own draw: :data:`REGISTERED`): the
+  training loss, and every
   ``--log-every`` steps the paper's held-out metric (the geometric mean over the windows and
   times of ||err|| / (||pred|| + ||true||), angles not wrapped; from t = 1, and from t = 0 as
   the paper reports it) and the MSE; judged on the checkpoints of the second half (``late``).
@@ -66,8 +68,14 @@ from ._decon import (
 from ._decon_ours import Ours, loss_and_grad, paper_metric
 from ._seed import SeedCodeError
 
-CURVES = ("paper", "mapped", "suite", "suite_mapped")
+CURVES = ("paper", "mapped", "suite", "suite_mapped", "registered")
 PROFILE = "paper"
+# The suite's registered model in the paper's parametrisation and initialisation, per model
+# (its own draw, not the paper's weights): the ``registered`` curve
+REGISTERED = {
+    "node_so": ("node_so_pq", {}),
+    "hnn": ("hnn", {"inverse_mass": True, "init": "paper"}),
+}
 TORCH_SCRIPT = Path(__file__).with_name("_decon_torch.py")
 TOL_FIELD = {"32": 1e-4, "64": 1e-9}  # (0) max relative difference of qddot and of the energy
 TOL_TRAJ = 1e-3  # (0) the paper's data pipeline against our windows, max |diff| / max |z|
@@ -117,6 +125,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     """Every check of model ``name``; returns the verdict lines."""
     import jax
 
+    import models
     from bench.core import Batches, build_run, train_config
     from systems import cache_root
 
@@ -161,7 +170,12 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
         traj_ts=ts_eval,
     )
     t0 = time.perf_counter()
-    paper = run_paper(a.torch_python, root, inp, out / "paper_out.npz", out / "paper_log.txt")
+    if a.reuse_paper and (out / "paper_out.npz").exists():
+        paper = dict(np.load(out / "paper_out.npz"))  # the paper's side of an earlier call
+        if int(paper["losses"].shape[0]) < a.steps:
+            raise ValueError(f"--reuse-paper: {out}/paper_out.npz holds fewer than {a.steps} steps")
+    else:
+        paper = run_paper(a.torch_python, root, inp, out / "paper_out.npz", out / "paper_log.txt")
     print(f"paper's side: {time.perf_counter() - t0:.0f} s", flush=True)
     rows, lines = [], []
 
@@ -259,6 +273,17 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
         sides["suite"] = Ours(suite_model, tcfg, arrays)
     if "suite_mapped" in a.curves and partial is not None:
         sides["suite_mapped"] = Ours(partial, tcfg, arrays)
+    if "registered" in a.curves and name in REGISTERED:
+        reg = models.make(
+            REGISTERED[name][0],
+            scene,
+            key=jax.random.PRNGKey(a.seed),
+            width=config.width,
+            depth=config.depth,
+            dtype=config.dtype,
+            **REGISTERED[name][1],
+        )
+        sides["registered"] = Ours(reg, tcfg, arrays)
     curve_rows = []
     evals = paper["evals"]
     previous = 0
@@ -389,6 +414,11 @@ def main(argv=None) -> int:
     p.add_argument("--curves", default=",".join(CURVES[1:]), help=f"of {', '.join(CURVES[1:])}")
     p.add_argument("--torch-python", default=os.environ.get("DECON_TORCH_PYTHON", "python3"))
     p.add_argument("--out", default="results/own/sidebyside/decon_hnn")
+    p.add_argument(
+        "--reuse-paper",
+        action="store_true",
+        help="take the paper's side from --out's paper_out.npz of an earlier call (same seed)",
+    )
     a = p.parse_args(argv)
     try:
         root = check_paper_code(a.seed_code)
