@@ -9,6 +9,7 @@ one on which it is contradicted and one on which it is undecided: the latter are
 "reproduce" table with one cell's per-seed errors set to a stated ratio of another's.
 """
 
+import json
 import math
 
 import numpy as np
@@ -24,6 +25,12 @@ from bench.studies.paper import relativistic as REL
 
 # claim number -> verdict rule, from the registry
 CLAIMS = {s.claim: s.rule for s in R.claim_studies()}
+
+
+def _claim3(runs, curves):
+    """Claim 3's verdict in the suite's form (the first it gives)."""
+    return CLAIMS[3](runs, curves)[0]
+
 
 ERR = policy.margin("error")  # 1.25x
 TWO = policy.margin("learning")  # 2x
@@ -329,13 +336,13 @@ def test_failed_runs_count_as_error_one_not_dropped(tables):
     # longer shown (dropping them would leave three seeds on which it holds); it still learned
     # on the geometric mean over seeds, so the comparison is judged
     bad = _fail(runs, (runs["model"] == "node_so") & (runs["seed"] >= 3))
-    v = CLAIMS[3](bad, curves)
+    v = _claim3(bad, curves)
     assert v.n_failed == 4, v.detail  # 2 seeds x chain, spring
     for system in ("chain", "spring"):
         assert _status(v, system, "(a) log(NODE / NODE+SO)") in ("undecided", "contradicts")
         assert _status(v, system, "(a) log(HNN / HNN+SO)") == "holds"
     # failing on every seed, NODE+SO did not learn: its comparisons are not tested
-    v = CLAIMS[3](_fail(runs, runs["model"] == "node_so"), curves)
+    v = _claim3(_fail(runs, runs["model"] == "node_so"), curves)
     assert v.n_failed == 10
     assert _status(v, "chain", "(a) log(NODE / NODE+SO)") == "not tested"
     closed = [
@@ -359,7 +366,7 @@ def test_scored_sets_failures_to_the_worst_error():
 def test_failed_trivial_predictors_leave_discrimination_unknown(tables):
     runs, curves = tables
     bad = _fail(runs, runs["model"].isin(R.TRIVIAL_MODELS))
-    v = CLAIMS[3](bad, curves)
+    v = _claim3(bad, curves)
     # whether the test set tells models apart is unknown: nothing is signed
     assert v.discriminating is None and v.verdict == R.INCONCLUSIVE, v.detail
     assert all(p.status == "holds" for p in v.parts if p.role == "part")
@@ -920,17 +927,17 @@ def test_claim_3_a_pairwise_so_gain_per_system(tables, contradicting, system):
     assert _status(contradicting["3"], system, "(a) log(NODE / NODE+SO)") == "contradicts"
     assert _status(contradicting["3"], system, "(a) log(HNN / HNN+SO)") == "contradicts"
     # NODE+SO no better than NODE: contradicted in this system only
-    v = CLAIMS[3](_set_ratio(runs, so, node, 1.0), curves)
+    v = _claim3(_set_ratio(runs, so, node, 1.0), curves)
     assert _status(v, system, "(a) log(NODE / NODE+SO)") == "contradicts"
     assert _status(v, other, "(a) log(NODE / NODE+SO)") == "holds"
     assert v.verdict == R.PARTLY
     # NODE about 1.25x worse: undecided
-    v = CLAIMS[3](_set_ratio(runs, node, so, _spread(1.25)), curves)
+    v = _claim3(_set_ratio(runs, node, so, _spread(1.25)), curves)
     assert _status(v, system, "(a) log(NODE / NODE+SO)") == "undecided"
-    v = CLAIMS[3](_set_ratio(runs, hnn, hs, _spread(1.25)), curves)
+    v = _claim3(_set_ratio(runs, hnn, hs, _spread(1.25)), curves)
     assert _status(v, system, "(a) log(HNN / HNN+SO)") == "undecided"
     assert v.verdict == R.INCONCLUSIVE
-    v = CLAIMS[3](_set_ratio(runs, hnn, hs, 1.1), curves)
+    v = _claim3(_set_ratio(runs, hnn, hs, 1.1), curves)
     assert _status(v, system, "(a) log(HNN / HNN+SO)") == "contradicts"
 
 
@@ -940,13 +947,13 @@ def test_claim_3_b_most_of_the_gap(tables, contradicting):
     node, so, hs = (_paper(runs, sys_, m) for m in ("node", "node_so", "hnn_so"))
     assert _status(contradicting["3"], sys_, "(b)") == "contradicts"
     # SO gains 1.5x (part (a) holds) of a 4x gap: less than half, contradicted
-    v = CLAIMS[3](_set_ratio(runs, so, node, 1 / 1.5), curves)
+    v = _claim3(_set_ratio(runs, so, node, 1 / 1.5), curves)
     assert _status(v, sys_, "(a) log(NODE / NODE+SO)") == "holds"
     assert _status(v, sys_, "(b)") == "contradicts"
     assert v.verdict == R.PARTLY, v.detail
     # SO closes half the gap on average (closed - gap / 2 = SPREAD per seed): undecided
     half = np.sqrt(_per_seed(runs, node) * _per_seed(runs, hs)) * np.exp(-SPREAD)
-    v = CLAIMS[3](_assign(runs, so, half), curves)
+    v = _claim3(_assign(runs, so, half), curves)
     b = _part(v, sys_, "(b)")
     assert b.status == "undecided" and b.point == pytest.approx(0.5, abs=0.02)
     assert v.verdict == R.INCONCLUSIVE, v.detail
@@ -957,12 +964,44 @@ def test_claim_3_b_is_judged_only_where_hnn_so_has_an_advantage(tables):
     spring = "spring_pendulum"
     node, hs = _paper(runs, spring, "node"), _paper(runs, spring, "hnn_so")
     # HNN+SO no better than NODE on the spring: the condition fails, (b) is not tested
-    v = CLAIMS[3](_set_ratio(runs, hs, node, 1.0), curves)
+    v = _claim3(_set_ratio(runs, hs, node, 1.0), curves)
     cond = _part(v, spring, "HNN+SO beats NODE")
     assert cond.role == "condition" and cond.status == "contradicts"
     b = _part(v, spring, "(b)")
     assert b.status == "not tested" and cond.name in [g.label for g in b.gates if g.open is False]
     assert v.verdict != R.NOT_REPRODUCED
+
+
+def test_claim_3_is_read_in_each_form_and_the_forms_never_mix(tables):
+    """The paper's form of the four models (node, hnn with their paper options; node_so_pq)
+    gets its own claim-3 verdict; its rows never reach the suite's reading (nor claim 1's or
+    6's, which read the same experiments by model name)."""
+    runs, curves = tables
+    assert len(CLAIMS[3](runs, curves)) == 1  # no paper-form rows: the suite's reading alone
+    both = _with_paper_form(runs, models=("node", "node_so", "hnn"))
+    suite, paper = CLAIMS[3](both, curves)
+    assert paper.key == "3 (the paper's models)" and suite.key == "3"
+    assert suite.verdict == paper.verdict == _claim3(runs, curves).verdict == R.REPRODUCED
+    # the paper's NODE+SO as bad as its NODE: its reading fails, the suite's is untouched
+    pq, node = (
+        _paper(both, "spring_pendulum", "node_so_pq"),
+        _paper(both, "spring_pendulum", "node"),
+    )
+    node_paper = node & (both["model_options"] != "[]")
+    bad = _set_ratio(both, pq, node_paper, 1.0)
+    suite2, paper2 = CLAIMS[3](bad, curves)
+    assert paper2.verdict != R.REPRODUCED
+    assert _status(paper2, "spring_pendulum", "(a) log(NODE / NODE+SO)") == "contradicts"
+    assert (suite2.verdict, suite2.effect) == (suite.verdict, suite.effect)
+    # the paper-form rows made absurd: claims 1 and 6 read as without them
+    form = both["config_hash"].str.endswith("pq")
+    absurd = both.assign(rollout_error=np.where(form, 0.9, both["rollout_error"]))
+    for n in (1, 6):
+        a, b = CLAIMS[n](runs, curves), CLAIMS[n](absurd, curves)
+        a, b = (x if isinstance(x, list) else [x] for x in (a, b))
+        assert [(v.key, v.verdict, v.effect) for v in a] == [
+            (v.key, v.verdict, v.effect) for v in b
+        ]
 
 
 # ----------------------------------------------------------------------------- claim 4
@@ -998,12 +1037,19 @@ def test_claim_4_spring_must_be_shown_to_match(tables, contradicting):
     assert got[CLAIM_4].verdict == R.INCONCLUSIVE
 
 
-def _with_paper_form(runs, seeds=None):
-    """``runs`` plus a copy of its NODE+SO rows as ``node_so_pq`` (the paper's form; on
-    ``seeds`` only where given), each with its own hash."""
-    so = runs[(runs["model"] == "node_so") & (runs["seed"].isin(seeds) if seeds else True)]
-    pq = so.assign(model="node_so_pq", config_hash=so["config_hash"] + "pq")
-    return pd.concat([runs, pq], ignore_index=True)
+def _with_paper_form(runs, seeds=None, models=("node_so",)):
+    """``runs`` plus a copy of the rows of ``models`` in the paper's form (node_so as
+    ``node_so_pq``, node and hnn with their paper options; on ``seeds`` only where given),
+    each with its own hash."""
+    from bench.studies.paper._common import PAPER_FORM
+
+    rows = runs[runs["model"].isin(models) & (runs["seed"].isin(seeds) if seeds else True)]
+    form = rows.assign(
+        model=rows["model"].map(lambda m: PAPER_FORM[m][0]),
+        model_options=rows["model"].map(lambda m: json.dumps(PAPER_FORM[m][1])),
+        config_hash=rows["config_hash"] + "pq",
+    )
+    return pd.concat([runs, form], ignore_index=True)
 
 
 PAPER_FORM = "4 (geometric-mean error, spring from paper, the paper's NODE+SO)"

@@ -70,7 +70,7 @@ from ._figure import new_figure, save_figure, subplots
 from ._gates import Gate, apply_gates, condition, gated, learned, similar_fit
 from ._headlines import fig_headlines, headline_rows, write_headlines
 from ._holm import holm, margin_ranges
-from ._models import MODEL_LABELS, TRIVIAL_MODELS
+from ._models import MODEL_LABELS, TRIVIAL_MODELS, in_form, row_options
 from ._plot import (
     COLORS,
     FAILED_LABEL,
@@ -189,6 +189,8 @@ __all__ = [
     "seed_span",
     # trivial predictors
     "MODEL_LABELS",
+    "in_form",
+    "row_options",
     "TRIVIAL_FACTOR",
     "TRIVIAL_MODELS",
     "Discrimination",

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 import models
 
 from ...core import RunConfig
+from ...kit import in_form, row_options
 
 # The Deconstructing paper's claims (1-8); each seed's study adds its own claims' titles.
 CLAIM_TITLES = {
@@ -20,6 +21,22 @@ CLAIM_TITLES = {
     8: "VIN: bounded energy over long horizons, learns from less/noisier data than a ResNet",
 }
 PAPER_MODELS = ("node", "node_so", "hnn", "hnn_so")
+# The two forms in which the claims on these four models are read (``bench.kit.in_form``): each
+# role played by (registered model, options). The suite's own; and the paper's code's, run
+# beside it on the chain (docs/sidebyside.md): NODE with PyTorch's starting biases, NODE+SO in
+# (q, p) through a learned inverse mass, the non-separable HNN learning M^-1, and HNN+SO, which
+# already matches it.
+SUITE_FORM = {m: (m, ()) for m in PAPER_MODELS}
+PAPER_INIT = (("init", "paper"),)
+PAPER_HNN = (("init", "paper"), ("inverse_mass", True))
+PAPER_FORM = {
+    "node": ("node", PAPER_INIT),
+    "node_so": ("node_so_pq", ()),
+    "hnn": ("hnn", PAPER_HNN),
+    "hnn_so": ("hnn_so", ()),
+}
+# a paper-form cell's options, by model (the include filters of the experiments that run them)
+PAPER_FORM_OPTIONS = {"node": PAPER_INIT, "hnn": PAPER_HNN}
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
 # Fig. 3's grid: log-spaced from 1e-6 to 1e3 (the paper's code), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
@@ -61,6 +78,34 @@ def shared_overrides(extra: Mapping[str, Mapping[str, object]] | None = None) ->
     for p, v in (extra or {}).items():
         out.setdefault(p, {}).update(v)
     return out
+
+
+def suite_form(runs):
+    """The rows of the four models in the suite's form (:data:`SUITE_FORM`): the paper-form
+    rows of the same experiments left out, so that no reading by name mixes the two."""
+    return in_form(runs, SUITE_FORM, others=("node_so_pq",))
+
+
+def paper_form(runs):
+    """The rows of the four models in the paper's form (:data:`PAPER_FORM`), relabelled with
+    the suite's names, so that a claim's rule reads them unchanged."""
+    return in_form(runs, PAPER_FORM, others=("node_so",))
+
+
+def has_paper_form(runs) -> bool:
+    """Whether any row is a paper-form cell (``node_so_pq``, or a model with its paper options)."""
+    if not len(runs):
+        return False
+    opts = row_options(runs)
+    extra = {(m, tuple(sorted(o))) for m, o in PAPER_FORM.values()} - {
+        (m, ()) for m in PAPER_MODELS
+    }
+    return any((m, o) in extra for m, o in zip(runs["model"], opts, strict=True))
+
+
+def paper_form_ok(c: RunConfig) -> bool:
+    """An experiment cell's options: the paper form's for a model that has them, else none."""
+    return c.model_options in ((), PAPER_FORM_OPTIONS.get(c.model, ()))
 
 
 def is_free(model: str) -> bool:

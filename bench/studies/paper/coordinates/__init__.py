@@ -30,7 +30,9 @@ from .._common import (
     SPRING_PAPER,
     SYSTEMS,
     initial_ok,
+    paper_form,
     shared_overrides,
+    suite_form,
 )
 from ._links import fig_links
 
@@ -45,11 +47,9 @@ def _coordinates_include(c: RunConfig) -> bool:
 # through a learned inverse mass, PyTorch's starting biases), which learns where the paper's did
 # and the suite's ``node_so`` does not (docs/sidebyside.md); claim 4 is read with each.
 PAPER_BUDGET_MODELS = ("node_so", "node_so_pq", "hnn_so", "constant_velocity")
-# The forms of NODE+SO claim 4 is read with: (model, verdict label, spring starts read)
-NODE_SO_FORMS = (
-    ("node_so", "", ("paper", "equilibrium")),
-    ("node_so_pq", ", the paper's NODE+SO", ("paper",)),
-)
+# The spring starts claim 4 is read from in each form of NODE+SO (the paper's form runs from
+# the paper's start only)
+FORM_STARTS = {"suite": ("paper", "equilibrium"), "paper": ("paper",)}
 
 # Claim 4. The paper's published plotting code draws Fig. 5 from the test MSE over k = 1..4;
 # the verdict is given for both MSE and the geometric-mean rollout error, and per spring initial
@@ -92,9 +92,10 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
     an HNN+SO edge of the margin, and is contradicted by an edge shown to exceed it.
     Headline: spring edge minus chain edge.
 
-    NODE+SO is read in each form of :data:`NODE_SO_FORMS` whose rows are stored: the suite's
-    ``node_so`` (always), and the paper's own ``node_so_pq`` (from the paper's spring start,
-    with "the paper's NODE+SO" in the verdict's label), each on the rows without the other.
+    NODE+SO is read in the suite's form (``node_so``, always) and, where its rows are stored,
+    in the paper's (``node_so_pq``: ``PAPER_FORM``; from the paper's spring start, "the
+    paper's NODE+SO" in the verdict's label), each on its own rows (``suite_form`` and
+    ``paper_form``).
     """
     p = select(plain(runs), loss="l2", ok=False)
     if not len(p):
@@ -104,27 +105,23 @@ def claim_4(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
             )
             for v in ("geometric-mean error, spring from paper", "MSE, spring from paper")
         ]
-    out = []
-    forms = [m for m, _, _ in NODE_SO_FORMS]
-    for node_so, label, starts in NODE_SO_FORMS:
-        if node_so != "node_so" and not (p["model"] == node_so).any():
-            continue
-        rows = p[~p["model"].isin([f for f in forms if f != node_so])]
-        out += _claim_4_form(rows, node_so, label, starts)
+    out = _claim_4_form(suite_form(p), "", FORM_STARTS["suite"])
+    if (p["model"] == "node_so_pq").any():
+        out += _claim_4_form(paper_form(p), ", the paper's NODE+SO", FORM_STARTS["paper"])
     return out
 
 
-def _claim_4_form(p: pd.DataFrame, node_so: str, label: str, starts) -> list[Verdict]:
-    """Claim 4's verdicts with ``node_so`` as NODE+SO (:func:`claim_4`)."""
+def _claim_4_form(p: pd.DataFrame, label: str, starts) -> list[Verdict]:
+    """Claim 4's verdicts on the rows of one form of the models (:func:`claim_4`)."""
     init = initial_state(p)
     out = []
-    pair = (node_so, "hnn_so")
+    pair = ("node_so", "hnn_so")
 
     def edge(rows, metric) -> pd.Series:
         ds = []
         for k, _ in rows.groupby("k", dropna=False):
             kk = {"k": k} if np.isfinite(k) else {}
-            ds.append(paired(rows, {**kk, "model": node_so}, {**kk, "model": "hnn_so"}, metric))
+            ds.append(paired(rows, {**kk, "model": "node_so"}, {**kk, "model": "hnn_so"}, metric))
         return pd.concat(ds, axis=1).mean(axis=1).dropna() if ds else pd.Series(dtype=float)
 
     # learning is judged once per model, on its geometric-mean rollout error: the gates of a

@@ -11,13 +11,14 @@ from scipy import stats
 
 from ....core import plain, select
 from ....kit import TRIVIAL_MODELS, non_trivial, paper_spring, scored, t_bounds_jackknife
-from .._common import PAPER_MODELS
+from .._common import PAPER_MODELS, suite_form
 
 
 def energy_cells(runs: pd.DataFrame) -> pd.DataFrame:
-    """Fig. 2 cells: the four paper models and the trivial predictors on undamped chain/spring
-    (the paper's spring initial state where present), any k, L2 loss; failed rows kept."""
-    p = paper_spring(plain(runs))
+    """Fig. 2 cells: the four paper models (in the suite's form) and the trivial predictors on
+    undamped chain/spring (the paper's spring initial state where present), any k, L2 loss;
+    failed rows kept."""
+    p = paper_spring(plain(suite_form(runs)))
     return select(
         p,
         ok=False,

@@ -35,7 +35,14 @@ from ....kit import (
     trivial_lines,
     verdict,
 )
-from .._common import CLAIM_TITLES, PAPER_MODELS, is_paper_cell, is_trivial, shared_overrides
+from .._common import (
+    CLAIM_TITLES,
+    PAPER_MODELS,
+    is_paper_cell,
+    is_trivial,
+    shared_overrides,
+    suite_form,
+)
 
 
 def _loss_include(c: RunConfig) -> bool:
@@ -130,7 +137,7 @@ def claim_6(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> Verdict:
     the other; undecided otherwise.
     Headline: the largest of the (a) effects.
     """
-    p = select(plain(runs), system="chain_pendulum", ok=False)
+    p = select(plain(suite_form(runs)), system="chain_pendulum", ok=False)
     p = p[p["model"].isin([*PAPER_MODELS, *TRIVIAL_MODELS])] if len(p) else p
     k = 2 if len(p) and 2 in set(p["k"].dropna()) else None
     if k is not None:
