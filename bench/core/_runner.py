@@ -447,18 +447,22 @@ def run_experiments(
     results_dir="results",
     seeds: Sequence[int] | None = None,
     models: Sequence[str] | None = None,
+    where=None,
     **kw,
 ) -> dict[str, list[dict]]:
     """Sweep the named experiments under ``profile`` as ONE sweep (one pool of workers, runs
     of every experiment interleaved, longest first with ``order``); a run that several
     experiments declare is tagged with the first of them. ``seeds`` replaces the profile's
-    seeds (a replication); ``models`` the experiments' trained models (``expand``). Returns the
-    new rows per experiment."""
+    seeds (a replication); ``models`` the experiments' trained models (``expand``); ``where``
+    (a predicate on a RunConfig) keeps only the runs it accepts. Returns the new rows per
+    experiment."""
     from ._experiments import expand
 
     configs, tags = [], {}
     for n in names:
         for c in expand(n, profile, seeds=seeds, models=models):
+            if where is not None and not where(c):
+                continue
             if c.config_hash not in tags:
                 tags[c.config_hash] = n
                 configs.append(c)

@@ -131,8 +131,9 @@ def model_list(args) -> list[str] | None:
     return names
 
 
-def run_experiments(args, names, *, order, seeds=None) -> dict:
-    """One sweep of ``names`` with the :func:`sweep_options` of ``args``."""
+def run_experiments(args, names, *, order, seeds=None, where=None) -> dict:
+    """One sweep of ``names`` with the :func:`sweep_options` of ``args`` (``where``: a
+    predicate on the runs to keep)."""
     from ..core import run_experiments as run
 
     return run(
@@ -141,6 +142,7 @@ def run_experiments(args, names, *, order, seeds=None) -> dict:
         args.results,
         seeds=seeds,
         models=model_list(args),
+        where=where,
         order=order,
         executor=args.executor,
         workers=None if args.workers == 0 else args.workers,

@@ -122,6 +122,23 @@ def campaign_runs(
     return out
 
 
+def replicable(results_dir, profile: str, names) -> object:
+    """A predicate on a replication run: whether its cell (the run but for its seed) is stored
+    on every one of ``profile``'s own seeds, in the experiments ``names``. A replication
+    phase runs only those, so that a cell declared since the last campaign has its own seeds
+    run before its replication seeds."""
+    import dataclasses
+
+    done = done_hashes(Path(results_dir)) if holds_runs(Path(results_dir)) else set()
+    stored: dict[str, bool] = {}
+    for n in names:
+        for c in expand(n, profile):
+            key = dataclasses.replace(c, seed=0).config_hash
+            stored[key] = stored.get(key, True) and c.config_hash in done
+    ready = {k for k, v in stored.items() if v}
+    return lambda c: dataclasses.replace(c, seed=0).config_hash in ready
+
+
 def _links(c) -> int:
     """A run's number of links (0 where the system has none): within a claim the campaign
     finishes the cheaper k first, so that each k is judged as soon as it can be (paper-k

@@ -123,6 +123,7 @@ def _campaign(args) -> int:
         campaign_experiments,
         cheapest_first,
         priority,
+        replicable,
         replication_order,
         signed_claims,
     )
@@ -156,7 +157,9 @@ def _campaign(args) -> int:
     print(f"campaign {args.profile}{which}{only} -> {args.results}: {', '.join(names)}", flush=True)
     # claim by claim, longest runs first within a claim
     key = priority(args.profile, seeds, order, claims)
-    res = run_experiments(args, names, order=key, seeds=seeds)
+    # a replication follows its cell's own seeds (a cell declared since runs them first)
+    where = replicable(args.results, args.profile, names) if seeds else None
+    res = run_experiments(args, names, order=key, seeds=seeds, where=where)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0
