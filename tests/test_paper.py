@@ -194,3 +194,11 @@ def test_smoke_is_small_and_quick_budget_does_not_grow():
         P.make_bench_seconds("quick", papers=("deconstructing",))
         + P.make_bench_seconds("quick", papers=("hnn", "lnn", "vin"))
     )
+
+
+def test_every_claim_has_one_read_only_title():
+    """Every claim study is titled from the one table, which no study can change."""
+    for s in kit.claim_studies():
+        assert s.title == P.CLAIM_TITLES[s.claim], s.name
+    with pytest.raises(TypeError):
+        P.CLAIM_TITLES[12] = "another title"

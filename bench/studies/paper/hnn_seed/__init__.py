@@ -152,9 +152,6 @@ def _experiment(system: str) -> Experiment:
 
 
 EXPERIMENTS = tuple(_experiment(s) for s in SYSTEMS)
-CLAIM_TITLES[10] = (
-    "HNN seed: HNN energy error orders of magnitude below the baseline's at similar loss"
-)
 
 
 def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):

@@ -199,9 +199,6 @@ LNN_SEED_NOTEBOOK = Experiment(
     claim=9,
 )
 EXPERIMENTS = (LNN_SEED, LNN_SEED_NOTEBOOK)
-CLAIM_TITLES[9] = (
-    "LNN seed: LNN energy error far below the baseline's at similar loss (double pendulum)"
-)
 
 
 def _seed_rows(runs: pd.DataFrame, notebook: bool = False) -> pd.DataFrame:

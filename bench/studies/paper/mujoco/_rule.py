@@ -77,11 +77,6 @@ NOT_JUDGED = "not judged: stand-in data"
 LR, CODE_LR = 2e-4, 5e-3
 EFFECT = "log(test MSE NODE / NODE+SO), mean over tasks per seed"
 
-CLAIM_TITLES[CLAIM] = (
-    "MuJoCo: NODE+SO beats NODE and HNN; the HNN underperforms NODE, fitting the training data "
-    "poorly"
-)
-
 
 def data_kind(rows: pd.DataFrame) -> pd.Series:
     """Each row's data: ``"file"`` (a task's file) or ``"stand-in"`` (random controls)."""

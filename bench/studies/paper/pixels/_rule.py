@@ -30,10 +30,6 @@ from ._experiments import SEED_PROTOCOL, SHORT
 
 HNN, BASELINE = {"model": "hnn"}, {"model": "node"}
 VIN_CELL, RESNET = {"model": "vin"}, {"model": "resnet"}
-CLAIM_TITLES[11] = (
-    "HNN seed, pixels: the latent HNN conserves energy far better than the MLP at similar loss"
-)
-CLAIM_TITLES[12] = "VIN seed, pixels: the latent VIN forecasts better than a ResNet, long horizons"
 
 
 def pixel_rows(runs: pd.DataFrame, models: tuple[str, ...]) -> pd.DataFrame:

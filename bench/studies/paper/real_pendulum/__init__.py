@@ -95,9 +95,6 @@ EXPERIMENT = Experiment(
     claim=15,
 )
 EXPERIMENTS = (EXPERIMENT,)
-CLAIM_TITLES[15] = (
-    "HNN seed, real pendulum: the HNN's energy MSE far below the baseline's on measured data"
-)
 
 
 def claim_15(runs: pd.DataFrame, curves: pd.DataFrame | None = None):

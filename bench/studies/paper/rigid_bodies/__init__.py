@@ -75,11 +75,6 @@ RIGID_BODIES = Experiment(
     claim=13,
 )
 
-CLAIM_TITLES[13] = (
-    "App. D.2: second-order structure accounts for much of the NODE-HNN difference on the "
-    "gyroscope, rotor and magnet pendulum; the NODE leads on the magnet pendulum and rotor"
-)
-
 
 def _parts(p: pd.DataFrame, systems: tuple[str, ...]):
     """Parts (a) and (b) of :func:`claim_13` on the rows ``p`` of ``systems``, as (parts,

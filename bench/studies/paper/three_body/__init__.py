@@ -99,7 +99,6 @@ EXPERIMENT = Experiment(
     claim=14,
 )
 EXPERIMENTS = (EXPERIMENT,)
-CLAIM_TITLES[14] = "HNN seed, three-body: the HNN's energy MSE below the baseline's; both struggle"
 
 
 def claim_14(runs: pd.DataFrame, curves: pd.DataFrame | None = None):

@@ -138,10 +138,6 @@ VIN_BLOG = Experiment(
     claim=12,
 )
 EXPERIMENTS = (VIN_BLOG,)
-CLAIM_TITLES[12] = (
-    "VIN seed, pixels: the VIN-SO(2)'s embedding is consistent with the truth, its baselines' "
-    "are not; it forecasts better than a ResNet"
-)
 
 
 # ------------------------------------------------------------------------------ the rule
