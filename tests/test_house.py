@@ -226,3 +226,28 @@ def test_every_data_file_of_the_packages_ships_with_them():
             if not any(fnmatch.fnmatch(path.name, p) for p in shipped.get(owner, ())):
                 missing.append(str(path.relative_to(ROOT)))
     assert missing == []
+
+
+def test_each_paper_study_lives_in_a_folder_of_its_own():
+    """The paper's studies are folders (``bench/studies/paper/<study>/``): every registered
+    study's code is inside one, every folder there holds a study but the campaign's and the
+    report's operations, and nothing else sits loose beside them."""
+    import inspect
+
+    import bench  # noqa: F401 (registers the studies)
+    from bench.core import studies
+
+    paper = ROOT / "bench" / "studies" / "paper"
+    used = set()
+    for s in studies():
+        code = s.rule or s.figure or s.section
+        module = inspect.getmodule(code).__name__.split(".")
+        if module[:3] != ["bench", "studies", "paper"]:
+            continue
+        assert len(module) >= 4, f"study {s.name} sits loose in bench/studies/paper"
+        used.add(module[3])
+    folders = {p.name for p in paper.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert folders - used == {"campaign", "report"}
+    assert used <= folders
+    loose = {p.name for p in paper.glob("*.py")}
+    assert loose == {"__init__.py", "_common.py"}
