@@ -43,6 +43,7 @@ def cells(profile: str) -> list[RunConfig]:
         and c.system == "spring_pendulum"
         and c.k == 2
         and c.system_params == SPRING_PAPER
+        and c.model_options == ()
     ]
     if not out:
         raise ValueError(f"profile {profile!r} has no plain-HNN spring cell in second_order")
