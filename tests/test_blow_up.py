@@ -5,9 +5,11 @@ non-finite losses)."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from bench import _report
 from bench.core import BLOW_UP_RISE, TrainResult, loss_rise, result_meta
@@ -59,10 +61,17 @@ def _rows():
 
 def test_the_report_names_the_finished_runs_that_blew_up():
     lines = _report._blown_up_lines(_rows())
-    named = [line for line in lines if line.startswith("- hnn_force on")]
-    assert [line.split(" seed ")[1].split(":")[0] for line in named] == ["0", "4"]
-    assert "3.4e+09x above its best" in named[0]
-    assert "(4 of 5 runs record it; older rows do not)" in lines[-2]
+    named = [
+        re.fullmatch(r"- (\S+) on (\S+) seed (\d+): ended (\S+)x above its best", line).groups()
+        for line in lines
+        if line.startswith("- hnn_force on")
+    ]
+    assert [(seed, float(rise)) for *_, seed, rise in named] == [
+        ("0", pytest.approx(3.4e9)),
+        ("4", pytest.approx(BLOW_UP_RISE * 1.01, rel=1e-3)),
+    ]
+    recorded = re.fullmatch(r"- \((\d+) of (\d+) runs record it.*", lines[-2]).groups()
+    assert recorded == ("4", "5")  # seed 3's older row does not
     calm = _rows().assign(loss_rise=1.2)
     assert _report._blown_up_lines(calm) == []
     assert _report._blown_up_lines(_rows().drop(columns="loss_rise")) == []

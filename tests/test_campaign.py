@@ -2,6 +2,7 @@
 (same hashes), every claim has cells, the order settles the unsettled claims first, and the
 plan counts what is stored."""
 
+import re
 from pathlib import Path
 
 import pytest
@@ -384,16 +385,27 @@ def test_status_names_the_trainings_saved_mid_way(tmp_path):
         (folder / "resume.json").write_text(json.dumps(record))
     lines = C.saved_trainings("paper-core", None, cache_root=tmp_path)
     assert len(lines) == 3, lines
-    assert f"seed {first.seed}: step 300 of {first.steps:,} (2.00 h trained; resumes)" in lines[0]
-    assert lines[0].startswith(f"claim {E.get(name).claim}, {name}, {first.model}")
-    assert lines[1].endswith("restarts: saved by other code)")
-    assert f"mujoco, {controlled.model} seed {controlled.seed}:" in lines[2]
-    assert lines[2].endswith("resumes)")
+    said = [_saved(x) for x in lines]
+    steps = f"{first.steps:,}"
+    assert said[0] == (str(E.get(name).claim), name, first.model, str(first.seed), "300", steps,
+                       "2.00", "resumes")  # fmt: skip
+    assert said[1][-1].startswith("restarts")  # saved by other code
+    assert said[2][1:4] == ("mujoco", controlled.model, str(controlled.seed))
+    assert said[2][-1] == "resumes"  # its data file beside this code
     # a stored run is not listed
     results = tmp_path / "results"
     row = {"config_hash": first.config_hash, "status": "ok", "system": first.system}
     _store.write_row(results, {**row, "model": first.model, "seed": first.seed})
     assert len(C.saved_trainings("paper-core", results, cache_root=tmp_path)) == 2
+
+
+def _saved(line):
+    """A saved training's line read back: (claim, experiment, model, seed, step, steps, hours
+    trained, resumes or restarts)."""
+    return re.fullmatch(
+        r"claim (\d+), (\S+), (\S+) seed (\d+): step (\S+) of (\S+) \((\S+) h trained; (.+)\)",
+        line,
+    ).groups()
 
 
 def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):

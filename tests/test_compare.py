@@ -4,14 +4,16 @@ The folders hold synthetic tables (tests/_synthetic.py: no training), written as
 folder without row files (runs.parquet, curves.parquet, bench_meta.json)."""
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import section, table_rows
 from _synthetic import synthetic_tables
 
 from bench._cli import main
-from bench._compare import compare
+from bench._compare import _same_text, compare
 from bench.core import SCHEMA_VERSION
 
 
@@ -54,8 +56,15 @@ def test_moved_cells_are_flagged_and_changed_verdicts_named(tmp_path, tables):
     row = c.claims.set_index("claim").loc["3"]
     assert row["verdict_a"] != row["verdict_b"] and "->" in row["moved"]
     assert c.cells["flagged"].any() and (c.runs["rel_diff"] > 0).any()
-    claims = c.markdown().split("\n## Claims\n")[1].split("\n## ")[0]
-    assert next(x for x in claims.splitlines() if x.startswith("| 3 |"))  # its row
+    shown = _claims_table(c)["3"]  # its row
+    assert (shown["verdict A"], shown["verdict B"]) == (row["verdict_a"], row["verdict_b"])
+    assert shown["same"] == _same_text(False)
+
+
+def _claims_table(c):
+    """The comparison's claims table as rendered, per claim."""
+    rows = table_rows(section(c.markdown(), "Claims"), "| claim | verdict A")
+    return {r["claim"]: r for r in rows}
 
 
 @pytest.mark.slow  # three folders judged (~15 s); the flagging itself is tested above
@@ -93,8 +102,10 @@ def test_cli_prints_claims_and_summary_and_writes_the_comparison(tmp_path, table
     out = tmp_path / "cmp" / "COMPARE.md"
     assert main(["compare", str(a), str(b), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "## Claims" in printed and printed.strip().splitlines()[-1].startswith("compare ")
-    assert "## Cells" in out.read_text() and "## Runs" in out.read_text()
+    assert section(printed, "Claims") is not None
+    assert printed.strip().splitlines()[-1] == compare(a, b).summary  # the summary, last
+    written = out.read_text()
+    assert all(section(written, s) is not None for s in ("Claims", "Cells", "Runs"))
 
 
 def test_cli_bad_folders_get_one_line(tmp_path, tables, capsys):
@@ -154,13 +165,12 @@ def test_a_claim_not_run_in_one_folder_is_listed_not_counted(tmp_path, tables):
     assert row["verdict_a"] != "no runs" and row["verdict_b"] == "no runs"
     assert row["same"] is None  # neither the same nor a difference
     assert "8" not in c.claims_differ and c.n_judged == len(c.claims) - 1
-    assert f"{c.n_judged} of {c.n_judged} claim verdicts the same" in c.summary
-    assert "1 with no runs in one folder (not compared)" in c.summary
-    claims = c.markdown().split("\n## Claims\n")[1].split("\n## ")[0]
-    line = next(x for x in claims.splitlines() if x.startswith("| 8 |"))
-    assert line.split(" | ")[3] == "no runs" and "**no**" not in line
-    judged = [x for x in claims.splitlines() if x.startswith("| ") and "| 8 |" not in x][2:]
-    assert judged and all(x.split(" | ")[3] == "yes" for x in judged)
+    same = re.search(r"(\d+) of (\d+) claim verdicts the same", c.summary).groups()
+    assert same == (str(c.n_judged), str(c.n_judged))
+    assert re.search(r", (\d+) with no runs in one folder", c.summary).group(1) == "1"
+    shown = _claims_table(c)
+    assert shown.pop("8")["same"] == _same_text(None) != _same_text(False)
+    assert shown and all(r["same"] == _same_text(True) for r in shown.values())
 
 
 def test_a_verdict_that_read_none_of_its_cells_reads_no_runs(monkeypatch):

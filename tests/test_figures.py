@@ -12,12 +12,21 @@ import re
 from pathlib import Path
 
 import pytest
+from _markdown import section, table_rows
 from _synthetic import synthetic_tables
 
 from bench._report import figure_stem, make_figures, write_report
 from bench._tables import discrimination_groups
-from bench.core import experiment_rows, load_tables, studies
-from bench.kit import INCONCLUSIVE, NOT_REPRODUCED, PARTLY, REPRODUCED, VERDICTS, Verdict
+from bench.core import compare_provenance, experiment_rows, load_runs, load_tables, studies
+from bench.kit import (
+    INCONCLUSIVE,
+    NOT_REPRODUCED,
+    PARTLY,
+    REPRODUCED,
+    VERDICTS,
+    Verdict,
+    folder_label,
+)
 from bench.studies.paper import PAPER_EXPERIMENTS
 from bench.studies.paper.report._comparison import comparison_rows, comparison_section, load_other
 
@@ -66,15 +75,9 @@ def judged(loaded):
     return verdicts, {r.key: r for r in rows}
 
 
-def _section(text, heading):
-    """The body of the section ``heading`` (an experiment's heading may add "(claim n)")."""
-    lines = text.split("\n")
-    i = next(i for i, x in enumerate(lines) if x == heading or x.startswith(heading + " ("))
-    return "\n".join(lines[i + 1 :]).split("\n## ")[0]
-
-
-def _row(section, key):
-    return next(line for line in section.splitlines() if line.startswith(f"| {key} |"))
+def _claims(text):
+    """The report's claims table, per claim key."""
+    return {r["claim"]: r for r in table_rows(section(text, "Claims"), "| claim | statement")}
 
 
 def test_every_experiment_with_runs_has_png_and_pdf(results):
@@ -96,9 +99,10 @@ def test_report_has_a_verdict_row_per_claim(results, judged):
     final = {v.key: v.verdict for v in verdicts}
     # The synthetic table satisfies claims 1-6 and 8 by construction; claim 7 has no runs.
     assert final["3"] == REPRODUCED and final["7"] == INCONCLUSIVE
-    claims = _section(text, "## Claims")
-    for v in verdicts:  # one row per verdict, showing it
-        assert f"| **{v.verdict}** |" in _row(claims, v.key), v.key
+    claims = _claims(text)
+    assert set(claims) == {v.key for v in verdicts}  # one row per verdict, showing it
+    for v in verdicts:
+        assert claims[v.key]["verdict"] == f"**{v.label()}**", v.key
 
 
 def test_report_sets_both_budgets_side_by_side(results, judged):
@@ -108,10 +112,10 @@ def test_report_sets_both_budgets_side_by_side(results, judged):
     assert row3.labels == ("smoke (here)", "paper (`paper/`)")
     assert [v.verdict for v in row3.verdicts] == [REPRODUCED, NOT_REPRODUCED]
     assert row3.agree is False and "budget" in {c.kind for c in row3.causes}
-    section = _section(text, "## Verdicts at both budgets")
+    shown = {r["claim"] for r in table_rows(section(text, "Verdicts at both budgets"), "claim")}
     for key, row in rows.items():  # one row per claim key that some folder has runs for
         ran = any(v is not None and (v.n_seeds or v.pending) for v in row.verdicts)
-        assert ran == any(line.startswith(f"| {key} |") for line in section.splitlines()), key
+        assert ran == (key in shown), key
 
 
 def test_a_claim_judged_in_one_folder_only_names_no_cause(judged):
@@ -133,17 +137,23 @@ def test_every_experiment_table_has_trivial_row_and_discriminates(results):
         assert {"constant_velocity", "at_rest"} & set(rows["model"]), name
         groups = discrimination_groups(rows)
         assert groups and all(g.status == "yes" for g in groups), (name, groups)
-        assert "(trivial) |" in _section(text, f"## {name}"), name  # its row in the table
+        table = table_rows(section(text, name), "|")  # its row in the table
+        assert any(r["variant"].endswith("(trivial)") for r in table), name
 
 
 def test_report_links_figures_and_skips_an_experiment_without_runs(results):
     d, _, text = results
-    assert "](figures/fig4_second_order.png)" in text
-    section = _section(text, "## relativistic")
-    assert not [line for line in section.splitlines() if line.startswith("| ")]  # no table
-    assert "](figures/" not in section
-    assert "- profile: smoke" in text
-    assert "reference_compatible" in text
+    assert _figure_links(section(text, "second_order")) == ["figures/fig4_second_order.png"]
+    skipped = section(text, "relativistic")
+    with pytest.raises(LookupError):  # no table
+        table_rows(skipped, "|")
+    assert _figure_links(skipped) == []
+    assert re.search(r"^- profile: (\S+)$", text, re.M).group(1) == "smoke"
+    assert section(text, "What the suite does not copy from the reference") is not None
+
+
+def _figure_links(md):
+    return re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
 
 
 def test_report_table_shows_mean_and_sem(results):
@@ -172,8 +182,8 @@ def test_a_registered_study_is_drawn_and_reported(tmp_path, monkeypatch):
     assert [s.name for s in _studies.studies()][-2:] == ["toy", "broken"]
     assert tmp_path / "figures" / "toy.png" in make_figures(tmp_path) and drawn == [tmp_path]
     text = "\n".join(report._extra_sections(tmp_path))
-    assert "## Toy\n\nhi" in text
-    assert "## Broken\n\n(section failed: division by zero)" in text
+    assert section(text, "Toy").strip() == "hi"
+    assert "division by zero" in section(text, "Broken")  # the failure, in its own section
 
 
 def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_stored(tmp_path):
@@ -192,9 +202,9 @@ def test_a_campaign_folder_states_verdicts_only_for_claims_whose_runs_are_all_st
     assert final["6"].pending is None and final["6"].verdict in VERDICTS
     stored, declared = final["1"].pending
     assert declared == 50 and stored < declared
-    claims = _section(write_report(tmp_path / "a", compare=[]).read_text(), "## Claims")
+    claims = _claims(write_report(tmp_path / "a", compare=[]).read_text())
     for key in ("1", "6"):  # the folder's own claims table shows them
-        assert f"| **{final[key].verdict}** |" in _row(claims, key)
+        assert claims[key]["verdict"] == f"**{final[key].label()}**"
     _store(tmp_path / "b", runs.iloc[1:], curves)
     final = {v.key: v for v in load_other(tmp_path / "b")[2]}
     assert final["6"].pending == (44, 45)
@@ -273,8 +283,7 @@ def test_a_key_no_folder_ran_is_left_out_of_the_comparison_table():
     here[2] = dataclasses.replace(here[2], pending=(0, 60))
     others = [("a", "quick", [v(15, 10), v(15, 0, "not run"), v(13, 5)])]
     table = "\n".join(comparison_section(here, "paper-core", others))
-    body = [line for line in table.splitlines() if line.startswith("| ")][2:]  # no header
-    assert sorted(line.split(" | ")[0].removeprefix("| ") for line in body) == ["13", "15"], table
+    assert sorted(r["claim"] for r in table_rows(table, "| claim")) == ["13", "15"], table
 
 
 def test_a_cause_shared_by_two_compared_folders_is_named_once():
@@ -348,8 +357,15 @@ def test_report_names_no_folder_by_its_absolute_path(tmp_path):
     _store(tmp_path / "a", runs.assign(jax_version="0.10.2"), curves)
     _store(tmp_path / "a" / "gpu", runs.assign(jax_version="0.11.2"), curves)
     text = write_report(tmp_path / "a", compare=[tmp_path / "a" / "gpu"]).read_text()
-    assert "Differences from `gpu`:" in text
-    assert "jax_version differs: 0.10.2 (a) vs 0.11.2 (gpu)" in text
+    names = (folder_label(tmp_path / "a"), folder_label(tmp_path / "a" / "gpu"))
+    assert names == ("a", "gpu")
+    warnings = compare_provenance(
+        load_runs(tmp_path / "a"), load_runs(tmp_path / "a" / "gpu"), names=names
+    )
+    assert warnings  # the jax versions differ
+    provenance = section(text, "Provenance")
+    assert re.findall(r"^Differences from `(.+)`:$", provenance, re.M) == ["gpu"]
+    assert [x.removeprefix("- ") for x in provenance.splitlines() if x.startswith("- ")] == warnings
     assert str(tmp_path) not in text
 
 
@@ -360,20 +376,20 @@ def test_report_prints_the_margin_policy_the_margin_ranges_and_the_dependent_cla
 
     _, _, text = results
     verdicts, _ = judged
-    section = _section(text, "## Margin policy")
-    for q in policy.POLICY.values():
-        assert f"| {q.label} |" in section
+    margins = section(text, "Margin policy")
+    labels = [r["quantity"] for r in table_rows(margins, "| quantity | margin")]
+    assert labels == [q.label for q in policy.POLICY.values()]
     stated = policy.stated_margins()  # margins a seed states, each with its quote and source
-    assert stated and all(m.quote in section and m.source in section for m in stated)
-    parts = text.split("### Every part")[1].split("## Margin policy")[0]
-    assert "| margin range |" in parts.splitlines()[2]
+    assert stated and all(m.quote in margins and m.source in margins for m in stated)
+    parts = table_rows(section(text, "Every part"), "| claim | part")
+    shown = {(r["part"], r["margin range"]) for r in parts}
     tested = [p for v in verdicts for p in v.parts if p.status != "not tested"]
     for p in tested:
         p.ranges = margin_ranges(p)
-        assert p.range_text() in parts, (p.name, p.range_text())
+        assert (p.name, p.range_text()) in shown, (p.name, p.range_text())
     three = [p for p in tested if [r[0] for r in p.ranges] == ["holds", "undecided", "contradicts"]]
     assert three, "no part that holds, then is undecided, then contradicted as the margin grows"
-    assert "\n## Margin-dependent claims\n" in text
+    assert section(text, "Margin-dependent claims") is not None
 
 
 def test_figures_are_drawn_without_pyplot():

@@ -1,8 +1,10 @@
 """README's findings table says what the committed reports say, and the README stays short."""
 
+import re
 import shutil
 
 import pytest
+from _markdown import cells, table_rows
 
 from bench import findings
 
@@ -39,7 +41,8 @@ def test_a_changed_verdict_changes_the_table_and_the_check(tmp_path):
     new = findings.findings(tmp_path)
     cell = findings._replicated({**row, "verdict": "**no way**"})  # with its seeds 5-9 state
     assert cell.startswith("**no way**")
-    assert f"| {cell} |" in next(x for x in new.splitlines() if x.startswith("| 5 |"))
+    rows = {r["claim"]: r for r in table_rows(new, "| claim | the paper says")}
+    assert rows["5"]["paper-core (seeds 0-4, then 5-9)"] == cell
     assert findings.current(readme) != new
     assert findings.write(readme, tmp_path) and findings.current(readme) == new
     assert not findings.write(readme, tmp_path)
@@ -124,11 +127,11 @@ def test_the_seeds_protocols_come_from_each_claims_section():
     assert got[9]["loss"] == ("squared error", "L1")
     assert got[9]["verdict"] == ("not run", "not run")
     lines = F._protocol_lines({"quick": report, "paper-core": "## Claims"})
-    assert lines[-1] == "| 9 | - / - | not run / not run | not run / not run | not run / not run |"
+    assert cells(lines[-1]) == ["9", "- / -", *["not run / not run"] * 3]
     # each budget's learning gates from its own report
     gates = report.replace("| learned | - | - |", "| learned | HNN yes | HNN no |")
     lines = F._protocol_lines({"quick": report, "paper-core": gates})
-    assert lines[-1] == "| 9 | - / - | not run / not run | HNN yes / HNN no | not run / not run |"
+    assert cells(lines[-1])[3] == "HNN yes / HNN no"
 
 
 def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
@@ -153,8 +156,8 @@ def test_compute_is_summed_per_device_and_reaches_the_readme_sentence(tmp_path):
         (tmp_path / folder).mkdir(parents=True)
         (tmp_path / folder / "REPORT.md").write_text(f"# report\n\n{text}\n- other: 1\n")
     sentence = findings.compute_sentence(tmp_path)
-    assert sentence.count(": ") == 3 and "paper-core on cpu A: 3 runs" in sentence
-    assert "paper_gpu on gpu B: 1 run" in sentence
+    said = re.findall(r"(\S+) on ([^:;]+): (\d+) runs?,", sentence)
+    assert said == [("paper-core", "cpu A", "3"), ("paper_gpu", "gpu B", "1")], sentence
 
 
 def test_an_ensemble_member_without_its_share_of_wall_time_is_counted_and_named():
@@ -216,10 +219,15 @@ def test_a_pending_claim_is_not_called_margin_dependent():
         return Verdict(int(key), "t", "inconclusive", 0.0, 0.0, 0.0, 5, "", pending=pending)
 
     deps = [Dependence(k, "error", ((1.5, "reproduced"),), "inconclusive") for k in ("1", "12")]
-    text = "\n".join(_dependence_section(deps, [v("1"), v("12", pending=(27, 30))]))
-    assert "Margin-dependent: claim 1." in text and "| 12 |" not in text
-    text = "\n".join(_dependence_section(deps, [v("1"), v("12")]))
-    assert "Margin-dependent: claim 1, 12." in text
+
+    def shown(final):
+        text = "\n".join(_dependence_section(deps, final))
+        rows = [r["claim"] for r in table_rows(text, "| claim | quantity")]
+        named = re.search(r"^Margin-dependent: claim (.*)\.$", text, re.M).group(1)
+        return rows, named.split(", ")
+
+    assert shown([v("1"), v("12", pending=(27, 30))]) == (["1"], ["1"])
+    assert shown([v("1"), v("12")]) == (["1", "12"], ["1", "12"])
 
 
 def test_the_sentences_say_what_holds_what_is_contradicted_and_what_is_open():
@@ -237,11 +245,32 @@ def test_the_sentences_say_what_holds_what_is_contradicted_and_what_is_open():
     quick = {"3": row("partly reproduced: headline holds"), "2": row("inconclusive")}
     papers = {1: "deconstructing", 2: "deconstructing", 3: "deconstructing", 4: "deconstructing"}
     papers |= {13: "deconstructing", 9: "lnn"}
-    lines = findings.summary(core, quick, papers)
-    assert lines == [
-        "- **The Deconstructing paper.** Holds: claim 2 (reproduced) and 3 (quick) (partly "
-        "reproduced: headline holds); contradicted in part or whole: claim 1 (partly "
-        "reproduced: headline contradicted); not decided: claim 4 (inconclusive, does not "
-        "replicate, 2 of 2 readings) and 13 (inconclusive, not discriminating).",
-        "- **The LNN seed.** Contradicted in part or whole: claim 9 (not reproduced).",
-    ]
+    said = _summary_facts(findings.summary(core, quick, papers))
+    assert said == {
+        "The Deconstructing paper": {
+            "holds": [("2", "reproduced"), ("3 (quick)", "partly reproduced: headline holds")],
+            "contradicted in part or whole": [("1", "partly reproduced: headline contradicted")],
+            "not decided": [
+                ("4", "inconclusive, does not replicate, 2 of 2 readings"),
+                ("13", "inconclusive, not discriminating"),
+            ],
+        },
+        "The LNN seed": {"contradicted in part or whole": [("9", "not reproduced")]},
+    }
+
+
+def _summary_facts(lines):
+    """The summary's sentences read back: per paper, per group (holds, contradicted, not
+    decided), the claims it names, each as (claim, its reading)."""
+    out = {}
+    for line in lines:
+        paper, text = re.fullmatch(r"- \*\*(.+?)\.\*\* (.*)\.", line).groups()
+        groups = {}
+        for said in text.split("; "):
+            group, claims = said.split(": claim ", 1)
+            named = re.findall(
+                r"(?:^|, | and )(\d+(?: \(quick\))?) \(((?:[^()]|\([^()]*\))*)\)", claims
+            )
+            groups[group.lower()] = named
+        out[paper] = groups
+    return out

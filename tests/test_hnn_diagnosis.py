@@ -7,6 +7,7 @@ import jax
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 import models
 from bench.core import build_run, train, train_config
@@ -128,20 +129,40 @@ def test_summary_flags_stalled_runs_and_shows_the_stored_run():
     runs = pd.DataFrame(
         [{"config_hash": "h1", "status": "ok", "final_loss": 0.102, "rollout_error": 0.38}]
     )
-    text = D.summary(df, runs)
-    lines = {tuple(x.split(" | ")[:2]): x for x in text.splitlines() if x.startswith("| ")}
-    assert "| **yes** | 300 | ok, 0.102, 0.38 |" in lines[("| 1", "suite")]
-    assert lines[("| 1", "suite")].split(" | ")[6] == "1 -> 240"
-    assert "| no | 300 | - |" in lines[("| 0", "suite")]  # no stored row for h0
-    assert "| no | - | - |" in lines[("| 1", "lr_1e-3")]  # the stored run is the suite's only
+    rows = table_rows(D.summary(df, runs), "| seed | variant")
+    got = {
+        (r["seed"], r["variant"]): (
+            r["stalled"],
+            r["replay = stored run (steps)"],
+            r["stored run: status, final loss, rollout error"],
+        )
+        for r in rows
+    }
+    assert got == {
+        ("0", "suite"): ("no", "300", "-"),  # no stored row for h0
+        ("1", "suite"): ("**yes**", "300", "ok, 0.102, 0.38"),
+        ("1", "lr_1e-3"): ("no", "-", "-"),  # the stored run is the suite's only
+    }
+    one = next(r for r in rows if (r["seed"], r["variant"]) == ("1", "suite"))
+    assert one["largest eig M"] == "1 -> 240"
     assert D.stalled_counts(df) == {"suite": (1, 2), "lr_1e-3": (0, 1)}
     # the variants in their declared order, seed by seed
-    assert [k[1] for k in lines if k[0] == "| 1"] == ["suite", "lr_1e-3"]
+    assert [r["variant"] for r in rows if r["seed"] == "1"] == ["suite", "lr_1e-3"]
     # on the threshold: not stalled; NaN: not stalled
     assert D.stalled([0.51, 0.5, np.nan], 1.0).tolist() == [True, False, False]
 
 
 def test_section_says_how_to_make_the_table_where_there_is_none(tmp_path):
-    assert "python -m bench diagnose-hnn" in D.section(tmp_path)
+    assert "python -m bench diagnose-hnn" in D.section(tmp_path)  # the command is the contract
+    with pytest.raises(LookupError):
+        table_rows(D.section(tmp_path), "| seed | variant")
     _table({(0, "suite"): 0.9}).to_csv(tmp_path / D.FILE, index=False)
-    assert "| 0 | suite | 0.005 | 1 | 300 | 0.1 -> 0.09 |" in D.section(tmp_path)
+    (row,) = table_rows(D.section(tmp_path), "| seed | variant")
+    assert [row[k] for k in ("seed", "variant", "lr", "cores", "steps")] == [
+        "0",
+        "suite",
+        "0.005",
+        "1",
+        "300",
+    ]
+    assert row["loss: first step -> last block"] == "0.1 -> 0.09"

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 from bench.core import _store, expand
 from bench.kit import policy
@@ -86,8 +87,10 @@ def test_several_orders_of_magnitude_at_similar_loss_are_reproduced():
     assert [p.role for p in v.parts if p.name.startswith("(b)")] == ["condition"] * 3
     # the two-body margin is the seed's stated number, the others the policy's energy margin
     two = next(p for p in v.parts if p.name.startswith("(a) two_body"))
-    assert two.margin_value == 100.0 and "stated: Greydanus et al. 2019" in two.margin
-    assert "Deconstructing view" in v.detail
+    assert two.margin_value == H.TWO_BODY_ENERGY.value == 100.0
+    assert H.TWO_BODY_ENERGY.source in two.margin  # the margin names where the seed states it
+    # the Deconstructing view (NODE+SO) reported beside, not a part of the verdict
+    assert "Deconstructing view" in v.detail and not any("NODE+SO" in p.name for p in v.parts)
 
 
 def test_equal_energy_error_is_not_reproduced():
@@ -137,12 +140,14 @@ def test_fewer_than_five_seeds_or_no_runs_are_inconclusive():
 def test_section_and_figure_from_a_results_folder(tmp_path):
     r = _tables(energy_ratio=100.0, loss_ratio=1.0)
     r.to_parquet(tmp_path / "runs.parquet", index=False)
-    text = H.section(tmp_path)
+    rows = {row["task"]: row for row in table_rows(H.section(tmp_path), "| task | seeds")}
+    assert list(rows) == list(H.SYSTEMS)
     for system in H.SYSTEMS:
-        line = next(x for x in text.splitlines() if x.startswith(f"| {system} |"))
         # the seed's numbers and ours, side by side (ours: 1e-2 MLP / 1e-4 HNN / 3e-4 NODE+SO)
-        assert f"{H.SEED_NUMBERS[system]['energy_mse'][0]:.3g}" in line
-        assert "| 0.01 / 0.0001 / 0.0003 |" in line
+        mlp, hnn = H.SEED_NUMBERS[system]["energy_mse"]
+        assert rows[system]["energy MSE MLP / HNN (seed)"] == f"{mlp:.3g} / {hnn:.3g}"
+        ours = rows[system]["energy MSE MLP / HNN / NODE+SO (ours)"].split(" / ")
+        assert [float(x) for x in ours] == [0.01, 0.0001, 0.0003]
     paths = H.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"} and all(
         p.stat().st_size > 1000 for p in paths

@@ -5,6 +5,8 @@ and the settling budget the first checkpoint of the final verdict."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -17,6 +19,7 @@ from bench.studies.learning import (
     settling_table,
     verdicts_along_curve,
 )
+from tests._markdown import table_rows
 from tests._synthetic import synthetic_tables
 
 PROFILE = "smoke"
@@ -196,10 +199,11 @@ def test_paper_budget_note_takes_the_curves_cells_only_and_names_each_folder():
         ]
     )
     note = _paper_budget_note(ref, "chain_pendulum", "()")
-    assert note == (
-        "HNN+SO 0.02 (8000 steps, n_train 800, n=1, `paper`); "
-        "HNN+SO 0.02 (8000 steps, n_train 800, n=2, `paper_gpu`)"
-    )
+    said = re.findall(r"(\S+) (\S+) \((\d+) steps, n_train (\d+), n=(\d+), `([^`]+)`\)", note)
+    assert said == [  # per model and folder: geometric mean, steps, n_train, runs, folder
+        ("HNN+SO", "0.02", "8000", "800", "1", "paper"),
+        ("HNN+SO", "0.02", "8000", "800", "2", "paper_gpu"),
+    ], note
     assert _paper_budget_note(ref.iloc[0:0], "chain_pendulum", "()") == ""
 
 
@@ -227,7 +231,15 @@ def test_a_claim_whose_runs_train_for_different_budgets_settles_at_a_fraction():
                     "effect": 0.0,
                 }
             )
-    text = "\n".join(_settling_lines(pd.DataFrame(rows)))
-    assert "verdict at 1/2 (100 steps) | verdict at 1 (300 steps)" in text
-    assert "| 7 | inconclusive | reproduced | 1 of its runs' training (their step budgets" in text
-    assert "| 7 (rollout loss) | partly reproduced | partly reproduced | 1/2 of its runs'" in text
+    along = pd.DataFrame(rows)
+    settled = settling_table(along).set_index("key")
+    assert settled.loc["1", "settles_at"] == 100.0  # the other claims keep their steps
+    for key, fraction in (("7", 1.0), ("7 (rollout loss)", 0.5)):
+        assert np.isnan(settled.loc[key, "settles_at"])
+        assert settled.loc[key, "settles_fraction"] == fraction
+    shown = {r["claim"]: r for r in table_rows("\n".join(_settling_lines(along)), "| claim")}
+    assert list(shown["1"])[1:3] == ["verdict at 1/2 (100 steps)", "verdict at 1 (300 steps)"]
+    for key, fraction in (("7", "1"), ("7 (rollout loss)", "1/2")):
+        cells = list(shown[key].values())
+        assert cells[1:3] == settled.loc[key, "verdicts"]
+        assert cells[3].split(" of its runs' training")[0] == fraction, cells[3]

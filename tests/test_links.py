@@ -1,13 +1,16 @@
 """The claims at every number of links (bench.studies.paper.report._links) on synthetic stored
 runs of the paper profile's Fig. 5 cells at k = 1..4, seeds 0-9 (no training)."""
 
+import re
+
 import pandas as pd
 import pytest
+from _markdown import table_rows
 from _synthetic import synthetic_tables
 
 from bench import kit as R
 from bench.core import expand
-from bench.kit import evaluate_claims
+from bench.kit import evaluate_claims, seed_span
 from bench.studies.paper.coordinates import fig_links
 from bench.studies.paper.report import _links as L
 
@@ -62,8 +65,28 @@ def test_the_section_names_pending_readings_and_seeds(fig5):
     ctx = Ctx()
     ctx.runs, ctx.curves = runs, curves
     text = "\n".join(L.links_section(ctx))
-    assert "| claim | k = 1 | k = 2 | k = 3 | k = 4 | k = 1-4 |" in text
-    assert "pending (" in text and "seeds 0-9" in text
+    rows = table_rows(text, "| claim |")
+    got = L.readings(runs, curves)
+    assert list(rows[0]) == ["claim", "k = 1", "k = 2", "k = 3", "k = 4", "k = 1-4"]
+    said = {(row["claim"], r.label): row[r.label] for row in rows for r in got}
+    pending, seeds = [], set()
+    for r in got:
+        for key in {row["claim"] for row in rows}:
+            claim = int(key.split()[0])
+            n, m = r.counts.get(claim, (0, 0))
+            cell = said[key, r.label]
+            if m and n < m:  # a reading still waiting for runs says how many are stored
+                assert re.fullmatch(r"pending \((\d+) of (\d+) runs\)", cell).groups() == (
+                    str(n),
+                    str(m),
+                ), cell
+                pending.append(cell)
+            elif cell != "-":  # a judged one: its verdict and the seeds it rests on
+                v = next(v for v in r.judgement.final if v.key == key)
+                verdict, span = re.fullmatch(r"\*\*(.+?)\*\*.*, seeds (\S+)", cell).groups()
+                assert verdict == v.label() and span == seed_span(r.judgement.reading_seeds(key))
+                seeds.add(span)
+    assert pending and "0-9" in seeds
     # k = 2 alone is paper-core's own reading: no section
     ctx.runs = runs[runs["k"] == 2]
     assert L.links_section(ctx) == []

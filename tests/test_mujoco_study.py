@@ -6,16 +6,19 @@ to end on the random-control stand-in."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import section, table_rows
 
 import systems
 from bench.core import RunConfig, _store, expand
 from bench.kit import policy
 from bench.studies.paper import mujoco as X
 from bench.studies.paper.mujoco import _rule as R
+from bench.studies.paper.mujoco._section import DIFFERENCES
 from systems import mujoco_data as D
 
 SEEDS = (0, 1, 2, 3, 4)
@@ -132,13 +135,15 @@ def test_the_study_is_registered_with_its_rule_figure_and_section():
 
 # --------------------------------------------------------------------------- the rule
 def test_the_paper_s_ordering_is_reproduced_on_every_task():
-    v = X.claim_16(_tables(tasks=X.TASKS))
+    runs = _tables(tasks=X.TASKS)
+    v = X.claim_16(runs)
     assert v.verdict == "reproduced" and v.key == "16", v.detail
     assert len(v.parts) == 4 * 3 and all(p.status == "holds" for p in v.parts), v.detail
     assert v.effect == pytest.approx(math.log(5.0), abs=1e-9)  # pooled (a): the headline
     assert v.n_seeds == 5 and v.discriminating is True and v.n_failed == 0
-    assert "orders every test comparison as test_mse does" in v.detail
-    assert "file HalfCheetahFull-v0.npz: 200K" in v.detail
+    assert R.disagreements(runs) == []  # rollout_error orders every comparison alike
+    sources = set(runs["data_source"])  # each task's data named in the detail
+    assert len(sources) == len(X.TASKS) and all(src in v.detail for src in sources)
 
 
 def test_the_opposite_ordering_is_not_reproduced():
@@ -172,7 +177,8 @@ def test_a_model_that_did_not_learn_leaves_the_parts_it_wins_untested():
     assert s[f"{X.QUICK_TASK}: (c) log(train MSE HNN / NODE+SO)"] == "holds", v.detail
     against_node = [p for p in v.parts if p.name.rstrip(")").endswith("/ NODE")]
     assert len(against_node) == 2 and all(p.status == "not tested" for p in against_node)
-    assert all("NODE on HalfCheetahFull-v0 did not learn" in p.note for p in against_node)
+    for p in against_node:  # the reason: NODE's learning gate, closed
+        assert [g.label for g in p.gates if g.open is False] == [f"NODE on {X.QUICK_TASK}"]
     assert s[f"{X.QUICK_TASK}: (a) log(test MSE NODE / NODE+SO)"] == "not tested"
     assert v.verdict == "inconclusive", v.detail
 
@@ -187,7 +193,7 @@ def test_an_hnn_that_did_not_learn_is_the_claims_finding_not_a_gap():
 def test_a_test_set_the_trivial_predictor_wins_is_not_discriminating():
     v = X.claim_16(_tables(change={(X.QUICK_TASK, "constant_velocity"): (1e-3, 1e-3, 0.01)}))
     assert v.verdict == "inconclusive" and v.discriminating is False, v.detail
-    assert v.detail.startswith("not discriminating on ")
+    assert {p.status for p in v.parts} == {"not tested"}  # the task's parts, void
 
 
 def test_too_few_seeds_is_inconclusive():
@@ -202,27 +208,32 @@ def test_failed_runs_score_the_worst_value_and_are_counted():
     runs.loc[hnn, "status"] = "diverged"
     runs.loc[hnn, "test_mse"] = math.nan
     v = X.claim_16(runs)
-    assert v.n_failed == 5 and "5 failed/diverged runs" in v.detail
+    assert v.n_failed == 5
     # scored at the task's worst value (>= 1): a diverged HNN loses to NODE, not skipped
     assert _statuses(v)[f"{X.QUICK_TASK}: (b) log(test MSE HNN / NODE)"] == "holds"
 
 
 def test_a_rollout_error_that_orders_the_other_way_is_named():
-    v = X.claim_16(_tables(change={(X.QUICK_TASK, "node_so"): (0.02, 0.01, 0.5)}))
+    runs = _tables(change={(X.QUICK_TASK, "node_so"): (0.02, 0.01, 0.5)})
+    v = X.claim_16(runs)
     assert v.verdict == "reproduced", v.detail  # the verdict reads the paper's metric
-    assert "rollout_error disagrees with test_mse" in v.detail
-    assert "(a) NODE / NODE+SO" in v.detail
+    off = R.disagreements(runs)
+    assert [x.split(":")[0] for x in off] == [f"{X.QUICK_TASK} (a) NODE / NODE+SO"]
+    assert all(x in v.detail for x in off)  # and the detail names it
 
 
 def test_the_stand_in_alone_gives_no_signed_verdict():
-    v = X.claim_16(_tables(data=X.STAND_IN))
+    stand = _tables(data=X.STAND_IN)
+    v = X.claim_16(stand)
     assert v.verdict == "inconclusive" and v.variant == X.NOT_JUDGED, v.detail
     assert v.key == "16 (not judged: stand-in data)"
     assert [p.status for p in v.parts] == ["undecided"]
-    assert "pipeline check on the random-control stand-in" in v.detail and "holds" in v.detail
+    check = R.judge(stand)  # the pipeline check: the rule on the stand-in, shown in the detail
+    assert check.verdict == "reproduced" and v.detail.endswith(f"({check.detail})")
     # no runs at all: the claim's own key (the runs are not made yet), not the stand-in's
     empty = X.claim_16(_tables().iloc[0:0])
-    assert empty.key == "16" and "no runs on the task files" in empty.detail
+    assert empty.key == "16" and empty.n_seeds == 0
+    assert [(p.status, p.note) for p in empty.parts] == [("undecided", "no runs")]
 
 
 def test_the_task_files_are_judged_and_the_stand_in_left_out():
@@ -231,7 +242,8 @@ def test_the_task_files_are_judged_and_the_stand_in_left_out():
     runs = pd.concat([_tables(), _tables(CONTRADICT, data=X.STAND_IN)], ignore_index=True)
     v = X.claim_16(runs)
     assert v.verdict == "reproduced" and v.key == "16", v.detail
-    assert "20 stand-in rows left out" in v.detail
+    left_out = re.search(r"(\d+) stand-in rows left out", v.detail).group(1)
+    assert int(left_out) == (R.data_kind(runs) == "stand-in").sum() == 20
 
 
 # ------------------------------------------------------------------ section and figure
@@ -240,23 +252,58 @@ def test_the_section_and_figure_show_fig_7_s_numbers(tmp_path, data):
     runs, curves = _tables(tasks=X.TASKS, data=data, spread=0.0, frames=True)
     runs.to_parquet(tmp_path / "runs.parquet", index=False)
     curves.to_parquet(tmp_path / "curves.parquet", index=False)
-    text = X.section(tmp_path)
-    assert text.startswith(f"## {X.TITLE}")
-    assert "| HalfCheetahFull-v0 | NODE+SO | 5 | 0.02 ± 0 | 0.01 ± 0 | 0.1 |" in text
-    assert "| HopperFull-v0 | constant velocity | 5 | 10 ± 0 | 5 ± 0 |" in text
-    assert "What differs from the paper:" in text and "850K" in text
+    text = section(X.section(tmp_path), X.TITLE)
+    table = {(r["task"], r["model"]): r for r in table_rows(text, "| task | model")}
+    cheetah = table["HalfCheetahFull-v0", "NODE+SO"]
+    assert (cheetah["seeds"], cheetah["test MSE"], cheetah["train MSE"]) == (
+        "5",
+        "0.02 ± 0",
+        "0.01 ± 0",
+    )
+    assert cheetah["rollout error (geometric mean)"] == "0.1"
+    trivial = table["HopperFull-v0", "constant velocity"]
+    assert (trivial["seeds"], trivial["test MSE"], trivial["train MSE"]) == ("5", "10 ± 0", "5 ± 0")
+    assert _bullets(text, "What differs from the paper:") == list(DIFFERENCES)
+    v = X.claim_16(runs)
+    assert _verdict_line(text) == (v.verdict, v.variant)
+    data_lines = dict(x.split(": ", 1) for x in _bullets(text, "Data:"))
+    for task in X.TASKS:  # each task's source and the transitions read from it
+        source, read = data_lines[task].split("; ")[:2]
+        rows = runs[runs["system"] == task]
+        assert source == rows["data_source"].iloc[0]
+        assert read == f"{int(rows['data_points'].iloc[0])} transitions read"
     if data == X.FILE:
-        assert "Verdict: **reproduced**." in text and "STAND-IN" not in text
-        assert "file HopperFull-v0.npz: 200K; 200000 transitions read" in text
+        assert v.variant == "" and set(R.data_kind(runs)) == {"file"}
     else:
-        assert "RANDOM-CONTROL STAND-IN" in text and "No signed verdict" in text
+        assert v.variant == X.NOT_JUDGED and set(R.data_kind(runs)) == {"stand-in"}
     paths = X.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"} and all(p.stat().st_size for p in paths)
     assert paths[0].name == f"{X.STEM}.png"
 
 
+def _bullets(text, label):
+    """The bullet list after the line ``label`` (e.g. "Data:")."""
+    lines = text.splitlines()
+    out = []
+    for x in lines[lines.index(label) + 1 :]:
+        if x.startswith("- "):
+            out.append(x[2:])
+        elif out:
+            break
+    return out
+
+
+def _verdict_line(text):
+    """The section's verdict and its variant (``Verdict: **inconclusive** (not judged...).``)."""
+    m = re.search(r"^Verdict: \*\*(.+?)\*\*(?: \((.+)\))?\.$", text, re.M)
+    return m.group(1), m.group(2) or ""
+
+
 def test_no_runs_give_a_section_without_a_table_and_no_figure(tmp_path):
-    assert X.section(tmp_path).endswith("(no runs)") and X.figure(tmp_path) == []
+    text = section(X.section(tmp_path), X.TITLE)
+    assert text is not None and X.figure(tmp_path) == []
+    with pytest.raises(LookupError):  # no table of models
+        table_rows(text, "| task | model")
 
 
 # --------------------------------------------------------------------------- end to end
@@ -269,8 +316,8 @@ def test_the_smoke_profile_runs_and_reports_on_the_stand_in(tmp_path):
     runs = load_runs(tmp_path / "res")
     assert (runs["status"] == "ok").all(), runs[["model", "error"]]
     v = X.claim_16(runs)
-    assert v.variant == X.NOT_JUDGED and "pipeline check" in v.detail, v.detail
-    assert "RANDOM-CONTROL STAND-IN" in X.section(tmp_path / "res")
+    assert v.variant == X.NOT_JUDGED and R.judge(runs).verdict in v.detail, v.detail
+    assert _verdict_line(X.section(tmp_path / "res")) == (v.verdict, X.NOT_JUDGED)
     assert len(X.figure(tmp_path / "res")) == 2
 
 
@@ -289,7 +336,7 @@ def test_the_code_lr_runs_are_a_sensitivity_reading_not_the_verdicts():
     assert (v.verdict, _statuses(v)) == (base.verdict, _statuses(base))
     (a,) = R.code_lr_parts(both)
     assert a.status == "contradicts" and a.n == len(SEEDS)
-    assert "at the reference code's lr, not judged" in v.detail
+    assert f"{a.name}: {a.status}" in v.detail  # shown beside the verdict, not judged
     assert not R.code_lr_parts(runs)
 
 

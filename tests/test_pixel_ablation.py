@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 import models
 from bench.core import _pixels, expand
@@ -100,10 +101,17 @@ def test_the_summary_counts_the_seeds_under_the_learning_gate():
                     "recon_mse": 1e-5,
                 }
             )
-    text = D.summary(D.HNN_SEED, pd.DataFrame(rows))
-    assert "| hnn | protocol | 1 | 2 | 1 of 2 |" in text
-    assert "| hnn | no L2 (weight decay 0) | 1 | 2 | 2 of 2 |" in text
-    assert "0: 10, 1: 1.5" in text
+    got = _summary_rows(D.summary(D.HNN_SEED, pd.DataFrame(rows)))
+    assert {k: (r["aux weight"], r["seeds"], r["learned"]) for k, r in got.items()} == {
+        ("hnn", D.PROTOCOL): ("1", "2", "1 of 2"),
+        ("hnn", "no L2 (weight decay 0)"): ("1", "2", "2 of 2"),
+    }
+    assert got["hnn", D.PROTOCOL]["static / pixel MSE per seed"] == "0: 10, 1: 1.5"
+
+
+def _summary_rows(text):
+    """The diagnosis table's rows, per (model, variant)."""
+    return {(r["model"], r["variant"]): r for r in table_rows(text, "| model | variant")}
 
 
 @pytest.mark.slow  # a smoke sweep and a training
@@ -127,10 +135,12 @@ def test_diagnosis_reads_stored_protocol_runs_and_trains_the_ablation(tmp_path):
     assert vin["vin", 0.0] != vin["vin", 1.0]  # trained again, with another loss
     again = pd.read_csv(res / D.VIN.file)
     assert len(again) == 3 and set(again["source"]) == {"stored run", "trained here"}
-    text = D.summary(D.VIN, again)
-    assert (
-        "| vin | no auxiliary loss | 0 | 1 | " in text and "| resnet | protocol | 1 | 1 | " in text
-    )
+    got = _summary_rows(D.summary(D.VIN, again))
+    assert {k: (r["aux weight"], r["seeds"]) for k, r in got.items()} == {
+        ("vin", D.PROTOCOL): ("1", "1"),
+        ("vin", "no auxiliary loss"): ("0", "1"),
+        ("resnet", D.PROTOCOL): ("1", "1"),
+    }
     with pytest.raises(ValueError, match="profile must be one of smoke, quick, paper-core"):
         D.diagnose(D.VIN, "paper", res)
     with pytest.raises(ValueError, match="--runs-from .* is not a folder"):

@@ -5,6 +5,7 @@ the latent HNN's Hamiltonian structure, a smoke sweep through the store, and cla
 from __future__ import annotations
 
 import math
+import re
 
 import equinox as eqx
 import jax
@@ -12,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 import models
 import systems
@@ -20,6 +22,8 @@ from bench.kit import policy
 from bench.studies.paper import pixels as P
 from bench.studies.paper import vin_blog as V
 from bench.studies.paper.pixels import _section as S
+from bench.studies.paper.pixels._aux import NAME as AUX_PART
+from bench.studies.paper.pixels._aux import aux_part
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32
@@ -304,19 +308,31 @@ def test_claim_11_c_the_auxiliary_loss_does_not_degrade_the_autoencoder():
     assert p.status == "not tested" and "HNN" in {g.label for g in p.gates if g.open is False}
 
 
+def _status(line):
+    """The status of the part a report line states (``...: effect [CI], n=5 -> holds``)."""
+    return re.search(r" -> (holds|contradicts|undecided|not tested)\b", line).group(1)
+
+
 def test_claim_11_c_is_judged_in_the_section_on_the_hnn_seeds_diagnosis():
     diag = _diagnosis(100.0, 10.0)
     line = S.diagnosis_line(diag)[1]  # no run without the auxiliary loss in it
-    assert "-> not tested" in line and "no HNN run trained without" in line
+    (missing,) = [g for g in aux_part(diag).gates if g.open is False]
+    assert _status(line) == "not tested" and missing.text in line  # the reason given
     hnn = diag[(diag["model"] == "hnn") & (diag["variant"] == "protocol")]
     no_aux = hnn.assign(variant="no auxiliary loss", aux_weight=0.0, recon_mse=5e-6)
     both = pd.concat([diag, no_aux], ignore_index=True)
+
+    def learned(rows):
+        return S._learned(rows[rows["variant"] == "protocol"].assign(status="ok"), "hnn")
+
     # the protocol's HNN does not learn the motion in this diagnosis (1.5x): not tested
     line = S.diagnosis_line(both, S._learned)[1]
-    assert "-> not tested" in line and "HNN did not learn" in line
+    gate = learned(both)
+    assert gate.open is False and _status(line) == "not tested" and gate.text in line
     both.loc[both["variant"] == "protocol", "pixel_mse"] = 0.002  # now it does
     line = S.diagnosis_line(both, S._learned)[1]
-    assert line.startswith("- Claim 11 (c) the auxiliary loss") and "-> holds" in line
+    assert learned(both).open is True
+    assert line.startswith(f"- Claim 11 {AUX_PART}:") and _status(line) == "holds"
 
 
 def _gates(v, state):
@@ -359,10 +375,13 @@ def test_claim_12_passes_fails_and_stays_undecided():
 
 
 def test_section_beside_the_seeds_numbers(tmp_path):
-    _tables().to_parquet(tmp_path / "runs.parquet", index=False)
-    text = P.section(tmp_path)
-    line = next(x for x in text.splitlines() if x.startswith("| MLP"))
-    assert f"{P.SEED_ENERGY_MSE[0]:.3g}" in line and "| 0.01 |" in line
+    t = _tables()
+    t.to_parquet(tmp_path / "runs.parquet", index=False)
+    rows = table_rows(P.section(tmp_path), "| model | protocol")
+    (mlp,) = [r for r in rows if r["model"] == P.LABELS["node"]]
+    assert mlp["energy MSE (HNN seed's number)"] == f"{P.SEED_ENERGY_MSE[0]:.3g}"
+    ours = t.loc[t["model"] == "node", "decoded_energy_mse"]
+    assert mlp["decoded energy MSE (ours)"] == f"{np.exp(np.log(ours).mean()):.3g}" == "0.01"
 
 
 # ------------------------------------------------------------ claim 11: the seed's protocol
@@ -457,9 +476,10 @@ def test_claim_11_passes_fails_and_stays_undecided_under_the_seeds_protocol():
     v = P.claim_11(_seed(seed_energy_ratio=100.0, energy_ratio=1.0))
     assert v.verdict == "reproduced", v.detail
     assert v.effect == pytest.approx(math.log(100.0), rel=1e-6)
-    assert "energy MSE (the seed's)" in v.parts[0].name
-    # ours beside it, not tested
-    assert "decoded energy MSE MLP / HNN 1x (not tested)" in v.detail
+    assert v.effect_name == "log energy MSE (the seed's) ratio MLP / HNN"
+    # ours beside it, not tested: named in the detail with its ratio, no part of the verdict
+    beside = re.search(r"decoded energy MSE MLP / HNN (\S+)x \(not tested\)", v.detail)
+    assert beside.group(1) == "1" and not any("decoded" in p.name for p in v.parts)
     # no gap, or the HNN worse, on the seed's metric: against the claim, whatever ours says
     no_gap = _seed(seed_energy_ratio=1.0, energy_ratio=100.0, recon_ratio=3.0)
     assert P.claim_11(no_gap).verdict == "not reproduced"
@@ -511,26 +531,40 @@ def test_section_sets_the_protocols_side_by_side_and_explains_a_seed_no_model_le
         tmp_path / "hnn_seed_pixel_diagnosis.csv", index=False
     )
     text = P.section(tmp_path)
-    lines = text.splitlines()
-    assert "| protocol | ours | the seed's |" in lines
-    learned = next(x for x in lines if x.startswith("| learned |"))
-    assert learned.count("HNN") == 2
-    opt = next(x for x in lines if x.startswith("| optimiser |"))
-    assert "AdamW" in opt and "Adam with the weight decay as an L2 term" in opt
-    step = next(x for x in lines if x.startswith("| targets |"))
-    assert "explicit Euler z + f(z)" in step
-    verdict = next(x for x in lines if x.startswith("| verdict |"))
+    protocol = {r["protocol"]: r for r in table_rows(text, "| protocol | ours | the seed's")}
+    for reading in ("ours", "the seed's"):  # both readings' learning gates name the HNN
+        assert protocol["learned"][reading].split(", ")[0] in ("HNN yes", "HNN no")
+    assert protocol["optimiser"]["ours"].startswith(S._OPTIMISERS["adamw"])
+    assert protocol["optimiser"]["the seed's"].startswith(S._OPTIMISERS["adam_l2"])
+    steps = {
+        k: re.search(r"\((.+), unit step", protocol["targets"][k]).group(1)
+        for k in ("ours", "the seed's")
+    }
+    assert "z + f(z)" in steps["the seed's"] and "z + f(z)" not in steps["ours"]
     # seed 1 learns nowhere: neither reading discriminates
-    assert verdict.count("inconclusive (seeds 0-4)") == 2
-    assert verdict.count("not discriminating") == 2
-    assert "| MLP (HNN seed's baseline) | seed's | 5 |" in text
-    one = next(x for x in lines if x.startswith("| 1 |"))
-    assert one.startswith("| 1 | none |") and one.endswith("| 5e-06, 10x |")
-    note = next(x for x in lines if x.startswith("Seed 1:"))
-    assert "no model learns the motion (6 runs)" in note and "10x the median" in note
-    assert "reconstructs at 5e-06 and learns (10x below" in note
-    assert "elements ours (its diagnosis's variants) learns there in 2 of 2 runs: HNN no L2" in note
-    assert next(x for x in lines if x.startswith("| 0 |")).startswith("| 0 | HNN (ours), MLP")
+    for reading in ("ours", "the seed's"):
+        said = re.fullmatch(r"(.+) \(seeds (\S+)\)(.*)", protocol["verdict"][reading])
+        assert said.groups() == ("inconclusive", "0-4", ", not discriminating"), said
+    models = {(r["model"], r["protocol"]): r for r in table_rows(text, "| model | protocol")}
+    assert models[P.LABELS["node"], "seed's"]["seeds"] == "5"
+    seeds = {r["seed"]: r for r in table_rows(text, "| seed | learned")}
+    assert seeds["1"]["learned"] == "none"
+    assert seeds["1"]["VIN without the auxiliary loss: recon MSE, x below"] == "5e-06, 10x"
+    assert seeds["0"]["learned"].split(", ")[:2] == ["HNN (ours)", "MLP (ours)"]
+    (note,) = [x for x in text.splitlines() if x.startswith("Seed 1:")]
+    facts = {  # the numbers the note states, each beside its label
+        "runs": r"no model learns the motion \((\d+) runs\)",
+        "recon / median": r"(\S+)x the median",
+        "VIN without it": r"reconstructs at (\S+) and learns \((\S+)x below",
+        "variants learn": r"learns there in (\d+ of \d+) runs: (.+?) [\d.]+x",
+    }
+    got = {k: re.search(x, note).groups() for k, x in facts.items()}
+    assert got == {
+        "runs": ("6",),
+        "recon / median": ("10",),
+        "VIN without it": ("5e-06", "10"),
+        "variants learn": ("2 of 2", "HNN no L2 (weight decay 0)"),
+    }, got
 
 
 def test_the_hnn_seeds_initialisation_is_pytorchs():
@@ -585,12 +619,24 @@ def test_the_seed_protocols_one_element_variant_is_read_by_the_seeds_rule():
     """The diagnosis's no-L2 runs read with claim 11's seed reading: a 100x energy ratio where
     both learn reads reproduced, equal energies not reproduced, an HNN that does not learn not
     tested; the protocol's own rows and a variant on one seed give no line."""
-    (line,) = [x for x in S.variant_lines(_diagnosis(100.0, 10.0)) if x]
-    assert "*no L2 (weight decay 0)*" in line and "**reproduced** (5 seeds" in line
-    assert "learned: HNN yes, MLP yes" in line
-    (line,) = [x for x in S.variant_lines(_diagnosis(1.0, 10.0)) if x]
-    assert "**not reproduced**" in line
-    (line,) = [x for x in S.variant_lines(_diagnosis(100.0, 1.2)) if x]
-    assert "(a) not tested" in line and "HNN no, MLP yes" in line
+
+    def said(*args):
+        (line,) = [x for x in S.variant_lines(_diagnosis(*args)) if x]
+        variant, verdict, n, head, gates = re.fullmatch(
+            r"- .*variant \*(.+?)\* .*?: \*\*(.+?)\*\* \((\d+) seeds; "
+            r".*; \(a\) ([a-z ]+?)(?::.*)?\); learned: (.+)\.",
+            line,
+        ).groups()
+        return variant, verdict, int(n), head, gates
+
+    assert said(100.0, 10.0) == (
+        "no L2 (weight decay 0)",
+        "reproduced",
+        5,
+        "holds",
+        "HNN yes, MLP yes",
+    )
+    assert said(1.0, 10.0)[1:4] == ("not reproduced", 5, "contradicts")
+    assert said(100.0, 1.2)[1:] == ("inconclusive", 5, "not tested", "HNN no, MLP yes")
     assert S.variant_lines(_diagnosis(100.0, 10.0, seeds=[0])) == []
     assert S.variant_lines(None) == []

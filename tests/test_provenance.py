@@ -16,6 +16,7 @@ import jaxlib
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 from bench.core import _provenance as P
 from bench.core import _store
@@ -93,8 +94,13 @@ def test_old_and_new_rows_load_together(tmp_path):
         new, old = (df[df["config_hash"] == h].iloc[0] for h in ("new", "old"))
         assert new["jax_version"] == jax.__version__
         assert pd.isna(old["jax_version"]) and pd.isna(old["git_commit"])
-    table = P.provenance_markdown(_store.load_runs(tmp_path))
-    assert f"{jax.__version__} (1), not recorded (1)" in table
+    table = _fields(P.provenance_markdown(_store.load_runs(tmp_path)))
+    assert table["jax_version"]["profile `quick`"] == f"{jax.__version__} (1), not recorded (1)"
+
+
+def _fields(md):
+    """The provenance table, per field."""
+    return {r["field"]: r for r in table_rows(md, "| field |")}
 
 
 def test_markdown_is_one_column_per_profile():
@@ -103,12 +109,13 @@ def test_markdown_is_one_column_per_profile():
         [_row("1", "quick", **prov), _row("2", "quick", **prov)]
         + [_row("3", "paper", **dict(prov, jax_version="0.11.2", backend="gpu"))]
     )
-    lines = P.provenance_markdown(df).splitlines()
-    assert lines[0] == "| field | profile `paper` | profile `quick` |"
-    assert "| runs | 1 | 2 |" in lines
-    assert "| jax_version | 0.11.2 | 0.10.2 |" in lines
-    assert "| git_commit | aaaaaaaaaa | aaaaaaaaaa |" in lines
-    assert "| git_dirty | clean | clean |" in lines
+    table = _fields(P.provenance_markdown(df))
+    assert list(table["runs"]) == ["field", "profile `paper`", "profile `quick`"]
+    got = {f: (table[f]["profile `paper`"], table[f]["profile `quick`"]) for f in table}
+    assert got["runs"] == ("1", "2")
+    assert got["jax_version"] == ("0.11.2", "0.10.2")
+    assert got["git_commit"] == ("aaaaaaaaaa", "aaaaaaaaaa")
+    assert got["git_dirty"] == ("clean", "clean")
     assert P.provenance_markdown(pd.DataFrame()) == "No runs."
 
 
@@ -119,15 +126,28 @@ def test_compare_warns_on_versions_and_on_what_is_not_recorded():
     b = pd.DataFrame([_row("1", **dict(prov, jax_version="0.11.2", backend="gpu"))])
     warnings = P.compare_provenance(a, b, names=("cpu", "gpu"))
     assert len(warnings) == 2
-    assert f"jax_version differs: {jax.__version__} (cpu) vs 0.11.2 (gpu)" in warnings
+    said = [_warning(w) for w in warnings]
+    assert ("differs", "jax_version", jax.__version__, "cpu", "0.11.2", "gpu") in said
     old = pd.DataFrame([_row("1")])
     warnings = P.compare_provenance(a, old, names=("new", "old"))
     assert len(warnings) == len(P.PROVENANCE_COLUMNS) - 1
-    assert f"jax_version not recorded for 1 runs of old (new: {jax.__version__})" in warnings
+    said = [_warning(w) for w in warnings]
+    assert ("not recorded", "jax_version", "1", "old", "new", jax.__version__) in said
     unknown = pd.DataFrame([_row("1", **dict(prov, numpy_version=P.UNKNOWN))])
-    assert P.compare_provenance(a, unknown) == [
-        f"numpy_version not recorded for 1 runs of b (a: {np.__version__})"
+    warnings = P.compare_provenance(a, unknown)
+    assert [_warning(w) for w in warnings] == [
+        ("not recorded", "numpy_version", "1", "b", "a", np.__version__)
     ]
+
+
+def _warning(w):
+    """A provenance warning read back: ("differs", field, value, folder, value, folder) or
+    ("not recorded", field, runs, folder, other folder, its value)."""
+    m = re.fullmatch(r"(\w+) differs: (.+) \((.+)\) vs (.+) \((.+)\)", w)
+    if m:
+        return ("differs", *m.groups())
+    m = re.fullmatch(r"(\w+) not recorded for (\d+) runs of (\S+) \((\S+): (.+)\)", w)
+    return ("not recorded", *m.groups())
 
 
 def test_backfill_records_what_is_known_and_the_rest_as_unknown(tmp_path):

@@ -7,10 +7,12 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 import zipfile
 
 import numpy as np
 import pytest
+from _markdown import table_rows
 
 from bench.core import RunConfig, _schema, _store, execute_run, expand
 from bench.studies.paper import real_pendulum as P
@@ -175,10 +177,12 @@ def _tables(
 
 
 def test_the_stand_in_alone_gives_no_signed_verdict():
-    v = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, data=(R.SYNTHETIC,)))
+    stand = _tables(energy_ratio=1000.0, spread=0.1, data=(R.SYNTHETIC,))
+    v = P.claim_15(stand)
     assert v.verdict == "inconclusive" and v.variant == P.NOT_RUN, v.detail
-    assert "pipeline check on the synthetic stand-in" in v.detail and "holds" in v.detail
     assert [p.status for p in v.parts] == ["undecided"]
+    check, n = P._part(stand)  # the pipeline check: the part on the stand-in, in the detail
+    assert (check.status, n) == ("holds", 5) and check.text() in v.detail
 
 
 def test_real_data_far_below_is_reproduced_and_equal_is_not():
@@ -199,11 +203,16 @@ def test_a_frozen_state_as_conserving_as_the_hnn_is_said():
     """The seed's energy MSE on data that loses energy: a frozen state within the energy
     margin of the HNN's score is named beside the verdict (which it does not change); one far
     above it is not."""
-    tied = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.2e-2))
-    assert tied.verdict == "reproduced" and "frozen state dz/dt = 0" in tied.detail, tied.detail
-    assert "rollout error MLP 0.1, HNN 0.01, frozen 0.5" in tied.detail, tied.detail
-    far = P.claim_15(_tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.0))
-    assert far.verdict == "reproduced" and "frozen state" not in far.detail, far.detail
+    rows = _tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.2e-2)
+    tied, note = P.claim_15(rows), P._frozen_note(rows)
+    assert tied.verdict == "reproduced" and note and note in tied.detail, tied.detail
+    errors = dict(
+        x.split(" ") for x in re.search(r"rollout error (.+)\)$", note).group(1).split(", ")
+    )
+    assert errors == {"MLP": "0.1", "HNN": "0.01", "frozen": "0.5"}, note
+    rows = _tables(energy_ratio=1000.0, spread=0.1, frozen_energy=1.0)
+    far = P.claim_15(rows)
+    assert far.verdict == "reproduced" and P._frozen_note(rows) == "", far.detail
 
 
 def test_real_data_undecided_at_the_margin_or_unlearned():
@@ -221,8 +230,10 @@ def test_section_and_figure_say_which_data(tmp_path):
     r, curves = _tables(energy_ratio=100.0, data=(R.SYNTHETIC,), frames=True)
     r.to_parquet(tmp_path / "runs.parquet", index=False)
     curves.to_parquet(tmp_path / "curves.parquet", index=False)
-    text = P.section(tmp_path)
-    assert "| the seed's |" in text and "| synthetic stand-in |" in text
-    assert "0.386 / 0.0145" in text and "| 1 / 0.01 |" in text
+    table = {row["data"]: row for row in table_rows(P.section(tmp_path), "| data | sha256")}
+    assert list(table) == ["the seed's", "synthetic stand-in"]  # one line per data source
+    mlp, hnn = P.SEED_NUMBERS["energy_mse"]
+    assert table["the seed's"]["energy MSE MLP / HNN"] == f"{mlp:.3g} / {hnn:.3g}"
+    assert table["synthetic stand-in"]["energy MSE MLP / HNN"] == "1 / 0.01"  # 100x, built
     paths = P.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"}

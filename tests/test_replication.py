@@ -6,6 +6,8 @@ experiment (claim 3's cells, which claims 1, 4 and 6 read too): judge() evaluate
 up to seven times, and a small table keeps each test to a few seconds.
 """
 
+import re
+
 import pandas as pd
 import pytest
 from _synthetic import synthetic_tables
@@ -16,8 +18,10 @@ from bench.kit import evaluate_claims
 from bench.kit._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
+    disagreement,
     judge,
     pooled_moves,
+    reversed_parts,
     seed_sets,
     seed_span,
     settled,
@@ -115,9 +119,11 @@ def test_disagreeing_seed_sets_do_not_replicate(
     assert j.primary["3"].verdict == primary and j.replication["3"].verdict == replication
     assert final["3"].verdict == DOES_NOT_REPLICATE and not settled(final["3"].verdict)
     assert j.replicates("3") is False
-    assert final["3"].detail.startswith(f"seeds 0-4: {primary}; seeds 5-9: {replication}; ")
-    assert "reverses" in final["3"].detail.split(". ")[0]
-    assert final["3"].detail.endswith(j.primary["3"].detail)
+    flipped = reversed_parts(j.primary["3"], j.replication["3"])
+    assert flipped  # a part holds on one set and is contradicted on the other
+    # the detail: the readings, why they cannot be pooled, then the primary seeds' detail
+    why = "; ".join(disagreement(j.primary["3"], j.replication["3"]))
+    assert final["3"].detail == f"{final['3'].readings}; {why}. {j.primary['3'].detail}"
     # the demoted reading and the readings behind it, for the report's causes
     assert final["3"].primary == primary
     assert final["3"].readings == f"seeds 0-4: {primary}; seeds 5-9: {replication}"
@@ -130,9 +136,11 @@ def test_disagreeing_seed_sets_do_not_replicate(
     # why: the parts the sets read in reverse, each with its effect on both; the pooled
     # reading shown for information, never the verdict
     why = why_not_replicated(j, "3")
-    assert why.startswith("**") and "reverse" in why.split(":")[0], why
-    assert f"on seeds 0-4 ({fmt(j.primary['3'].parts[0].point)}" in why
-    assert f"pooled 0-9, for information: {j.pooled_any['3'].verdict}" in why
+    assert re.match(r"\*\*(\d+) parts? reverses?\*\*", why).group(1) == str(len(flipped)), why
+    moved = _moved(why)  # each part whose status differs, with its estimate on both sets
+    first = j.primary["3"].parts[0]
+    assert moved[first.name][:2] == (first.status, fmt(first.point)), why
+    assert why.endswith(f", for information: {j.pooled_any['3'].verdict}"), why  # pooled
     assert "3" not in j.pooled and j.pooled_any["3"].n_seeds == 10
     assert why_not_replicated(j, "5") is None
 
@@ -275,8 +283,8 @@ def test_a_part_left_undecided_on_the_other_set_adds_evidence(
     assert j.replication["3"].verdict == R.INCONCLUSIVE
     assert j.replicates("3") is True and why_not_replicated(j, "3") is None
     assert _final(j)["3"] is j.pooled["3"] and j.pooled["3"].n_seeds == 10
-    said = pooled_moves(j, "3")
-    assert said.startswith(f"seeds 0-4 read {R.REPRODUCED}, seeds 5-9 {R.INCONCLUSIVE}"), said
+    said = _added_up(pooled_moves(j, "3"))
+    assert said[:3] == (R.REPRODUCED, R.INCONCLUSIVE, j.pooled["3"].verdict), said
 
 
 def test_estimates_that_differ_beyond_chance_do_not_replicate(
@@ -297,9 +305,11 @@ def test_estimates_that_differ_beyond_chance_do_not_replicate(
     assert statuses == ["holds", "holds"]
     final = _final(j)["3"]
     assert final.verdict == DOES_NOT_REPLICATE and j.replicates("3") is False
-    assert f"{name}: the seed sets' estimates differ (Welch p = " in final.detail
+    reasons = disagreement(j.primary["3"], j.replication["3"])  # the estimates differ
+    assert len(reasons) == 1 and reasons[0].startswith(f"{name}: ") and reasons[0] in final.detail
+    assert reversed_parts(j.primary["3"], j.replication["3"]) == []
     why = why_not_replicated(j, "3")
-    assert why.startswith("no part reverses (holds <-> contradicts), but "), why
+    assert not re.match(r"\*\*\d+ parts? reverse", why) and reasons[0] in why, why
 
 
 @pytest.mark.parametrize("stronger", [1.0, 2.0, 4.0])
@@ -351,13 +361,11 @@ def test_pooling_that_resolves_a_part_is_said(
     j = judge(runs, curves, PROFILE, loso=False)
     assert j.primary["3"].verdict == j.replication["3"].verdict == R.INCONCLUSIVE
     assert _final(j)["3"].verdict == R.REPRODUCED and j.replicates("3") is True
-    said = pooled_moves(j, "3")
+    said = _added_up(pooled_moves(j, "3"))
     name = j.pooled["3"].parts[0].name
-    assert said.startswith(
-        f"seeds 0-4 read {R.INCONCLUSIVE}, seeds 5-9 {R.INCONCLUSIVE}; they add up, pooled "
-        f"{R.REPRODUCED}: "
-    ), said
-    assert f"{name}: holds on 0-9 (" in said and "undecided on 0-4, undecided on 5-9" in said
+    assert said[:3] == (R.INCONCLUSIVE, R.INCONCLUSIVE, R.REPRODUCED), said
+    # the part ten seeds resolve: its pooled status, then each set's
+    assert said[3][name] == ("holds", "0-9", "undecided", "undecided"), said
     assert pooled_moves(j, "5") is None and why_not_replicated(j, "3") is None
 
 
@@ -388,7 +396,8 @@ def test_a_part_reversed_without_a_seed_demotes_the_verdict(reproduce_primary, m
     assert [s for s, _ in j.loso_reversals("3")] == [2]
     v = _final(j)["3"]
     assert v.verdict == CHANGES_WITHOUT_A_SEED and v.primary == R.REPRODUCED
-    assert "without seed 2: chain_pendulum: (a) log(NODE / NODE+SO) reversed" in v.readings
+    ((_, parts),) = j.loso_reversals("3")
+    assert parts == ["chain_pendulum: (a) log(NODE / NODE+SO)"] and parts[0] in v.readings
 
 
 def test_leave_one_seed_out_needs_more_than_one_seed(reproduce_primary):
@@ -436,3 +445,29 @@ def test_a_claims_declared_runs_count_every_study_that_declares_its_experiments(
     ours = {c.config_hash for c in expand("relativistic", "paper-core")}
     seeds = {c.config_hash for c in expand("relativistic_seed", "paper-core")}
     assert seeds and counts[7] == (0, len(ours | seeds))
+
+
+def _moved(why):
+    """The parts :func:`why_not_replicated` names, read back: name -> (status on seeds 0-4, its
+    estimate, status on seeds 5-9)."""
+    found = re.findall(
+        r"(?:: |; )([^;]+?): (\w[\w ]*?) on seeds \S+ \((\S+?)[ )][^;]*?, (\w[\w ]*?) on seeds",
+        why,
+    )
+    return {name: (a, est, b) for name, a, est, b in found}
+
+
+def _added_up(said):
+    """:func:`pooled_moves` read back: (seeds 0-4's verdict, seeds 5-9's, the pooled one,
+    {part: (pooled status, pooled seeds, status on 0-4, status on 5-9)})."""
+    head, _, text = said.partition(": ")
+    first, second, pooled = re.fullmatch(
+        r"seeds \S+ read (.+), seeds \S+ (.+); they add up, pooled (.+)", head
+    ).groups()
+    statuses = r"holds|contradicts|undecided|not tested|-"
+    parts = re.findall(
+        rf"([^;]+?): ({statuses}) on (\S+) \([^)]*\); ({statuses}) on \S+, ({statuses}) on \S+",
+        text,
+    )
+    moved = {n.strip(): (s, both, a, b) for n, s, both, a, b in parts}
+    return first, second, pooled, moved

@@ -3,8 +3,11 @@ tables built to pass, to fail and to be undecided (no training)."""
 
 from __future__ import annotations
 
+import re
+
 import pandas as pd
 import pytest
+from _markdown import table_rows
 from _synthetic import cell_tables
 
 from bench.core import expand
@@ -117,8 +120,10 @@ def test_the_stable_rate_is_a_reading_beside_the_verdict_not_a_part_of_it(stable
     assert R.stable_lr_reading(paper) is None
     stable = R.stable_lr_reading(rows)
     assert stable.verdict == reading
-    assert f"lr {R.STABLE_LR:g}" in v.detail and f"not judged: {reading} (" in v.detail
-    assert f"lr {R.STABLE_LR:g}" not in alone.detail
+    # the stable reading only adds to the detail: its verdict and its parts' statuses
+    extra = v.detail.removeprefix(alone.detail)
+    assert extra != v.detail and stable.verdict in extra
+    assert all(f"{q.name}: {q.status}" in extra for q in stable.parts if q.role != "condition")
     # the stable reading is undecided on noise like any other
     _, noisy = _with_stable_lr(lost, stable_errors, spread=3.0)
     assert R.stable_lr_reading(noisy).verdict == "inconclusive"
@@ -136,20 +141,22 @@ def test_the_reports_tables_tell_the_two_rates_apart():
     from bench._tables import _experiment_table, _missing_cells, discrimination_groups
 
     _, rows = _with_stable_lr(REPRODUCE, CONTRADICT)
-    table = _experiment_table(rows)
-    assert table[0].startswith("| system | variant | coordinates | lr | seeds |")
-    rotor_hnn = [line for line in table if line.startswith("| rotor | hnn_so |")]
-    assert sorted(line.split(" | ")[3] for line in rotor_hnn) == ["0.001", "0.005"]
+    table = table_rows("\n".join(_experiment_table(rows)), "| system |")
+    assert list(table[0])[:5] == ["system", "variant", "coordinates", "lr", "seeds"]
+    rotor_hnn = [r for r in table if (r["system"], r["variant"]) == ("rotor", "hnn_so")]
+    assert sorted(r["lr"] for r in rotor_hnn) == ["0.001", "0.005"]
     # the stable rate's HNN (CONTRADICT: ahead of the NODE) is the rotor's best variant
     rotor = next(d for d in discrimination_groups(rows) if d.group == "system=rotor")
     assert rotor.best == f"hnn_so lr={R.STABLE_LR:g}"
     paper_only = rows[rows["lr"] == R.PAPER_LR]
     (line, _) = _missing_cells(paper_only, "rigid_bodies", "paper-core")
-    assert f"NODE on rotor lr={R.STABLE_LR:g}" in line
-    assert f"lr={R.PAPER_LR:g}" not in line
+    missing = re.fullmatch(r"No runs for \d+ declared cells \(every seed\): (.*)\.", line)
+    cells = missing.group(1).split("; ")  # every missing cell at the stable rate only
+    assert f"NODE on rotor lr={R.STABLE_LR:g}" in cells
+    assert all(c.endswith(f"lr={R.STABLE_LR:g}") for c in cells), cells
     # a protocol that gives each model its own rate: the rate names no cell
     own = paper_only.assign(lr=paper_only["model"].map({"hnn_so": R.STABLE_LR}).fillna(R.PAPER_LR))
-    assert " lr " not in _experiment_table(own)[0]
+    assert "lr" not in table_rows("\n".join(_experiment_table(own)), "| system |")[0]
     assert all(" lr=" not in d.best for d in discrimination_groups(own))
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -46,7 +47,16 @@ def test_the_footnote_part_holds_is_contradicted_or_stays_undecided(tables):
     p = _part(claim_1(runs, curves))  # a thousandth of the violation is the solver's
     assert p.status == "holds" and p.kind == "greater" and p.quantity == "energy", p.text()
     assert p.point == pytest.approx(math.log(1e3), abs=0.1) and p.n == 5
-    assert "solver drift" in p.note and "NODE" in p.note  # the NODEs reported, not judged
+    # per system its drift and each model's violation / drift, the NODEs' reported, not judged
+    said = {
+        system: dict(x.rsplit(" ", 1) for x in ratios.split(", "))
+        for system, ratios in re.findall(
+            r"(\w+): solver drift \S+; violation / drift ([^;]+)", p.note
+        )
+    }
+    assert set(said) == {"chain_pendulum", "spring_pendulum"}, p.note
+    assert all(set(r) == {"HNN+SO", "NODE", "NODE+SO"} for r in said.values()), p.note
+    assert [g.label for g in p.gates] == ["HNN+SO on chain_pendulum", "HNN+SO on spring_pendulum"]
     # the violation is all the solver's: contradicted
     p = _part(claim_1(_with_drift(runs, 1.0), curves))
     assert p.status == "contradicts", p.text()
@@ -65,14 +75,15 @@ def test_the_footnote_part_is_not_tested_where_the_hnn_did_not_learn(tables):
     stuck = runs.copy()
     stuck.loc[chain, "rollout_error"] = 0.9  # no better than constant velocity
     p = _part(claim_1(stuck, curves))
-    assert p.status == "not tested" and "HNN+SO on chain_pendulum" in p.note, p.text()
+    assert p.status == "not tested", p.text()
+    assert [g.label for g in p.gates if g.open is False] == ["HNN+SO on chain_pendulum"]
 
 
 def test_no_drift_to_be_had_leaves_the_part_undecided(tables, monkeypatch):
     runs, curves = tables
     monkeypatch.setattr(D, "_cached", lambda config, root: math.nan)
     p = _part(claim_1(runs.drop(columns=[D.COLUMN]), curves))
-    assert p.status == "undecided" and "no solver drift" in p.note
+    assert p.status == "undecided" and p.n == 0 and not p.gates, p.text()
 
 
 def test_the_solver_drift_is_the_true_field_under_the_runs_integrator(tmp_path):

@@ -12,6 +12,7 @@ import jax
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import section, table_rows
 
 from bench.studies import stability as S
 
@@ -196,11 +197,9 @@ def test_run_stability_smoke_writes_everything(tmp_path):
     ok = df[df["outcome"] == "ok"]
     assert np.all(np.isfinite(ok["value"]))
     assert set(df["case"]) == set(S.CASES)
-    text = S.stability_section(tmp_path)
-    assert text.startswith("## Numerical stability\n")
+    text = section(S.stability_section(tmp_path), "Numerical stability")
     for case, g in df.groupby("case"):  # one table per case, a row per variant and metric
-        table = text.split(f"\n### {case}\n")[1].split("\n### ")[0]
-        assert sum(x.startswith("| ") for x in table.splitlines()) == 2 + len(g), case
+        assert len(table_rows(section(text, case), "|")) == len(g), case
 
 
 @pytest.mark.slow  # keeps make test under 10 min on a 2-core CPU

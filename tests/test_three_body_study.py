@@ -5,10 +5,12 @@ data.py, and its verdict rule on synthetic tables built to pass, to fail and to 
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import table_rows
 
 from bench.core import _store, expand
 from bench.kit import policy
@@ -74,7 +76,10 @@ def test_energy_far_below_the_baselines_is_reproduced():
     v = T.claim_14(_tables(energy_ratio=1000.0, spread=0.1))
     assert v.verdict == "reproduced", v.detail
     assert v.effect == pytest.approx(math.log(1000.0), rel=1e-6)
-    assert "both struggle, not tested" in v.detail
+    # "both struggle" is reported beside, not tested: each model's rollout error in the detail
+    said = dict(re.findall(r"(MLP|HNN|trivial) rollout error ([^,;]+)", v.detail))
+    assert said == {"MLP": "0.05", "HNN": "0.04", "trivial": "0.8"}, v.detail
+    assert [p.name.split(":")[0] for p in v.parts] == ["(a) three_body"]
 
 
 def test_equal_energy_error_is_not_reproduced():
@@ -93,7 +98,7 @@ def test_a_baseline_that_learned_nothing_is_the_claims_content_not_a_gap():
     # says it "struggled"): the foil is never gated, so the HNN's edge is still judged
     v = T.claim_14(_tables(energy_ratio=1000.0, spread=0.1, mlp_error=0.6))
     assert v.parts[0].status == "holds", v.detail
-    assert not any("MLP on three_body" in g.text for g in v.parts[0].gates)
+    assert [g.label for g in v.parts[0].gates] == ["HNN on three_body"]  # no MLP gate
 
 
 def test_fewer_than_five_seeds_or_no_runs_are_inconclusive():
@@ -104,9 +109,11 @@ def test_fewer_than_five_seeds_or_no_runs_are_inconclusive():
 
 def test_section_and_figure_from_a_results_folder(tmp_path):
     _tables(energy_ratio=100.0).to_parquet(tmp_path / "runs.parquet", index=False)
-    text = T.section(tmp_path)
-    line = next(x for x in text.splitlines() if x.startswith("| 5 |"))
-    assert "109 / 0.0419" in line  # the seed's energy MSE
-    assert "| 1 / 0.01 |" in line and "0.05 / 0.04 / 0.8" in line  # ours
+    (row,) = table_rows(T.section(tmp_path), "| seeds |")
+    mlp, hnn = T.SEED_NUMBERS["energy_mse"]
+    assert row["seeds"] == "5"
+    assert row["energy MSE MLP / HNN (seed)"] == f"{mlp:.3g} / {hnn:.3g}" == "109 / 0.0419"
+    assert row["energy MSE (ours)"] == "1 / 0.01"  # 100x, built so
+    assert row["rollout error MLP / HNN / trivial (ours)"] == "0.05 / 0.04 / 0.8"
     paths = T.figure(tmp_path)
     assert {p.suffix for p in paths} == {".png", ".pdf"}

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
+from _markdown import section, table_rows
 
 from bench.core import _experiments as E
 from bench.studies import tradeoff as T
@@ -183,9 +186,9 @@ def test_section_and_figure_from_a_store(tmp_path):
     pick = T.cheapest_within(T.aggregate_seeds(runs), "rollout_seconds_per_traj")
     assert len(pick) and (pick["error_ratio"] <= 1.1 + 1e-12).all()
     text = T.tradeoff_section(tmp_path)
-    table = text.split("\n### Pareto front")[1].split("\n### ")[0].splitlines()
-    assert sum(x.startswith("| ") for x in table) == 2 + len(front)  # head, rule, the rows
-    assert "\n### Cheapest configuration" in text
+    shown = table_rows(section(text, "Pareto front per model"), "|")
+    assert [r["config"] for r in shown] == list(front["config"])  # a row per configuration
+    assert section(text, "Cheapest configuration within 10% of the best error, by rollout seconds")
     paths = T.tradeoff_figure(tmp_path)
     assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths)
 
@@ -194,15 +197,24 @@ def test_the_section_names_the_machines_and_warns_when_they_differ(tmp_path):
     """Costs are times: the section names the machine that measured them, and says the fronts
     are not comparable where two machines did; a store without the fields says so."""
     rows = _synthetic_store(tmp_path)
-    assert "Costs measured on: not recorded." in T.tradeoff_section(tmp_path)
+    assert _machines(T.tradeoff_section(tmp_path)) == ([], False)  # not recorded
     runs = pd.DataFrame(rows).assign(device="cpu A", cpu_family_model="6/85")
     runs.to_parquet(tmp_path / "runs.parquet")
-    assert f"one machine: cpu A 6/85 ({len(runs)} runs)." in T.tradeoff_section(tmp_path)
+    one = [("cpu A 6/85", len(runs))]
+    assert _machines(T.tradeoff_section(tmp_path)) == (one, False)
     runs.loc[runs.index[:3], "device"] = "cpu B"
     runs.to_parquet(tmp_path / "runs.parquet")
-    text = T.tradeoff_section(tmp_path)
-    assert "2 machines: cpu A 6/85" in text and "cpu B 6/85 (3 runs)" in text
-    assert "not comparable" in text
+    two = [("cpu A 6/85", len(runs) - 3), ("cpu B 6/85", 3)]
+    assert _machines(T.tradeoff_section(tmp_path)) == (two, True)  # and the warning
+
+
+def _machines(text):
+    """The section's machines line read back: each machine with its number of runs, and
+    whether a warning follows them."""
+    (line,) = [x for x in text.splitlines() if x.startswith("Costs measured on")]
+    said, _, warning = line.partition(". ")
+    found = re.findall(r"([^:;]+?) \((\d+) runs\)", said)
+    return [(m.strip(), int(n)) for m, n in found], bool(warning)
 
 
 def test_the_figure_leaves_a_cost_the_rows_lack_blank(tmp_path):
@@ -229,7 +241,10 @@ def test_table_lists_every_evaluated_method(tmp_path):
     row = got[got.config.str.startswith("implicit_midpoint")].iloc[0]
     assert row.on_front == "no"
     assert (got.on_front == "yes").any()
-    assert "implicit midpoint" in T.methods_legend(runs)
+    from models import DESCRIPTIONS
+
+    legend = dict(re.findall(r"`([^`]+)` = ([^;]+?)(?:;|\.$)", T.methods_legend(runs)))
+    assert legend["implicit_midpoint"] == DESCRIPTIONS["implicit_midpoint"]
 
 
 def test_label_forms():

@@ -48,17 +48,22 @@ def test_an_undiscriminating_system_voids_only_its_own_parts(chain, expected):
     does)."""
     discs = [_disc("chain_pendulum", "yes"), _disc("spring_pendulum (paper)", "no")]
     v = _claim(chain, REVERSED, discs)
-    spring = {p.name: p for p in v.parts}["spring edge"]
-    assert spring.status == "not tested" and "not discriminating on spring_pendulum" in spring.note
+    parts = {p.name: p for p in v.parts}
+    spring, rest = parts.pop("spring edge"), list(parts.values())
+    assert spring.status == "not tested" and discs[1].group in spring.note  # the reason
+    assert rest and all(p.status != "not tested" for p in rest)  # the chain's still read
     assert v.verdict == expected, v.detail
     assert v.discriminating is False
-    assert v.detail.startswith("not discriminating on spring_pendulum (paper): its parts")
+    lead = v.detail.split(";")[0]  # the detail leads with the group that voids its parts
+    assert discs[1].group in lead and discs[0].group not in lead
 
 
 def test_a_part_pooling_an_undiscriminating_system_leaves_the_claim_inconclusive():
     discs = [_disc("chain_pendulum", "yes"), _disc("rotor", "no")]
     v = _claim(CLEAR, CLEAR, discs, pooled=True)
-    assert v.verdict == R.INCONCLUSIVE and v.detail.startswith("NOT DISCRIMINATING")
+    assert v.verdict == R.INCONCLUSIVE and v.discriminating is False, v.detail
+    assert {p.status for p in v.parts if p.role == "part"} == {"holds"}  # none voids alone
+    assert "rotor" in v.detail.split(";")[0]  # the detail leads with why
 
 
 def test_no_system_discriminating_is_inconclusive():
