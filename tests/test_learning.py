@@ -62,20 +62,27 @@ def _checkpoints(scenarios, sequence, drop_experiment=None):
 
 
 def _hybrid(scenarios, name):
-    """Scenario ``name``'s trained runs with the final table's trivial predictors: what the
-    runs table at a checkpoint holding scenario ``name`` must be (built here with pandas)."""
+    """What the runs table at a checkpoint holding scenario ``name`` must be (built here with
+    pandas): the final table, its trained runs' checkpoint metrics (``SCORES``), status and
+    training time taken from scenario ``name``; a run's other columns (e.g. the achieved
+    symplectic error) are recorded once, at the end, and stay the final table's."""
     runs, curves = scenarios[name]
     final_runs, final_curves = scenarios["reproduce"]
-    trivial = final_runs[~_trained(final_runs)]
-    runs = pd.concat([runs[_trained(runs)], trivial], ignore_index=True)
+    out = final_runs.copy()
+    src = runs.set_index("config_hash")
+    rows = _trained(out)
+    for col in (*SCORES, "status", "train_seconds"):
+        if col in src.columns:
+            out.loc[rows, col] = src.loc[out.loc[rows, "config_hash"], col].to_numpy()
+    trivial = out.loc[~rows, "config_hash"]
     curves = pd.concat(
         [
-            curves[curves["config_hash"].isin(runs.loc[_trained(runs), "config_hash"])],
-            final_curves[final_curves["config_hash"].isin(trivial["config_hash"])],
+            curves[curves["config_hash"].isin(out.loc[rows, "config_hash"])],
+            final_curves[final_curves["config_hash"].isin(trivial)],
         ],
         ignore_index=True,
     )
-    return runs, curves
+    return out, curves
 
 
 def _keyed(verdicts):

@@ -111,7 +111,9 @@ def verdicts_along_curve(
     """One row per (verdict, checkpoint): key, claim, position, fraction (nominal, of the
     budget), step (median over the claim's trained runs; NaN where they train for different
     numbers of steps), verdict, effect. Claims whose trained
-    runs lack checkpoints are left out. Empty when no run has checkpoints."""
+    runs lack checkpoints are left out. Empty when no run has checkpoints. At a checkpoint a
+    run has its checkpoint metrics (:data:`SCORES`); what a run records only at its end (the
+    achieved symplectic error of claim 2) stays the final value."""
     cols = ["key", "claim", "position", "fraction", "step", "verdict", "effect"]
     if not len(checkpoints) or not len(runs):
         return pd.DataFrame(columns=cols)
