@@ -51,11 +51,10 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     h = {n: {c.config_hash for c in E.expand(n, profile)} for n in NAMES}
     suite = {c.config_hash for c in E.expand("second_order", profile) if is_suite_cell(c)}
     assert suite <= h["energy"]
-    # the paper's form of the four models (k = 2, paper budgets): NODE+SO's cells are claim 4's
+    # the paper's form of the four models (k = 2, the paper profile): NODE+SO's cells are
+    # claim 4's
     form = {c.config_hash: c for c in E.expand("second_order", profile) if not is_suite_cell(c)}
-    assert {c.k for c in form.values()} <= {2} and bool(form) == (
-        profile in ("paper", "paper-core")
-    )
+    assert {c.k for c in form.values()} <= {2} and bool(form) == (profile == "paper")
     pq = {h_ for h_, c in form.items() if c.model == "node_so_pq"}
     assert pq <= h["coordinates"]
     paper_init = {
