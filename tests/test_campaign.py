@@ -465,12 +465,12 @@ def test_a_replication_runs_only_cells_whose_own_seeds_are_stored(tmp_path):
     """A replication run waits for its cell on every one of the profile's own seeds: a cell
     declared since the last campaign runs seeds 0-4 before 5-9."""
     own = E.expand("coordinates", "paper-core")
-    cell = [c for c in own if c.model == "node_so_pq" and c.system == "chain_pendulum"]
+    cell = [c for c in own if c.model == "node_so" and c.system == "chain_pendulum"]
     assert sorted(c.seed for c in cell) == [0, 1, 2, 3, 4]
     for c in cell[:4]:  # four of its five own seeds
         _store.write_row(tmp_path, {**c.to_dict(), "config_hash": c.config_hash, "status": "ok"})
     rep = E.expand("coordinates", "paper-core", seeds=E.replication_seeds("paper-core"))
-    mine = [c for c in rep if c.model == "node_so_pq" and c.system == "chain_pendulum"]
+    mine = [c for c in rep if c.model == "node_so" and c.system == "chain_pendulum"]
     ready = C.replicable(tmp_path, "paper-core", ["coordinates"])
     assert mine and not any(map(ready, mine))
     last = cell[4]

@@ -57,6 +57,8 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     assert {c.k for c in form.values()} <= {2} and bool(form) == (profile == "paper")
     pq = {h_ for h_, c in form.items() if c.model == "node_so_pq"}
     assert pq <= h["coordinates"]
+    coords_pq = {c.k for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
+    assert coords_pq == {"paper": {1, 2, 3, 4}, "paper-k": {1, 3, 4}}.get(profile, set())
     paper_init = {
         c.config_hash
         for c in E.expand("coordinates", profile)
@@ -65,7 +67,7 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     # the paper's own form of NODE+SO: at its budget, for claim 4 alone
     pq = {c.system_params for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
-    assert pq == ({(), P.SPRING_PAPER} if profile.startswith("paper") else set())
+    assert pq == ({(), P.SPRING_PAPER} if profile in ("paper", "paper-k") else set())
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
     # claim 6 is not run at quick, nor at paper-k (which sweeps k in Figs. 2-5 only)

@@ -113,14 +113,14 @@ def paper_form(runs):
     return in_form(runs, PAPER_FORM, others=("node_so",))
 
 
-def has_paper_form(runs) -> bool:
-    """Whether any row is a paper-form cell (``node_so_pq``, or a model with its paper options)."""
+def has_paper_form(runs, roles=PAPER_MODELS) -> bool:
+    """Whether any row is a paper-form cell of one of ``roles`` (``node_so_pq`` for node_so, a
+    model with its paper options for node and hnn)."""
     if not len(runs):
         return False
     opts = row_options(runs)
-    extra = {(m, tuple(sorted(o))) for m, o in PAPER_FORM.values()} - {
-        (m, ()) for m in PAPER_MODELS
-    }
+    extra = {(m, tuple(sorted(o))) for r, (m, o) in PAPER_FORM.items() if r in roles}
+    extra -= {(m, ()) for m in PAPER_MODELS}
     return any((m, o) in extra for m, o in zip(runs["model"], opts, strict=True))
 
 

@@ -88,7 +88,7 @@ def claim_3(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list[Verd
     cells is stored (:data:`~bench.studies.paper._common.PAPER_FORM`; the verdict labelled
     "the paper's models"): :func:`claim_3_form` on each."""
     out = [claim_3_form(suite_form(runs))]
-    if has_paper_form(runs):
+    if has_paper_form(runs, roles=("node", "hnn")):  # not claim 4's NODE+SO cells alone
         out.append(claim_3_form(paper_form(runs), variant="the paper's models"))
     return out
 
