@@ -3,11 +3,11 @@ predictors (parameter-free references that every claim's models must beat)."""
 
 from __future__ import annotations
 
-import json
-
 import pandas as pd
 
 import models
+
+from ..core import params_of
 
 __all__ = ["MODEL_LABELS", "TRIVIAL_MODELS", "in_form", "row_options"]
 
@@ -33,18 +33,9 @@ MODEL_LABELS = {
 
 
 def row_options(runs) -> pd.Series:
-    """Each row's ``model_options`` as a sorted tuple of (name, value) pairs (the store keeps
-    them as JSON text; a missing or empty value is ``()``)."""
-
-    def one(v):
-        if v is None or (isinstance(v, float) and v != v) or v == "":
-            return ()
-        pairs = json.loads(v) if isinstance(v, str) else v
-        return tuple(sorted((str(a), b) for a, b in pairs))
-
-    if "model_options" not in runs:
-        return pd.Series([()] * len(runs), index=runs.index, dtype=object)
-    return runs["model_options"].map(one)
+    """Each row's ``model_options`` as a sorted tuple of (name, value) pairs (``()`` where
+    missing or empty), read by the store's one parser (``bench.core.params_of``)."""
+    return params_of(runs, "model_options").map(lambda d: tuple(sorted(d.items())))
 
 
 def in_form(runs, form: dict, others=()) -> pd.DataFrame:
