@@ -50,7 +50,7 @@ PAPER_CELLS = {
     },
 }
 DAMPED = {
-    "reproduce": {"node": 0.08, "node_so": 0.03, "hnn_so": 0.3, "mixture_hnn": 0.028, "ray": 0.02},
+    "reproduce": {"node": 0.08, "node_so": 0.03, "hnn_so": 0.3, "mixture_hnn": 0.028, "ray": 0.028},
     "contradict": {"node": 0.08, "node_so": 0.1, "hnn_so": 0.01, "mixture_hnn": 0.01, "ray": 0.01},
 }
 # (model, coordinates, momentum_map) -> error on (q, qdot)

@@ -11,7 +11,7 @@ from _synthetic import synthetic_tables
 from bench import kit as R
 from bench.core import expand
 from bench.kit import evaluate_claims, seed_span
-from bench.studies.paper.coordinates import fig_links
+from bench.studies.paper.coordinates import PAPER_BUDGET_MODELS, fig_links
 from bench.studies.paper.report import _links as L
 
 
@@ -29,10 +29,9 @@ def test_the_selections_split_the_paper_cells_by_k():
     core = {c.config_hash for c in expand("coordinates", "paper-core")}
     links = {c.config_hash for c in expand("coordinates", "paper-k")}
     paper = {c.config_hash: c for c in expand("coordinates", "paper")}
-    assert core | links <= set(paper) and not core & links
-    # the paper's form of NODE+SO at k = 2 is the paper profile's (paper-core reads its rows)
-    rest = {(c.model, c.k) for h, c in paper.items() if h not in core | links}
-    assert rest == {("node_so_pq", 2)}
+    # together they are the paper profile's cells, the paper's form of NODE+SO included
+    assert core | links == set(paper) and not core & links
+    assert {c.model for c in paper.values() if c.k == 2} == set(PAPER_BUDGET_MODELS)
     assert {c.k for c in expand("coordinates", "paper-k")} == {1, 3, 4}
     assert {c.k for c in expand("second_order", "paper-k")} == {1, 3, 4}
     assert {c.k for c in expand("symplectic", "paper-k")} == {3, 4}

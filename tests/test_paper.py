@@ -51,14 +51,16 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     h = {n: {c.config_hash for c in E.expand(n, profile)} for n in NAMES}
     suite = {c.config_hash for c in E.expand("second_order", profile) if is_suite_cell(c)}
     assert suite <= h["energy"]
-    # the paper's form of the four models (k = 2, the paper profile): NODE+SO's cells are
+    # the paper's form of the four models (k = 2, at the paper's budget): NODE+SO's cells are
     # claim 4's
     form = {c.config_hash: c for c in E.expand("second_order", profile) if not is_suite_cell(c)}
-    assert {c.k for c in form.values()} <= {2} and bool(form) == (profile == "paper")
+    assert {c.k for c in form.values()} <= {2}
+    assert bool(form) == (profile in ("paper", "paper-core"))
     pq = {h_ for h_, c in form.items() if c.model == "node_so_pq"}
     assert pq <= h["coordinates"]
     coords_pq = {c.k for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
-    assert coords_pq == {"paper": {1, 2, 3, 4}, "paper-k": {1, 3, 4}}.get(profile, set())
+    want = {"paper": {1, 2, 3, 4}, "paper-core": {2}, "paper-k": {1, 3, 4}}
+    assert coords_pq == want.get(profile, set())
     paper_init = {
         c.config_hash
         for c in E.expand("coordinates", profile)
@@ -67,7 +69,7 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     # the paper's own form of NODE+SO: at its budget, for claim 4 alone
     pq = {c.system_params for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
-    assert pq == ({(), P.SPRING_PAPER} if profile in ("paper", "paper-k") else set())
+    assert pq == ({(), P.SPRING_PAPER} if profile in ("paper", "paper-core", "paper-k") else set())
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
     # claim 6 is not run at quick, nor at paper-k (which sweeps k in Figs. 2-5 only)

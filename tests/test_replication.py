@@ -471,3 +471,44 @@ def _added_up(said):
     )
     moved = {n.strip(): (s, both, a, b) for n, s, both, a, b in parts}
     return first, second, pooled, moved
+
+
+def test_a_further_reading_joins_its_claim_whole_and_never_holds_it_pending():
+    """Claim 5's Rayleigh HNN is a further reading of paper-core (``Experiment.supplementary``):
+    stored on some seeds only, the claim is judged on its own cells, without that reading (not
+    with the seeds that happen to be done), and the report says how many runs it waits for;
+    stored whole, it is a verdict of its own."""
+    from bench.core import get, is_supplementary
+    from bench.studies.paper.report._comparison import pending
+
+    runs, curves = synthetic_tables("paper-core", seeds=PRIMARY, experiments=("damped",))
+    ray = runs["dissipation"].eq(True)
+    assert ray.sum() == 10 and all(is_supplementary(get("damped"), c) for c in _configs(runs[ray]))
+    part = runs[~ray | runs["seed"].isin((0, 1, 2))].reset_index(drop=True)
+    assert R.stored_counts(part, "paper-core")[5] == (50, 50)  # the claim's own cells: all
+    assert R.stored_counts(part, "paper-core", supplementary=True)[5] == (6, 10)
+    j = judge(part, curves, "paper-core", loso=False, claims=[5])
+    assert [v.key for v in j.final] == ["5"] and j.final[0].verdict == R.REPRODUCED
+    (v,) = pending(None, part, "paper-core", j.final)
+    assert v.pending is None and v.verdict == R.REPRODUCED
+    assert v.detail.endswith("its further reading waits for runs: 6 of 10 on seeds 0-4")
+    # its rows never reach the rule while incomplete: a Rayleigh HNN that wins would show
+    assert not len(R.restrict(part, get_study(5), "paper-core").query("dissipation == True"))
+    j = judge(runs, curves, "paper-core", loso=False, claims=[5])
+    got = {v.key: v.verdict for v in pending(None, runs, "paper-core", j.final)}
+    assert got == {"5": R.REPRODUCED, "5 (against the Rayleigh HNN)": R.REPRODUCED}
+    # the claim's own cells missing: pending, as before
+    short = runs[~(runs["model"].eq("node_so") & runs["seed"].eq(4))]
+    j = judge(short, curves, "paper-core", loso=False, claims=[5])
+    assert pending(None, short, "paper-core", j.final)[0].pending == (48, 50)  # two systems
+
+
+def _configs(rows):
+    from bench.core import RunConfig, field_names
+
+    names = [c for c in rows.columns if c in field_names()]
+    return [RunConfig.from_dict(dict(zip(names, r, strict=True))) for r in rows[names].values]
+
+
+def get_study(claim):
+    return next(s for s in R.claim_studies() if s.claim == claim)

@@ -118,6 +118,10 @@ class Experiment:
     profile_overrides: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
     include: Callable[[RunConfig], bool] | None = None
     claim: int | None = None
+    # The cells of a further reading of the claim (another form of its models, another system):
+    # its claim is never pending on them, and they join its verdict on a seed set only once
+    # every one of them the profile declares there is stored (:func:`is_supplementary`).
+    supplementary: Callable[[RunConfig], bool] | None = None
     # The profiles it runs at (None: every profile); elsewhere it expands to no runs.
     profiles: tuple[str, ...] | None = None
     # The paper it reproduces (one of PAPERS): `bench --papers` runs a paper's experiments.
@@ -195,6 +199,11 @@ def get(name: str) -> Experiment:
     if name not in _REGISTRY:
         check_choice("experiment", name, sorted(_REGISTRY) or ["(none registered)"])
     return _REGISTRY[name]
+
+
+def is_supplementary(exp: Experiment, cfg: RunConfig) -> bool:
+    """Whether ``cfg`` is a cell of ``exp``'s further reading (``Experiment.supplementary``)."""
+    return exp.supplementary is not None and bool(exp.supplementary(cfg))
 
 
 def profile_defaults(profile: str) -> tuple[dict, tuple[int, ...]]:

@@ -54,7 +54,15 @@ headline table and figure (:mod:`._headlines`), and the report's text convention
 from __future__ import annotations
 
 from . import policy
-from ._claims import claim_studies, claims_not_run, evaluate_claims, restrict, restrict_all, runs_at
+from ._claims import (
+    claim_studies,
+    claims_not_run,
+    evaluate_claims,
+    incomplete_supplements,
+    restrict,
+    restrict_all,
+    runs_at,
+)
 from ._discrimination import (
     TRIVIAL_FACTOR,
     Discrimination,
@@ -223,6 +231,7 @@ __all__ = [
     "evaluate_claims",
     "restrict",
     "restrict_all",
+    "incomplete_supplements",
     "runs_at",
     "CHANGES_WITHOUT_A_SEED",
     "DOES_NOT_REPLICATE",

@@ -11,25 +11,29 @@ from collections.abc import Iterable, Mapping
 
 import pandas as pd
 
-from ..core import experiment_rows, labelled, studies
+from ..core import expand, experiment_rows, is_supplementary, labelled, studies
+from ._seeds import seed_sets
 from ._verdict import INCONCLUSIVE, Verdict
 
 __all__ = [
     "claim_studies",
     "claims_not_run",
     "evaluate_claims",
+    "incomplete_supplements",
     "restrict",
     "restrict_all",
     "runs_at",
 ]
 
 
-def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
+def restrict(runs: pd.DataFrame, study, profile: str | None, keep=None) -> pd.DataFrame:
     """The rows a claim reads: those of its study's experiments (by config hash under
     ``profile``) plus the stored rows tagged with an experiment in ``study.reads`` (results older
     than today's declarations, whose cells no longer expand, still reach the claims that filter
     them). The runs of other experiments that happen to match a claim's field filters, e.g.
-    VIN's NODE+SO on the pendulum, are left out."""
+    VIN's NODE+SO on the pendulum, are left out, and so are the cells of a further reading
+    (:func:`incomplete_supplements`; ``keep``: only the declared cells it accepts count) on a
+    seed set where some of them are not stored yet."""
     if profile is None or "config_hash" not in runs:
         return runs
     parts = [experiment_rows(runs, exp.name, profile) for exp in study.experiments]
@@ -37,18 +41,41 @@ def restrict(runs: pd.DataFrame, study, profile: str | None) -> pd.DataFrame:
         parts.append(runs[runs["experiment"].isin(study.reads) & labelled(runs, profile)])
     # ignore_index: experiment_rows resets its index and the tagged rows keep the store's, so
     # labels would repeat (and a rule that aligns on the index would fail)
-    return pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
+    rows = pd.concat(parts, ignore_index=True).drop_duplicates("config_hash") if parts else runs
+    drop = incomplete_supplements(rows, study, profile, keep)
+    return rows[~rows["config_hash"].isin(drop)].reset_index(drop=True) if drop else rows
+
+
+def incomplete_supplements(rows: pd.DataFrame, study, profile: str, keep=None) -> set:
+    """The config hashes of ``study``'s further reading (``Experiment.supplementary``) on each
+    seed set of ``profile`` (its own seeds, its replication seeds) where ``rows`` lack some of
+    them: a reading joins the verdict whole, never with the seeds that happen to be done."""
+    sups = [e for e in study.experiments if e.supplementary is not None]
+    if not sups:
+        return set()
+    done = set(rows["config_hash"]) if len(rows) else set()
+    drop: set = set()
+    for seeds in (s for s in seed_sets(profile) if s):
+        want = {
+            c.config_hash
+            for e in sups
+            for c in expand(e, profile, seeds=list(seeds))
+            if is_supplementary(e, c) and (keep is None or keep(c))
+        }
+        if not want <= done:
+            drop |= want
+    return drop
 
 
 def restrict_all(
-    runs: pd.DataFrame, profile: str | None, claims: Iterable[int] | None = None
+    runs: pd.DataFrame, profile: str | None, claims: Iterable[int] | None = None, keep=None
 ) -> dict[int, pd.DataFrame]:
     """``{claim: the rows it reads}`` for every claim study (only ``claims`` where given;
-    :func:`restrict`): the rows a claim reads do not depend on the seed, so one restriction
-    serves every seed set."""
+    :func:`restrict`, with ``keep``): the rows a claim reads do not depend on the seed, so one
+    restriction serves every seed set."""
     wanted = None if claims is None else set(claims)
     return {
-        s.claim: _plain_columns(restrict(runs, s, profile))
+        s.claim: _plain_columns(restrict(runs, s, profile, keep))
         for s in claim_studies()
         if wanted is None or s.claim in wanted
     }

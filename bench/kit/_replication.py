@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ..core import PROFILES, expand
+from ..core import PROFILES, expand, is_supplementary
 from ._claims import claim_studies, evaluate_claims, restrict_all
 from ._seeds import min_seeds, required_seeds, seed_sets, seed_span
 from ._stats import ALPHA
@@ -146,11 +146,13 @@ def disagreement(a: Verdict, b: Verdict, alpha: float = ALPHA) -> list[str]:
 
 
 def stored_counts(
-    runs: pd.DataFrame, profile: str | None, seeds=None, keep=None
+    runs: pd.DataFrame, profile: str | None, seeds=None, keep=None, *, supplementary=False
 ) -> dict[int, tuple]:
     """``{claim: (stored, declared)}``: how many of the runs each claim's experiments declare
     at ``profile`` (on ``seeds`` instead of its own; only the cells ``keep(config)`` accepts
-    where given) are in ``runs``; {} for an unknown profile."""
+    where given) are in ``runs``; {} for an unknown profile. The cells of a claim's further
+    readings (``Experiment.supplementary``) are counted apart: ``supplementary=True`` counts
+    them alone (a claim without any is left out), the default every other cell."""
     if profile not in PROFILES:
         return {}
     from ..core import studies
@@ -160,12 +162,17 @@ def stored_counts(
     declared: dict[int, set] = {}
     for study in studies():  # a claim's experiments may be declared by several studies
         if study.claim in judged:
-            declared.setdefault(study.claim, set()).update(
-                c.config_hash
-                for e in study.experiments
-                for c in expand(e, profile, seeds=seeds)
-                if keep is None or keep(c)
-            )
+            hashes = declared.setdefault(study.claim, set())
+            for e in study.experiments:
+                if supplementary and e.supplementary is None:
+                    continue
+                hashes.update(
+                    c.config_hash
+                    for c in expand(e, profile, seeds=seeds)
+                    if is_supplementary(e, c) == supplementary and (keep is None or keep(c))
+                )
+    if supplementary:
+        declared = {n: h for n, h in declared.items() if h}
     return {n: (len(hashes & done), len(hashes)) for n, hashes in sorted(declared.items())}
 
 
@@ -198,7 +205,7 @@ def judge(
         primary_seeds = declared
     else:
         primary_seeds = tuple(s for s in stored if s not in rep_seeds)
-    cache = restrict_all(runs, profile, claims) if restricted is None else restricted
+    cache = restrict_all(runs, profile, claims, keep) if restricted is None else restricted
 
     def evaluate(seeds):
         return evaluate_claims(runs, curves, profile, claims=claims, seeds=seeds, restricted=cache)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from ....core import SELECTIONS, load_tables
-from ....kit import folder_label, judge, md_escape, stored_counts
+from ....kit import folder_label, judge, md_escape, seed_sets, seed_span, stored_counts
 
 __all__ = [
     "Cause",
@@ -18,6 +18,7 @@ __all__ = [
     "comparison_section",
     "load_other",
     "pending",
+    "supplements_waiting",
 ]
 
 # The kinds of likely cause of two folders' verdicts of one claim disagreeing, in the order
@@ -245,17 +246,35 @@ def comparison_section(verdicts, profile: str | None, others) -> list[str]:
 def pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list:
     """The verdicts of a folder of a selection's runs (``paper-core``), each replaced by
     ``pending (n of m runs)`` where fewer of its claim's runs are stored than the selection
-    declares (a campaign under way)."""
+    declares (a campaign under way); a judged claim whose further reading
+    (``Experiment.supplementary``) waits for runs says so in its detail, per seed set."""
     if profile not in SELECTIONS or not len(runs):  # only a campaign's selection is pending
         return verdicts
     want = stored_counts(runs, profile)
+    waiting = supplements_waiting(runs, profile)
     out = []
     for v in verdicts:
         n, m = want.get(v.claim, (0, 0))
         if m and n < m:
             v = dataclasses.replace(v, verdict=f"pending ({n} of {m} runs)", pending=(n, m))
+        elif v.claim in waiting:
+            v = dataclasses.replace(v, detail=f"{v.detail}; {waiting[v.claim]}")
         out.append(v)
     return out
+
+
+def supplements_waiting(runs: pd.DataFrame, profile: str) -> dict[int, str]:
+    """``{claim: "its further reading waits for runs: n of m on seeds 0-4, ..."}`` for each
+    claim whose further reading (``Experiment.supplementary``) is not stored whole on a seed set
+    of ``profile`` (it joins the verdict there only then): its own seeds, and the replication
+    seeds where some of it is stored."""
+    parts: dict[int, list[str]] = {}
+    for i, seeds in enumerate(s for s in seed_sets(profile) if s):
+        counts = stored_counts(runs, profile, seeds, supplementary=True)
+        for claim, (n, m) in counts.items():
+            if n < m and (n or not i):
+                parts.setdefault(claim, []).append(f"{n} of {m} on seeds {seed_span(seeds)}")
+    return {c: "its further reading waits for runs: " + ", ".join(p) for c, p in parts.items()}
 
 
 def load_other(d: Path):
