@@ -41,8 +41,8 @@ CELL_COLUMNS = (
 
 def _table_variant(rows: pd.DataFrame) -> pd.Series:
     """Model label key plus the model options other than the regulariser weight; the Rayleigh
-    HNN is marked as claim 5's extra row."""
-    base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh (extra, not judged)"})
+    HNN is named as the damped HNN of claim 5's further reading."""
+    base = variant(rows).replace({"hnn_so_diss": "hnn_so + Rayleigh"})
 
     def opts(v) -> str:
         o = {a: b for a, b in parse_pairs(v).items() if a != "weight"}

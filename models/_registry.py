@@ -17,6 +17,7 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 | vin_implicit | discrete + variational: midpoint DEL step of a general learned L(q, v)   |
 | resnet       | discrete, free: z_{n+1} = z_n + MLP(z_n)                                 |
 | hnn_force    | the paper's controlled HNN: hnn_so field + a free force F(q, p, u) on dp/dt |
+| hnn_force_paper | hnn_force as the paper's code runs it: M = I, grad H in standardised z  |
 | constant_velocity | trivial, no parameters: q(t) = q0 + t qdot0 (see ``_trivial``)      |
 | at_rest      | trivial, no parameters: q(t) = q0, qdot(t) = 0                           |
 
@@ -33,7 +34,8 @@ part when the scene is damped (or ``dissipation=True``).
 
 In a controlled scene (``Scene.n_controls`` > 0) only the models with a part that reads u
 (``spec(name).controls``: the free networks of node, node_so, node_symreg, node_so_symreg,
-mixture_hnn, resnet, and hnn_force's force) can be built; see ``models._features``.
+mixture_hnn, resnet, and the force of hnn_force and hnn_force_paper) can be built; see
+``models._features``.
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ import equinox as eqx
 import jax
 
 from ._base import AbstractContinuousModel, AbstractDiscreteModel
-from ._forced import ForcedHNN
+from ._forced import ForcedHNN, ReferenceForcedHNN
 from ._hnn import HNN, MixtureHNN, SeparableHNN
 from ._lnn import LNN
 from ._mlp import ACTIVATIONS, DTYPES, INITS
@@ -177,6 +179,7 @@ _REGISTRY = {
         {"inverse_mass_floor": _strictly_positive_float("inverse_mass_floor")},
         needs=_V,
     ),
+    "hnn_force_paper": _Entry(ReferenceForcedHNN, _plain(ReferenceForcedHNN), needs=_V),
     "constant_velocity": _Entry(ConstantVelocity, _trivial(ConstantVelocity)),
     "at_rest": _Entry(AtRest, _trivial(AtRest)),
 }

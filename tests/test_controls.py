@@ -226,6 +226,43 @@ def test_hnn_force_conserves_h_without_force_and_f_enters_dp_dt_only():
     np.testing.assert_array_equal(model.vector_field(0.0, Z0, a1)[:2], Z0[2:])
 
 
+def _zero_force(model):
+    last = lambda m: (m.force.weights[-1], m.force.biases[-1])
+    return eqx.tree_at(last, model, tuple(jnp.zeros_like(x) for x in last(model)))
+
+
+def test_hnn_force_paper_is_the_reference_codes_field():
+    """The paper's code's controlled HNN: dq/dt the standardised velocity whatever the networks
+    learn, dqdot/dt minus the gradient of H in the standardised position (central differences
+    here) plus F; without a standardisation and with F = 0, H = |qdot|^2 / 2 + V(q) is
+    conserved (M = I)."""
+    st = models.Standardisation(
+        q_loc=(0.1, 0.2), q_scale=(2.0, 0.5), v_loc=(0.3, -0.1), v_scale=(1.5, 4.0),
+        u_loc=(0.0, 0.0), u_scale=(1.0, 1.0), rate_loc=(0.0,) * 4, rate_scale=(1.0,) * 4,
+    )  # fmt: skip
+    scene = Scene(dof=2, angular=(False, False), n_args=1, n_controls=2, standardisation=st)
+    model = _make("hnn_force_paper", scene)
+    spec = models.spec("hnn_force_paper")
+    assert spec.forced and spec.controls and not spec.second_order and spec.structure is None
+    a = jnp.concatenate([ARGS, U[0]])
+    f = model.vector_field(0.0, Z0, a)
+    q_loc, q_scale = jnp.array(st.q_loc), jnp.array(st.q_scale)
+    np.testing.assert_allclose(f[:2], (Z0[2:] - jnp.array(st.v_loc)) / jnp.array(st.v_scale))
+    h_s = lambda qs: model.potential_energy(qs * q_scale + q_loc, a)
+    qs0, eps = (Z0[:2] - q_loc) / q_scale, 1e-5
+    fd = jnp.array([(h_s(qs0 + eps * e) - h_s(qs0 - eps * e)) / (2 * eps) for e in jnp.eye(2)])
+    force = model.force(model.features(Z0[:2], Z0[2:], a))
+    np.testing.assert_allclose(f[2:], -fd + force, rtol=1e-7, atol=1e-9)
+    assert float(jnp.max(jnp.abs(force))) > 1e-3  # F enters
+    plain = _zero_force(_make("hnn_force_paper"))
+    ts, u = jnp.linspace(0.0, 2.0, 11), jr.normal(jr.PRNGKey(5), (10, 2))
+    zs = rollout(plain, Z0, ts, ARGS, Integrator("rk4", 20), controls=u)
+    full = jnp.concatenate([jnp.broadcast_to(ARGS, (10, 1)), u], axis=1)
+    energy = jax.vmap(lambda z, a_: 0.5 * z[2:] @ z[2:] + plain.potential_energy(z[:2], a_))
+    h = energy(zs[1:], full) - energy(Z0[None], full[:1])[0]
+    assert float(jnp.max(jnp.abs(h))) < 1e-8
+
+
 def test_hnn_force_floor_bounds_the_inverse_mass_spectrum_in_h_and_the_field():
     """``inverse_mass_floor``: with the factor's network driven to L ~ 0, M^-1 = floor I, and
     H's kinetic term and the field read the same M^-1 (H against 1/2 p^T M^-1 p + V, and

@@ -179,6 +179,7 @@ def test_registry_and_errors():
         "vin_implicit",
         "resnet",
         "hnn_force",
+        "hnn_force_paper",
         "constant_velocity",
         "at_rest",
     ]

@@ -14,7 +14,7 @@ import pytest
 from _markdown import section, table_rows
 
 import systems
-from bench.core import RunConfig, _store, expand
+from bench.core import RunConfig, _store, expand, is_supplementary
 from bench.kit import policy
 from bench.studies.paper import mujoco as X
 from bench.studies.paper.mujoco import _rule as R
@@ -23,7 +23,7 @@ from systems import mujoco_data as D
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # per-seed log offsets, mean 0
-INTEGRATOR = dict(X.CELLS)
+INTEGRATOR = {m: i for m, i in X.CELLS if m != R.PAPER_HNN}  # App. C's cells
 # test MSE, train MSE and rollout error per model: NODE+SO 5x below NODE, the HNN 4x above
 # NODE in test MSE and 6x in train MSE, the constant-velocity predictor 100x above NODE
 REPRODUCE = {
@@ -118,6 +118,17 @@ def test_quick_runs_one_task_and_every_profile_reads_the_files_size(monkeypatch,
     assert {c.seed for c in quick} == set(SEEDS) and {c.steps for c in quick} == {X.QUICK_STEPS}
     core = expand(X.EXPERIMENT, "paper-core")
     assert {c.system for c in core} == set(X.TASKS) and {c.seed for c in core} == set(SEEDS)
+    # Fig. 7's setting at paper-core: every model at the code's lr, the paper's HNN there
+    # only, with one Euler step; the HNNs there a further reading
+    at = {(c.model, c.lr, c.train_substeps, c.eval_substeps) for c in core}
+    assert at == {
+        *((m, R.LR, 8, 8) for m in R.MODELS),
+        *((m, R.CODE_LR, 8, 8) for m in ("node", "node_so", "hnn_force")),
+        (R.PAPER_HNN, R.CODE_LR, 1, 1),
+    }
+    further = {c.model for c in core if is_supplementary(X.EXPERIMENT, c)}
+    assert further == {"hnn_force", R.PAPER_HNN}
+    assert all(c.lr == R.CODE_LR for c in core if is_supplementary(X.EXPERIMENT, c))
     for c in (*quick, *core, *expand(X.EXPERIMENT, "paper")):
         assert c.n_generated == X.TRANSITIONS == 200_000
     assert {c.system_params for c in expand(X.EXPERIMENT, "smoke")} == {X.STAND_IN}
@@ -128,7 +139,11 @@ def test_the_study_is_registered_with_its_rule_figure_and_section():
     from bench.studies.paper import CLAIM_TITLES
 
     study = next(s for s in claim_studies() if s.claim == 16)
-    assert study is X.STUDY and study.rule is X.claim_16 and study.experiments == X.EXPERIMENTS
+    assert (
+        study is X.STUDY
+        and study.rule is X.claim_16_readings
+        and study.experiments == X.EXPERIMENTS
+    )
     assert study.results_figure is X.figure and study.section is X.section
     assert study.title == CLAIM_TITLES[16]
 
@@ -294,8 +309,9 @@ def _bullets(text, label):
 
 
 def _verdict_line(text):
-    """The section's verdict and its variant (``Verdict: **inconclusive** (not judged...).``)."""
-    m = re.search(r"^Verdict: \*\*(.+?)\*\*(?: \((.+)\))?\.$", text, re.M)
+    """The section's verdict and its variant
+    (``Verdict (at lr 0.0002): **inconclusive** (not judged...).``)."""
+    m = re.search(r"^Verdict \(at lr [\d.e-]+\): \*\*(.+?)\*\*(?: \((.+)\))?\.$", text, re.M)
     return m.group(1), m.group(2) or ""
 
 
@@ -338,6 +354,47 @@ def test_the_code_lr_runs_are_a_sensitivity_reading_not_the_verdicts():
     assert a.status == "contradicts" and a.n == len(SEEDS)
     assert f"{a.name}: {a.status}" in v.detail  # shown beside the verdict, not judged
     assert not R.code_lr_parts(runs)
+
+
+def _at_code_lr(runs, values, models=("node", "node_so", "hnn_force")):
+    """Copies of ``runs``' rows of ``models`` trained at the code's lr, with ``values``' test
+    and train MSE (the paper's HNN: ``hnn_force``'s copied, renamed)."""
+    out = []
+    for m in models:
+        src = "hnn_force" if m == R.PAPER_HNN else m
+        rows = runs[runs["model"] == src].copy()
+        test, train, _ = values[src]
+        rows = rows.assign(lr=R.CODE_LR, model=m, test_mse=test, train_mse=train)
+        if m == R.PAPER_HNN:
+            rows = rows.assign(model_options="[]", train_substeps=1, eval_substeps=1)
+        rows["test_mse"] *= np.exp(0.1 * SPREAD[rows["seed"].to_numpy()])
+        out.append(rows)
+    return pd.concat([runs, *out], ignore_index=True)
+
+
+def test_the_verdict_is_judged_at_fig_7_s_lr_once_every_model_ran_there():
+    """Where the HNN ran at the code's lr (Fig. 7's), the verdict is read there and App. C's
+    reading is named beside it; the paper's HNN, where it ran, is read in the HNN's place as a
+    verdict of its own."""
+    runs = _tables()
+    assert X.claim_16(runs).verdict == "reproduced"
+    both = _at_code_lr(runs, CONTRADICT)
+    v = X.claim_16(both)
+    assert v.verdict == "not reproduced", v.detail
+    assert f"judged at the reference code's lr {R.CODE_LR:g}" in v.detail
+    assert f"at App. C's {R.LR:g}, not judged: reproduced" in v.detail
+    assert [w.key for w in X.claim_16_readings(both)] == ["16"]
+    # the paper's HNN, 10x worse than NODE in test and training: its reading reproduces
+    worse = {**CONTRADICT, "hnn_force": (1.0, 0.5, 0.5)}
+    paper = _at_code_lr(both, worse, models=(R.PAPER_HNN,))
+    got = {w.key: w for w in X.claim_16_readings(paper)}
+    assert list(got) == ["16", "16 (the paper's HNN)"]
+    assert got["16"].verdict == "not reproduced"
+    hnn = {k: s for k, s in _statuses(got["16 (the paper's HNN)"]).items() if "HNN" in k}
+    assert hnn and set(hnn.values()) == {"holds"}, hnn
+    # without our HNN at the code's lr, App. C's rows decide, as before
+    ours = (paper["model"] == "hnn_force") & (paper["lr"] == R.CODE_LR)
+    assert X.claim_16(paper[~ours]).verdict == "reproduced"
 
 
 def test_models_worse_than_holding_the_velocity_on_their_training_data_are_named():
