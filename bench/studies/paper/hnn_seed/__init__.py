@@ -59,6 +59,17 @@ TWO_BODY_ENERGY = policy.stated(
     "an energy MSE that was several orders of magnitude below the baseline",
     "Greydanus et al. 2019",
 )
+# On the two-body the seed does not claim a tie on loss: "Both train and test losses of the HNN
+# model were about an order of magnitude lower than those of the baseline" (its own numbers:
+# 10.5x). "About an order of magnitude" is read as lower by more than half of one, sqrt(10).
+TWO_BODY_FIT = policy.stated(
+    "loss",
+    10**0.5,
+    "train and test losses of the HNN model were about an order of magnitude lower",
+    "Greydanus et al. 2019",
+)
+# the systems whose claim is "tied on loss" (the condition); the others state the HNN's fit edge
+TIED_SYSTEMS = ("mass_spring", "pendulum")
 
 # The seed's own numbers (greydanus/hamiltonian-nn README, "Numbers": baseline NN, HNN), the
 # means of its test loss on derivatives and of its energy MSE along rollouts. Its test loss is
@@ -161,12 +172,14 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
 
     Per system: (a) a *greater* part on ``log(energy MSE baseline / energy MSE HNN)`` at the
     policy's energy margin squared (an MSE), on the two-body at the stated 100x
-    (:data:`TWO_BODY_ENERGY`); judged under (b), the condition "tied on loss", which can only
-    confound (:func:`~bench.kit.similar_fit`: it blocks (a) only where the HNN is
-    shown to fit better than the baseline by more than the loss margin, ``log(test loss
-    baseline / test loss HNN)``), and where both models learned (rollout error on (q, qdot)
-    against the best trivial predictor). Every (a) holding:
-    reproduced; some contradicted: partly or not reproduced. Failed runs score the worst value.
+    (:data:`TWO_BODY_ENERGY`), judged where both models learned (rollout error on (q, qdot)
+    against the best trivial predictor); (b) on ``log(test loss baseline / test loss HNN)``:
+    on the mass-spring and the pendulum the condition "tied on loss", which can only confound
+    (:func:`~bench.kit.similar_fit`: it blocks (a) only where the HNN is shown to fit better
+    than the baseline by more than the loss margin); on the two-body, where the seed states the
+    HNN fits "about an order of magnitude" better, a *greater* part at sqrt(10)
+    (:data:`TWO_BODY_FIT`), a finding that does not gate (a). Every part holding: reproduced;
+    some contradicted: partly or not reproduced. Failed runs score the worst value.
     Headline: (a) on the mass-spring. The Deconstructing view on the same runs (NODE+SO's
     energy MSE and rollout error against the HNN's) is reported beside, not tested.
     """
@@ -183,21 +196,22 @@ def claim_10(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
             continue
         e = paired(rs, BASELINE, HNN, "energy_mse")
         fit = paired(rs, BASELINE, HNN, "derivative_mse_test")
-        similar, tied = similar_fit(
-            f"(b) {system}: HNN's fit edge log(test loss MLP / HNN)",
-            fit.to_numpy(),
-            policy.margin("loss"),
-        )
+        name = f"(b) {system}: HNN's fit edge log(test loss MLP / HNN)"
+        if system in TIED_SYSTEMS:
+            fit_part, tied = similar_fit(name, fit.to_numpy(), policy.margin("loss"))
+            gates = [tied]
+        else:
+            fit_part, gates = greater(name, fit.to_numpy(), TWO_BODY_FIT), []
         mg = TWO_BODY_ENERGY if system == "two_body" else policy.margin("energy", squared=True)
         parts.append(
             gated(
                 greater(f"(a) {system}: log(energy MSE MLP / HNN)", e.to_numpy(), mg),
-                tied,
+                *gates,
                 learned_cell(rs, HNN, f"HNN on {system}", "rollout_error_any"),
                 learned_cell(rs, BASELINE, f"MLP on {system}", "rollout_error_any"),
             )
         )
-        parts.append(similar)
+        parts.append(fit_part)
         seeds.append(min(len(e), len(fit)))
         so_e = paired(rs, NODE_SO, HNN, "energy_mse")
         so_r = paired(rs, NODE_SO, HNN, "rollout_error_any")
