@@ -354,7 +354,9 @@ def _data_mujoco(args) -> int:
         shown = ", ".join(f"{k} {v:.4g}" for k, v in info.items())
         print(f"{args.task}: {n}/{args.steps} steps, {shown}", file=sys.stderr, flush=True)
 
-    path = systems.mujoco_data.collect(
+    import collect
+
+    path = collect.collect_task(
         args.task, args.steps, seed=args.seed, folder=args.out, progress=progress
     )
     card = json.loads(path.with_suffix(".json").read_text())

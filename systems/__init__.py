@@ -4,8 +4,10 @@ Ground truth is float64: a process calls :func:`enable_x64` before computing it 
 points do); importing ``systems`` changes no jax setting.
 """
 
+from . import _mujoco as mujoco_envs
 from . import _mujoco_data as mujoco_data
 from . import _real_pendulum as real_pendulum
+from ._atomic import TMP_PREFIX, atomic_write, tmp_prefix
 from ._base import MAX_STEPS, AbstractSystem, reference_masses_lengths
 from ._chain import ChainPendulum
 from ._coordinates import derivatives, to_momentum, to_velocity
@@ -29,16 +31,16 @@ from ._registry import available, make, parameters
 from ._relativistic import RelativisticParticle
 from ._render import reach, read_angle, read_state, render
 from ._rigid import Gyroscope, Rotor
-from ._sac import SACConfig
-from ._sac_run import SACRun
-from ._sac_run import data_card as sac_data_card
-from ._sac_run import train_policy as train_sac_policy
 from ._spring import SpringPendulum
 from ._three_body import ThreeBody
 from ._two_body import TwoBody
 
 __all__ = [
     "AbstractSystem",
+    "TMP_PREFIX",
+    "atomic_write",
+    "tmp_prefix",
+    "mujoco_envs",
     "MAX_STEPS",
     "ChainPendulum",
     "Dataset",
@@ -54,8 +56,6 @@ __all__ = [
     "ThreeBody",
     "DatasetConfig",
     "RelativisticParticle",
-    "SACConfig",
-    "SACRun",
     "Rotor",
     "SpringPendulum",
     "available",
@@ -77,10 +77,8 @@ __all__ = [
     "read_state",
     "reference_masses_lengths",
     "render",
-    "sac_data_card",
     "source_fingerprint",
     "split_episodes",
     "to_momentum",
     "to_velocity",
-    "train_sac_policy",
 ]

@@ -18,8 +18,8 @@ fixed: every trajectory on the same uniform time grid, test windows anywhere, in
 
 Cache: ``<cache_dir>/datasets/<config.hash()>.npz``; the npz holds the arrays, the canonical
 config JSON, a sha256 of the arrays and the :func:`source_fingerprint` of the ``systems``
-package that generated them. It is written to a temporary file and moved into place with
-``os.replace``; a file that does not load, or whose checksum, config or code disagrees (the
+package that generated them. It is written through the one atomic write (a temporary file
+moved into place); a file that does not load, or whose checksum, config or code disagrees (the
 physics was edited since: any change to a file of ``systems/``), is rebuilt.
 """
 
@@ -33,7 +33,6 @@ import json
 import math
 import numbers
 import os
-import tempfile
 import warnings
 from pathlib import Path
 
@@ -41,6 +40,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._atomic import atomic_write
 from ._base import MAX_STEPS
 from ._coordinates import to_momentum
 from ._precision import require_x64
@@ -297,24 +297,16 @@ def _load(path: Path, config: DatasetConfig):
 
 
 def _save(path: Path, config: DatasetConfig, arrays) -> None:
-    """Write to a temporary file, fsync, rename: a write that fails (a full disk, a file-size
-    limit) raises and leaves no file at ``path`` and no temporary behind."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(
-                f,
-                checksum=np.array(_checksum(arrays)),
-                config=np.array(config.canonical_json()),
-                code=np.array(source_fingerprint("systems")),
-                **arrays,
-            )
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, OSError) and not e.filename:  # name the file the disk refused
-            raise OSError(e.errno, e.strerror, str(path)) from e
-        raise
+    """Write through the one atomic write (:func:`~systems._atomic.atomic_write`): a write
+    that fails (a full disk, a file-size limit) raises and leaves no file at ``path`` and no
+    temporary behind."""
+    atomic_write(
+        path,
+        lambda tmp: np.savez(
+            tmp,
+            checksum=np.array(_checksum(arrays)),
+            config=np.array(config.canonical_json()),
+            code=np.array(source_fingerprint("systems")),
+            **arrays,
+        ),
+    )

@@ -137,7 +137,7 @@ class Episodes:
 class Recorder:
     """Writes transitions one at a time into preallocated rows of an :class:`Episodes`, and
     keeps the episode bookkeeping in one place for every collector (a fixed policy here, the
-    learning SAC agent in ``systems._sac``): an episode ends when it terminates or reaches
+    learning SAC agent in ``collect._sac``): an episode ends when it terminates or reaches
     ``limit`` steps (a truncation); the episode id then advances and the step restarts at 0."""
 
     FIELDS = ("z", "u", "reward", "episode", "step", "terminated", "truncated")

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _mujoco as mj
+from ._atomic import atomic_write
 
 ENV = "DECON_MUJOCO_DATA"  # a folder holding <task>.npz and <task>.json
 COMMITTED = Path(__file__).resolve().parents[1] / "data" / "mujoco"
@@ -80,13 +81,10 @@ def replay(name: str, arrays) -> mj.Episodes:
 
 
 def _write_atomic(path: Path, arrays: dict, card: dict) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp_card = path.with_name(f".{path.stem}.tmp.json")
-    tmp_card.write_text(json.dumps(card, indent=1, sort_keys=True, default=str) + "\n")
-    os.replace(tmp, path)
-    os.replace(tmp_card, path.with_suffix(".json"))
+    """The task's file, then its card, each through the one atomic write."""
+    atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays))
+    text = json.dumps(card, indent=1, sort_keys=True, default=str) + "\n"
+    atomic_write(path.with_suffix(".json"), lambda tmp: tmp.write_text(text))
 
 
 def save_data(episodes: mj.Episodes, card: dict, folder: Path | str | None = None) -> Path:
@@ -155,37 +153,8 @@ def load_data(name: str, folder: Path | str | None = None) -> tuple[mj.Episodes,
             f"{path}: its replay under MuJoCo {mujoco.__version__} has sha256 {sha[:16]}, the "
             f"card's (MuJoCo {card.get('replay_mujoco')}) {want[:16]}: another simulator build"
         )
-    cached.parent.mkdir(parents=True, exist_ok=True)
-    tmp = cached.with_name(f".{cached.stem}.tmp.npz")
-    np.savez(tmp, seed=np.int64(ep.seed), **ep.arrays())
-    os.replace(tmp, cached)
+    atomic_write(cached, lambda tmp: np.savez(tmp, seed=np.int64(ep.seed), **ep.arrays()))
     return ep, card
-
-
-def collect(
-    name: str,
-    steps: int,
-    *,
-    seed: int = 0,
-    checkpoint_dir: Path | str | None = None,
-    folder: Path | str | None = None,
-    progress=None,
-) -> Path:
-    """Train the SAC agent ``steps`` environment steps on a task (resuming from
-    ``checkpoint_dir``, ``<cache>/mujoco`` by default), then save its whole recorded buffer as
-    the task's file with a card: the policy, its budget, its evaluation returns along the way,
-    the split's sizes. Returns the path of the npz."""
-    from ._dataset import cache_root
-    from ._sac_run import data_card, train_policy
-
-    ck = Path(checkpoint_dir) if checkpoint_dir is not None else cache_root() / "mujoco"
-    run = train_policy(name, steps, seed, ck, progress=progress)
-    ep = run.episodes()
-    card = data_card(run, mj.split_episodes(ep, seed=seed))
-    card["policy_training"]["eval_returns"] = [
-        [int(s), float(r)] for s, r in zip(run.eval_steps, run.eval_returns, strict=True)
-    ]
-    return save_data(ep, card, folder)
 
 
 def stand_in(name: str, n_steps: int, seed: int = 0) -> tuple[mj.Episodes, dict]:

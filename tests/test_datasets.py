@@ -229,7 +229,7 @@ def test_deterministic_per_seed(chain_data, tmp_path):
     other = make_dataset(_config(seed=1), cache_dir=tmp_path)
     assert not np.allclose(other.z_train, chain_data.z_train)
     assert not np.allclose(other.z_test, chain_data.z_test)
-    assert not [p for p in os.listdir(tmp_path / "datasets") if p.endswith(".tmp")]
+    assert not [p for p in os.listdir(tmp_path / "datasets") if p.startswith(systems.TMP_PREFIX)]
 
 
 def test_relativistic_momentum_and_random_args(tmp_path):

@@ -15,7 +15,7 @@ import sys
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-PACKAGES = ("systems", "models", "bench")
+PACKAGES = ("systems", "models", "collect", "bench")
 MAX_LINES = 500
 HISTORY = re.compile(
     r"\bissues? #?\d+|\bgh-?\d+\b|(?<![\w.])#\d{2,}\b|\b20\d\d-[01]\d-[0-3]\d\b"

@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
+from collect import _sac as sac
+from collect import _sac_run as sac_run
 from systems import _mujoco as mj
-from systems import _sac as sac
-from systems import _sac_run as sac_run
 
 warnings.filterwarnings("ignore", message=".*settotalmass.*")
 
@@ -230,7 +230,7 @@ _KILLED_SCRIPT = """
 import json, sys
 import jax
 jax.config.update("jax_enable_x64", sys.argv[4] == "True")  # as in the test's process
-from systems import _sac as sac, _sac_run as sac_run
+from collect import _sac as sac, _sac_run as sac_run
 config = sac.SACConfig(**json.loads(sys.argv[3]))
 sac_run.train_policy("HopperFull-v0", int(sys.argv[2]), 0, sys.argv[1], config=config)
 """

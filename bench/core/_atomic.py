@@ -1,24 +1,27 @@
-"""Atomic files: every file the suite stores (rows, tables, cached parameters, artifacts) is
-written to a temporary beside it, fsynced and renamed into place, so that a process killed at
-any moment, or a full disk, leaves the whole file or its old content, never a prefix."""
+"""Atomic files: every file the suite stores (rows, tables, cached parameters, artifacts) goes
+through the one atomic write (``systems.atomic_write``: a temporary beside it, fsynced and
+renamed into place); here, the clearing of a killed writer's temporaries and JSON."""
 
 from __future__ import annotations
 
 import json
 import math
 import os
-import tempfile
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-TMP_PREFIX = ".tmp-"
+from systems import TMP_PREFIX, atomic_write, tmp_prefix
 
-
-def tmp_prefix() -> str:
-    """Temporaries are named ``.tmp-<pid>-*``: :func:`clear_orphans` can tell a dead writer's."""
-    return f"{TMP_PREFIX}{os.getpid()}-"
+__all__ = [
+    "TMP_PREFIX",
+    "atomic_write",
+    "atomic_write_bytes",
+    "clear_orphans",
+    "jsonable",
+    "tmp_prefix",
+    "write_json",
+]
 
 
 def _alive(pid: int) -> bool:
@@ -42,40 +45,6 @@ def clear_orphans(directory) -> list[Path]:
             p.unlink(missing_ok=True)
             removed.append(p)
     return removed
-
-
-def _fsync(path, flags=os.O_RDONLY) -> None:
-    try:
-        fd = os.open(path, flags)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def atomic_write(path, write: Callable[[Path], object]) -> Path:
-    """``write(tmp)`` writes the file at the temporary path ``tmp`` (same folder and suffix as
-    ``path``); it is then fsynced and renamed to ``path``. On any error the temporary is
-    removed, and an OSError without a file name names ``path`` (the file the disk refused)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=tmp_prefix(), suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        _fsync(tmp)
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, OSError) and not e.filename:
-            raise OSError(e.errno, e.strerror, str(path)) from e
-        raise
-    _fsync(path.parent)
-    return path
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:

@@ -1,4 +1,4 @@
-"""Training the soft actor-critic of :mod:`systems._sac` on a MuJoCo task: the environment loop,
+"""Training the soft actor-critic of :mod:`collect._sac` on a MuJoCo task: the environment loop,
 the recording of every transition (the data), evaluation, atomic checkpoints and resumption
 after a kill, and the data card of a finished run.
 """
@@ -8,8 +8,6 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
-import os
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,7 +17,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _mujoco as mj
+from bench.core import atomic_write
+from systems import mujoco_envs as mj
+
 from ._sac import (
     Actor,
     Batch,
@@ -97,19 +97,10 @@ def _env_restore(env, snap) -> None:
 
 
 def save_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """np.savez to a temporary file in the same folder, fsync, os.replace: a kill at any
-    moment leaves either the previous file or the new one, never a partial one."""
+    """``np.savez`` through the suite's one atomic write: a kill at any moment leaves either
+    the previous file or the new one, never a partial one."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda tmp: np.savez(tmp, **arrays))
 
 
 def _config_json(name: str, seed: int, config: SACConfig) -> str:
