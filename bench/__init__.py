@@ -4,9 +4,10 @@ Layers, each importing only those below it: ``bench.core`` (experiments, trainin
 runner, store, query layer, study registry) <- ``bench.kit`` (the claims kit: parts, gates,
 verdicts, the policy, claim evaluation and replication) <- ``bench.studies`` (the paper's
 studies, one folder each, the trade-off, the stability study, perf) <- the CLI
-(``bench._cli``) and the report (``bench._report``). Importing ``bench`` registers the built-in
-studies and changes nothing in the process: the entry points set threads and the compilation
-cache up (``bench.core._env.setup_process``).
+(``bench._cli``) and the report (``bench._report``). Importing ``bench`` loads no study (the
+registry loads them all on its first use, ``bench.core.load_plugins``) and changes nothing in
+the process: the entry points set threads and the compilation cache up
+(``bench.core._env.setup_process``).
 """
 
 from ._shadow import check as _check_shadowing
@@ -15,11 +16,7 @@ from ._shadow import check as _check_shadowing
 # started in would hide them, and their first import would fail far from the cause
 _check_shadowing()
 
-from . import (
-    experiments,
-    metrics,
-    studies,  # registers the built-in studies
-)
+from . import experiments, metrics
 from .core import (
     PROFILES,
     PROVENANCE_COLUMNS,
@@ -69,7 +66,6 @@ __all__ = [
     "register_study",
     "registered_studies",
     "runs_of",
-    "studies",
     "sweep",
     "train",
     "train_ensemble",

@@ -161,9 +161,20 @@ def test_every_name_the_core_exports_is_imported_outside_it():
     assert sorted(set(bench.core.__all__) - imported) == []
 
 
+def test_importing_bench_loads_no_study_until_the_registry_is_used():
+    code = (
+        "import sys; import bench; "
+        "studies = lambda: [m for m in sys.modules if m.startswith('bench.studies')]; "
+        "assert not studies(), studies(); "
+        "names = [s.name for s in bench.registered_studies()]; "
+        "assert 'bench.studies.paper' in sys.modules and 'energy' in names, names"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
 def test_importing_the_core_imports_none_of_its_modules():
-    # ``import bench`` registers the studies, so loads the core's modules and jax: a bare
-    # parent package leaves ``bench.core``'s own import alone.
+    # ``import bench`` loads the core's names it re-exports, and with them jax: a bare parent
+    # package leaves ``bench.core``'s own import alone.
     code = (
         "import sys, types; "
         "bench = sys.modules['bench'] = types.ModuleType('bench'); bench.__path__ = ['bench']; "

@@ -156,6 +156,8 @@ class Experiment:
 
 _REGISTRY: dict[str, Experiment] = {}
 _LOADED = False
+# The built-in studies' package, loaded on the registry's first use (not at ``import bench``)
+BUILT_IN_STUDIES = "bench.studies"
 # Third-party studies: modules named in this Python entry-point group (see bench.core._studies).
 ENTRY_POINT_GROUP = "decon_bench.studies"
 
@@ -171,16 +173,19 @@ def register(exp: Experiment, *, replace: bool = False) -> Experiment:
 
 
 def load_plugins() -> None:
-    """Import, once, the studies outside ``bench.studies``: the modules of the entry-point group
-    ``decon_bench.studies`` and those named in ``DECON_EXTRA_EXPERIMENTS`` (comma-separated, for
-    the tests). The built-in studies register when ``bench`` is imported."""
+    """Import, once, on the registry's first use, every study, in this order: the built-in ones
+    (:data:`BUILT_IN_STUDIES`, whose imports give the report's order), the modules of the
+    entry-point group ``decon_bench.studies`` by entry-point name, and those named in
+    ``DECON_EXTRA_EXPERIMENTS`` (comma-separated, for the tests). Importing ``bench`` loads
+    none of them."""
     global _LOADED
     if _LOADED:
         return
     _LOADED = True
     from importlib import metadata
 
-    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+    importlib.import_module(BUILT_IN_STUDIES)
+    for ep in sorted(metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
         ep.load()
     extra = [m.strip() for m in os.environ.get("DECON_EXTRA_EXPERIMENTS", "").split(",")]
     for mod in [m for m in extra if m]:
