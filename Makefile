@@ -64,12 +64,12 @@ test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -q $(PYTEST_ARGS)
 
 lint: $(STAMP)
-	$(PY) -m ruff check systems models collect bench tests
-	$(PY) -m ruff format --check systems models collect bench tests
+	$(PY) -m ruff check systems models collect bench tests examples
+	$(PY) -m ruff format --check systems models collect bench tests examples
 
 format: $(STAMP)
-	$(PY) -m ruff format systems models collect bench tests
-	$(PY) -m ruff check --fix systems models collect bench tests
+	$(PY) -m ruff format systems models collect bench tests examples
+	$(PY) -m ruff check --fix systems models collect bench tests examples
 
 # Your runs go to $(RESULTS) (git-ignored); the committed reference results are under
 # results/reference/<budget>/, read-only (results/README.md). `make bench` ends with the

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("systems", "models", "collect", "bench", "tests")
+PACKAGES = ("systems", "models", "collect", "bench", "tests", "examples")
 
 
 @pytest.mark.skipif(importlib.util.find_spec("ruff") is None, reason="ruff is not installed")
