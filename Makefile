@@ -20,7 +20,7 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 	--python-version 3.11 --python-platform x86_64-manylinux_2_28 \
 	--generate-hashes --annotation-style line --custom-compile-command "make lock" --quiet
 
-.PHONY: install lock upgrade test test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean mujoco-data \
+.PHONY: install lock upgrade test golden test-slow lint format bench bench-seeds bench-all compare replicate stability perf figures report clean mujoco-data \
 	paper-core paper-core-status paper-core-pause paper-core-resume paper-core-drain paper-core-stop paper-core-report paper-gpu gpu-wheels \
 	paper-k paper-k-status paper-k-pause paper-k-resume paper-k-drain paper-k-stop
 
@@ -59,6 +59,10 @@ upgrade: $(UV)
 TEST_WORKERS ?= 2
 test: $(STAMP)
 	$(PY) -m pytest -m "not slow" -q -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
+
+# the committed report of the synthetic folders (tests/golden/), rewritten from today's code
+golden: $(STAMP)
+	DECON_UPDATE_GOLDEN=1 $(PY) -m pytest -q tests/test_figures.py -k golden $(PYTEST_ARGS)
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -q $(PYTEST_ARGS)

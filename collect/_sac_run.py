@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bench.core import atomic_write
+from systems import atomic_write
 from systems import mujoco_envs as mj
 
 from ._sac import (

@@ -8,6 +8,8 @@ from (:func:`load_other`'s verdicts, :func:`comparison_rows`), the report itself
 sections and rows."""
 
 import dataclasses
+import difflib
+import os
 import re
 from pathlib import Path
 
@@ -57,6 +59,33 @@ def results(tmp_path_factory):
     # only the folder built here beside it: the committed reference folders would add columns
     report = write_report(d, compare=[d / "paper"])
     return d, written, report.read_text()
+
+
+# The report written from the synthetic folders, as committed: any change to what the report
+# says of the same runs shows as a diff of this file. ``make golden`` rewrites it.
+GOLDEN = Path(__file__).with_name("golden") / "report_smoke.md"
+UPDATE_GOLDEN = "DECON_UPDATE_GOLDEN"
+
+
+def _normalised(text: str, folder: Path) -> str:
+    """``text`` without what differs between two writes of the same runs: the machine and date
+    lines, and the temporary folder's path and name."""
+    text = text.replace(str(folder), "<results>").replace(folder.name, "<results>")
+    keep = [line for line in text.splitlines() if not line.startswith(("- machine:", "- date:"))]
+    return "\n".join(keep) + "\n"
+
+
+def test_the_report_is_its_golden_file(results):
+    d, _, text = results
+    got = _normalised(text, d)
+    if os.environ.get(UPDATE_GOLDEN) == "1":
+        GOLDEN.parent.mkdir(exist_ok=True)
+        GOLDEN.write_text(got)
+    want = GOLDEN.read_text()
+    diff = "".join(
+        difflib.unified_diff(want.splitlines(True), got.splitlines(True), "golden", "written", n=1)
+    )
+    assert got == want, f"the report changed (accept it with `make golden`):\n{diff[:4000]}"
 
 
 @pytest.fixture(scope="module")
