@@ -37,7 +37,8 @@ canonical HNN). Checks, with one-line verdicts per model:
   (``bench.core.make_step``) with the paper-core configuration (AdamW, cosine over 30,000 steps,
   plain L1, float64), on the notebook's batches of 512 states (paper-core's are 32);
   ``ours_slow`` (not by default): the same at the notebook's effective starting rate
-  (:data:`SLOW_LR`), which tells the step size's part of a gap from the loss weights';
+  (:data:`SLOW_LR`), and ``ours_weighted`` (not by default): our trainer on the notebook's
+  weighted loss: they tell the step size's part of a gap from the loss weights';
 - (d) the budget: the step at which the seed's code reaches the final loss its notebook printed,
   or the loss reached and the measured seconds per step, and from them the CPU hours of the
   notebook's full schedule.
@@ -59,130 +60,31 @@ from pathlib import Path
 import numpy as np
 
 from . import _relativistic_seed as R
+from ._relativistic_ours import (  # noqa: F401 - the script's public names
+    CELLS,
+    PROFILE,
+    Ours,
+    SeedBatches,
+    WeightedSeedBatches,
+    net_of,
+    our_model,
+    ours_batch,
+    paper_core_config,
+)
 from ._relativistic_seed import EXPECTED, MODELS, SeedCodeError, check_seed_code  # noqa: F401
 from ._seed import ours_to_seed, seed_to_ours  # noqa: F401 - the script's public names
 
-CURVES = ("seed", "ours", "ours_slow")
+CURVES = ("seed", "ours", "ours_slow", "ours_weighted")
 DEFAULT_CURVES = ("seed", "ours")
 # ``ours_slow``: our trainer at the notebook's effective starting rate (its Adam counts steps in
 # epoch fractions, so it moves at about a third of its one-cycle rate: about 2e-4)
 SLOW_LR = 2e-4
-CELLS = {"lnn": ("lnn", "velocity"), "hnn_naive": ("hnn", "velocity"), "hnn_p": ("hnn", "momentum")}
-PROFILE = "paper-core"
+# ``ours_weighted``: our trainer on the notebook's loss (its weights towards c), our rate
 SEEDS_CLAIM = 10  # seeds per model in a claim-7 reading: the budget's multiplier
 # Tolerances of the verdicts
 TOL_PRINTED = 1e-3  # (0) relative, the seed's code here against the notebook's printout
 TOL = {"float32": (1e-3, 1e-2), "float64": (1e-9, 1e-7)}  # (a) field and loss, (b) gradient
 TOL_CURVE = 0.1  # (c) held-out loss of ours within 10 % of the seed's
-
-
-# ------------------------------------------------------------------------ our side
-def paper_core_config(model: str, seed: int):
-    """The ``relativistic_seed`` RunConfig of ``model`` at paper-core, for ``seed``."""
-    import bench
-
-    name, coords = CELLS[model]
-    (c,) = [
-        x
-        for x in bench.expand("relativistic_seed", PROFILE, seeds=[seed])
-        if (x.model, x.coordinates) == (name, coords)
-    ]
-    return c
-
-
-def net_of(model):
-    """The one MLP of our model (the HNN's H, the LNN's L)."""
-    return model.net if hasattr(model, "net") else model.hamiltonian_part.net
-
-
-def our_model(config, params, dtype: str):
-    """Our untrained model of ``config`` in ``dtype`` (as ``build_run`` makes it), with the
-    notebook's stax ``params`` as its MLP's."""
-    import equinox as eqx
-    import jax
-
-    import models
-
-    scene = models.Scene(
-        dof=1, angular=(False,), n_args=1, canonical=config.coordinates == "momentum"
-    )
-    model = models.make(
-        config.model,
-        scene,
-        key=jax.random.PRNGKey(config.seed),
-        width=config.width,
-        depth=config.depth,
-        activation=config.activation,
-        dtype=dtype,
-        dissipation=config.dissipation,
-        **dict(config.model_options),
-    )
-    return eqx.tree_at(net_of, model, seed_to_ours(params, net_of(model)))
-
-
-@dataclasses.dataclass(frozen=True)
-class SeedBatches:
-    """The objective of our trainer's step on a notebook batch (B, 5) = (z, args, dz) in our
-    model's coordinates: ``bench.core.loss_fn`` with the derivative target."""
-
-    def data(self, model, dataset, config):
-        import jax.numpy as jnp
-
-        return jnp.zeros((0,), jnp.dtype(config.dtype))
-
-    def loss(self, model, data, ix, config):
-        import jax.numpy as jnp
-
-        from bench.core import loss_fn
-
-        z, args, dz = ix[:, None, :2], ix[:, 2:3], ix[:, None, 3:]
-        return loss_fn(model, z, args, jnp.zeros((1,), ix.dtype), config, dz)
-
-
-def ours_batch(model: str, batch, dtype):
-    """The notebook's (states, g, targets) as our trainer's (B, 5) array."""
-    return np.concatenate(R.to_ours(model, *batch), 1).astype(dtype)
-
-
-class Ours:
-    """Our trainer's step on ``model`` with the training configuration ``tcfg``."""
-
-    def __init__(self, kind, model, tcfg):
-        import equinox as eqx
-        import jax
-        import jax.numpy as jnp
-
-        from bench.core import make_step, optimizer
-
-        self.kind, self.tcfg, self.objective = kind, tcfg, SeedBatches()
-        params, self.static = eqx.partition(model, eqx.is_inexact_array)
-        self.state = (params, optimizer(tcfg).init(params), jnp.asarray(False), params)
-        step = make_step(
-            self.static, tcfg, self.objective.data(model, None, tcfg), objective=self.objective
-        )
-        on = lambda idx: jnp.ones(idx.shape[0], bool)
-        self._run = jax.jit(lambda state, idx: jax.lax.scan(step, state, (idx, on(idx))))
-        field = lambda p, z, a: eqx.combine(p, self.static).vector_field(0.0, z, a)
-        self._field = jax.jit(jax.vmap(field, (None, 0, 0)))
-
-    @property
-    def model(self):
-        import equinox as eqx
-
-        return eqx.combine(self.state[0], self.static)
-
-    def train(self, batches):
-        block = np.stack([ours_batch(self.kind, b, self.tcfg.dtype) for b in batches])
-        self.state, (losses, failed) = self._run(self.state, block)
-        return np.asarray(losses, float), bool(np.asarray(failed).any())
-
-    def predict(self, state, g):
-        """The field at the notebook's (q, qdot), g, as its loss compares it."""
-        z, a, _ = R.to_ours(self.kind, state, g, np.zeros((len(g), 1)))
-        f = np.asarray(
-            self._field(self.state[0], z.astype(self.tcfg.dtype), a.astype(self.tcfg.dtype))
-        )
-        return R.seed_form(self.kind, f, np.asarray(state, float)[:, 1:])
 
 
 # ------------------------------------------------------------------------ the checks
@@ -308,6 +210,9 @@ def run_model(kind, a, root, curves, record, lines, curve_rows) -> dict:
     all_sides["ours"] = lambda: Ours(kind, our_model(config, init, config.dtype), tcfg)
     slow = dataclasses.replace(tcfg, lr=SLOW_LR)
     all_sides["ours_slow"] = lambda: Ours(kind, our_model(config, init, config.dtype), slow)
+    all_sides["ours_weighted"] = lambda: Ours(
+        kind, our_model(config, init, config.dtype), tcfg, WeightedSeedBatches(kind)
+    )
     sides = {c: all_sides[c]() for c in curves}
     hs, hg = R.held_out(a.n_eval, a.seed + 1_000_003)
     truth, v = R.seed_targets(kind, hs, hg), hs[:, 1:].astype(float)
