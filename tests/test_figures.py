@@ -68,10 +68,11 @@ UPDATE_GOLDEN = "DECON_UPDATE_GOLDEN"
 
 
 def _normalised(text: str, folder: Path) -> str:
-    """``text`` without what differs between two writes of the same runs: the machine and date
-    lines, and the temporary folder's path and name."""
+    """``text`` without what differs between two writes of the same runs: the machine, date and
+    commit lines, and the temporary folder's path and name."""
     text = text.replace(str(folder), "<results>").replace(folder.name, "<results>")
-    keep = [line for line in text.splitlines() if not line.startswith(("- machine:", "- date:"))]
+    volatile = ("- machine:", "- date:", "- commit:")
+    keep = [line for line in text.splitlines() if not line.startswith(volatile)]
     return "\n".join(keep) + "\n"
 
 
