@@ -19,10 +19,9 @@ _MODULES = {
     # the build step of a state run
     "_build": "build_run",
     # a run as data: RunConfig, its field vocabularies and its hashes
-    "_config": (
-        "COORDINATES DTYPES LOSSES OBSERVATIONS PIXEL_SIZE RunConfig TRAIN_TARGETS check_choice "
-        "field_names"
-    ),
+    "_config": "RunConfig field_names",
+    # the fields' vocabularies and the one-line check of a name
+    "_vocab": "COORDINATES DTYPES LOSSES OBSERVATIONS PIXEL_SIZE TRAIN_TARGETS check_choice",
     # runs that differ only in seed, learning rate or noise, trained as one program
     "_ensemble": "group_key plan_groups train_ensemble",
     # process settings made by entry points: 64-bit mode, threads, the compilation cache

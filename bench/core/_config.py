@@ -17,67 +17,37 @@ are not part of either hash: experiments that expand to the same run share it.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import functools
-import hashlib
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from models import METHODS as INTEGRATORS  # the one list of integrator names
 
-COORDINATES = ("velocity", "momentum")
-LOSSES = ("l1", "l2")
-DTYPES = ("float32", "float64")
-TRAIN_TARGETS = ("rollout", "derivative")
-# what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
-# measured trajectory read from a file, bench.core._measured; controlled: a MuJoCo task's
-# transitions under recorded controls, bench.core._controlled)
-OBSERVATIONS = ("state", "pixels", "frames", "measured", "controlled")
-OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
-LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
-# A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
-# |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)
-# (Pendulum-v0's reset). PIXEL_DEFAULTS: the fields a pixel run leaves at their defaults.
-PIXEL_SIZE = 28
-PIXEL_MAX_ANGLE = math.pi / 6
-PIXEL_MAX_SPEED = 1.0
-# The VIN seed's pixel task (observation "frames": single frames, each encoded to a position):
-# its starts |q0| in [pi/2, pi - 0.1] with either sign, qdot0 ~ U(-1, 1) (the authors' code,
-# steindoringi/Variational_Integrator_Networks, systems.py), far from rest so that the frames
-# go round most of the circle.
-FRAMES_ANGLES = (math.pi / 2, math.pi - 0.1)
-PIXEL_DEFAULTS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "rollout"),
-    ("friction", 0.0),
+from ._vocab import (  # noqa: F401 - the vocabularies, named here for the run's users too
+    CONTROLLED_DATA,
+    CONTROLLED_FIELDS,
+    COORDINATES,
+    DTYPES,
+    FRAMES_ANGLES,
+    LOSSES,
+    LR_SCHEDULES,
+    MEASURED_FIELDS,
+    OBSERVATIONS,
+    OPTIMIZERS,
+    PIXEL_DEFAULTS,
+    PIXEL_MAX_ANGLE,
+    PIXEL_MAX_SPEED,
+    PIXEL_SIZE,
+    TRAIN_TARGETS,
+    _as_float,
+    _as_int,
+    _frozen,
+    _hash,
+    _is_missing,
+    check_choice,
 )
-# A measured run's fixed fields (observation "measured": the states of the file, taken as
-# canonical, and their finite differences as targets)
-MEASURED_FIELDS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "derivative"),
-    ("coordinates", "momentum"),
-    ("friction", 0.0),
-    ("system_params", ()),
-    ("k", None),
-)
-# A controlled run's fixed fields (the raw state [q, v] of a MuJoCo task, rollout targets), and
-# its data: system_params (("data", "file"),) for the task's file, (("data", "stand-in"),) for
-# the random-control stand-in of the tests
-CONTROLLED_FIELDS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "rollout"),
-    ("coordinates", "velocity"),
-    ("friction", 0.0),
-    ("k", None),
-    ("train_box", ()),
-)
-CONTROLLED_DATA = ("file", "stand-in")
 
 
 @dataclass(frozen=True)
@@ -448,53 +418,6 @@ def _system(name: str, params: tuple):
         return systems.make(name, **dict(params))
 
 
-def _frozen(v):
-    """Lists (as JSON gives them back) as tuples, so that a configuration is hashable."""
-    return tuple(_frozen(x) for x in v) if isinstance(v, list | tuple) else v
-
-
-def _is_missing(v) -> bool:
-    return v is None or (isinstance(v, float) and math.isnan(v))
-
-
-def _as_int(v, name):
-    if isinstance(v, bool):
-        raise ValueError(f"{name} must be an integer; got {v!r}")
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an integer; got {v!r}") from None
-    if not f.is_integer():
-        raise ValueError(f"{name} must be an integer; got {v!r}")
-    return int(f)
-
-
-def _as_float(v, name):
-    if isinstance(v, bool):
-        raise ValueError(f"{name} must be a number; got {v!r}")
-    try:
-        return float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number; got {v!r}") from None
-
-
-def _hash(d: Mapping) -> str:
-    text = json.dumps(d, sort_keys=True, separators=(",", ":"), default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
 def field_names() -> tuple[str, ...]:
     """The RunConfig field names (the columns every run row carries)."""
     return tuple(f.name for f in dataclasses.fields(RunConfig))
-
-
-def check_choice(what: str, value, allowed: Sequence[str]) -> None:
-    """Raise ``ValueError("unknown <what> 'x'; allowed: ... (did you mean 'y'?)")``."""
-    allowed = list(allowed)
-    if value in allowed:
-        return
-    msg = f"unknown {what} {value!r}; allowed: {', '.join(map(str, allowed))}"
-    close = difflib.get_close_matches(str(value), [str(a) for a in allowed], n=1)
-    if close:
-        msg += f" (did you mean {close[0]!r}?)"
-    raise ValueError(msg)
