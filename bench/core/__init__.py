@@ -17,7 +17,7 @@ _MODULES = {
     # training on fresh states drawn from a box
     "_box": "BoxObjective BoxStates",
     # the build step of a state run
-    "_build": "build_run",
+    "_build": "build_run model_of",
     # a run as data: RunConfig, its field vocabularies and its hashes
     "_config": "RunConfig field_names",
     # the fields' vocabularies and the one-line check of a name

@@ -13,10 +13,29 @@ import systems
 from ._config import RunConfig
 
 
-def build_run(config: RunConfig, cache_root: Path):
-    """``(system, data, scene, model)`` of a state run; the model untrained."""
+def model_of(config: RunConfig, scene, *, width=None, depth=None, dtype=None):
+    """The untrained model of a run's configuration on ``scene``: ``models.make`` of its model
+    with its seed as the key, its width, depth, activation, dtype, dissipation and options
+    (``width``, ``depth``, ``dtype``: other values where a caller needs them)."""
     import jax
 
+    import models
+
+    return models.make(
+        config.model,
+        scene,
+        key=jax.random.PRNGKey(config.seed),
+        width=config.width if width is None else width,
+        depth=config.depth if depth is None else depth,
+        activation=config.activation,
+        dtype=config.dtype if dtype is None else dtype,
+        dissipation=config.dissipation,
+        **dict(config.model_options),
+    )
+
+
+def build_run(config: RunConfig, cache_root: Path):
+    """``(system, data, scene, model)`` of a state run; the model untrained."""
     import models
 
     system = systems.make(config.system, **config.system_kwargs())
@@ -28,17 +47,7 @@ def build_run(config: RunConfig, cache_root: Path):
         damped=config.friction > 0,
         canonical=config.coordinates == "momentum",
     )
-    model = models.make(
-        config.model,
-        scene,
-        key=jax.random.PRNGKey(config.seed),
-        width=config.width,
-        depth=config.depth,
-        activation=config.activation,
-        dtype=config.dtype,
-        dissipation=config.dissipation,
-        **dict(config.model_options),
-    )
+    model = model_of(config, scene)
     data = systems.make_dataset(dcfg, cache_dir=cache_root)
     if config.train_target == "derivative":
         clean = None

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._build import model_of
 from ._config import RunConfig
 
 SPLIT_SEED = 2021  # the reference converter's split seed; one split per task for all runs
@@ -41,21 +42,7 @@ def scene(task_name: str, standardisation=None):
 
 
 def _model(c: RunConfig, width: int, depth: int, standardisation=None):
-    import jax
-
-    import models
-
-    return models.make(
-        c.model,
-        scene(c.system, standardisation),
-        key=jax.random.PRNGKey(c.seed),
-        width=width,
-        depth=depth,
-        activation=c.activation,
-        dtype=c.dtype,
-        dissipation=c.dissipation,
-        **dict(c.model_options),
-    )
+    return model_of(c, scene(c.system, standardisation), width=width, depth=depth)
 
 
 def check_controlled_model(c: RunConfig) -> None:

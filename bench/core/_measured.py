@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from ._build import model_of
 from ._config import RunConfig
 from ._params import result_meta
 
@@ -60,25 +61,12 @@ class _Data:
 
 def build(c: RunConfig):
     """(measured data, training set, untrained model) of a run."""
-    import jax
-
-    import models
     from systems import real_pendulum as R
 
     data = R.load(c.system)
     x, dx = data.x[data.train], data.dx[data.train]
     train = _Data(np.zeros(1), x[:, None], np.zeros((len(x), 0)), dx[:, None])
-    model = models.make(
-        c.model,
-        _scene(),
-        key=jax.random.PRNGKey(c.seed),
-        width=c.width,
-        depth=c.depth,
-        activation=c.activation,
-        dtype=c.dtype,
-        **dict(c.model_options),
-    )
-    return data, train, model
+    return data, train, model_of(c, _scene())
 
 
 def train(c: RunConfig, built, cache_root, progress: bool):

@@ -8,6 +8,7 @@ import numpy as np
 
 from ._hnn_map import layer_diffs
 from ._hnn_ours import TERMS, seed_total
+from ._seed import verdict_line
 
 # The seed's README, pixel pendulum: final train and test loss (baseline, HNN)
 SEED_REPORTED = {"node": (1.7731e-4, 1.7306e-4), "hnn": (1.8683e-4, 1.8451e-4)}
@@ -18,10 +19,6 @@ TOL_GRAD = 1e-2  # (b) per layer ||g_seed - g_ours|| / ||g_ours||
 # their losses differ by 2x some hundred steps later) and one seed's held-out loss scatters by
 # up to 10x between logged steps late in training
 TOL_CURVE = 1.5
-
-
-def verdict_line(name, ok, detail, tol):
-    return f"({name}) {'agree' if ok else 'DIFFER'} within {tol}: {detail}"
 
 
 def first_below(points, value) -> int | None:

@@ -34,27 +34,17 @@ def net_of(model):
 
 
 def our_model(config, params, dtype: str):
-    """Our untrained model of ``config`` in ``dtype`` (as ``build_run`` makes it), with the
-    notebook's stax ``params`` as its MLP's."""
+    """Our untrained model of ``config`` in ``dtype`` (``bench.core.model_of``, as a run makes
+    it), with the notebook's stax ``params`` as its MLP's."""
     import equinox as eqx
-    import jax
 
     import models
+    from bench.core import model_of
 
     scene = models.Scene(
         dof=1, angular=(False,), n_args=1, canonical=config.coordinates == "momentum"
     )
-    model = models.make(
-        config.model,
-        scene,
-        key=jax.random.PRNGKey(config.seed),
-        width=config.width,
-        depth=config.depth,
-        activation=config.activation,
-        dtype=dtype,
-        dissipation=config.dissipation,
-        **dict(config.model_options),
-    )
+    model = model_of(config, scene, dtype=dtype)
     return eqx.tree_at(net_of, model, seed_to_ours(params, net_of(model)))
 
 

@@ -43,6 +43,22 @@ def check_checkout(path, repo: str, expected, whose: str = "the seed's") -> Path
     return root
 
 
+def verdict_line(name, ok, detail, tol) -> str:
+    """One check's line of ``verdicts.txt``: ``(name) agree within tol: detail`` (or DIFFER)."""
+    return f"({name}) {'agree' if ok else 'DIFFER'} within {tol}: {detail}"
+
+
+def write_table(path: Path, rows: list[dict], fieldnames=None) -> None:
+    """``rows`` as a CSV file with a header (``fieldnames``, default the first row's keys): the
+    side-by-side scripts' ``curves.csv`` and ``checks.csv``."""
+    import csv
+
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(fieldnames or rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
 def check_seed_code(path) -> Path:
     """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError."""
     return check_checkout(path, "MilesCranmer/lagrangian_nns", EXPECTED)

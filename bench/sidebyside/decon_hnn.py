@@ -43,7 +43,6 @@ docs/sidebyside.md (the paper's code section) has the measured numbers.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import os
 import subprocess
@@ -66,7 +65,7 @@ from ._decon import (
     wrapped_difference,
 )
 from ._decon_ours import Ours, loss_and_grad, paper_metric
-from ._seed import SeedCodeError
+from ._seed import SeedCodeError, verdict_line, write_table
 
 CURVES = ("paper", "mapped", "suite", "suite_mapped", "registered")
 PROFILE = "paper"
@@ -96,10 +95,6 @@ def run_config(model: str, seed: int):
     if len(cells) != 1:
         raise ValueError(f"{len(cells)} paper cells of {model} on chain_pendulum k = 2")
     return cells[0]
-
-
-def verdict_line(name, ok, detail, tol) -> str:
-    return f"({name}) {'agree' if ok else 'DIFFER'} within {tol}: {detail}"
 
 
 def run_paper(python, root, inp, out, log) -> dict:
@@ -376,14 +371,8 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
                 f"{TOL_CURVE:.0%}",
             )
         )
-    with open(out / "curves.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(curve_rows[0]))
-        w.writeheader()
-        w.writerows(curve_rows)
-    with open(out / "checks.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["check", "quantity", "paper", "ours", "rel"])
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "curves.csv", curve_rows)
+    write_table(out / "checks.csv", rows, ["check", "quantity", "paper", "ours", "rel"])
     np.save(out / "paper_losses.npy", paper["losses"])
     (out / "verdicts.txt").write_text("\n".join(lines) + "\n")
     return lines

@@ -47,7 +47,6 @@ rendered dataset there. The measured numbers: docs/sidebyside.md (the HNN seed's
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -79,6 +78,7 @@ from ._hnn_ours import (
     seed_total,
 )
 from ._hnn_verdicts import curve_verdicts, init_checks, update_check
+from ._seed import write_table
 
 MODELS = ("hnn", "node")
 CURVES = ("seed", "ours", "suite")
@@ -324,14 +324,8 @@ def main(argv=None) -> int:
         "seed_energy_mse",
         "seconds",
     ]
-    with open(out / "curves.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=names)
-        w.writeheader()
-        w.writerows(curve_rows)
-    with open(out / "checks.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["check", "model", "quantity", "seed", "ours", "rel"])
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "curves.csv", curve_rows, names)
+    write_table(out / "checks.csv", rows, ["check", "model", "quantity", "seed", "ours", "rel"])
     for f in out.glob("result_*.npz"):
         f.unlink()
     (out / "verdicts.txt").write_text("\n".join(lines) + "\n")

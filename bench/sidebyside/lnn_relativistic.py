@@ -50,7 +50,6 @@ the measured numbers and the conclusion.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import sys
@@ -72,7 +71,12 @@ from ._relativistic_ours import (  # noqa: F401 - the script's public names
     paper_core_config,
 )
 from ._relativistic_seed import EXPECTED, MODELS, SeedCodeError, check_seed_code  # noqa: F401
-from ._seed import ours_to_seed, seed_to_ours  # noqa: F401 - the script's public names
+from ._seed import (  # noqa: F401 - the script's public names
+    ours_to_seed,
+    seed_to_ours,
+    verdict_line,
+    write_table,
+)
 
 CURVES = ("seed", "ours", "ours_slow", "ours_weighted")
 DEFAULT_CURVES = ("seed", "ours")
@@ -138,10 +142,6 @@ def compare_init(record, kind, dtype, seed_out, ours_out):
     cos = float(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)))
     record("b", f"{tag}: cosine, the notebook's gradient vs our trainer's", None, None, cos)
     return rel_f, rel_l, worst, cos
-
-
-def verdict_line(name, ok, detail, tol):
-    return f"({name}) {'agree' if ok else 'DIFFER'} within {tol}: {detail}"
 
 
 def seconds_per_step(rows, curve, kind):
@@ -376,14 +376,8 @@ def main(argv=None) -> int:
             f"(d total) {c}: {SEEDS_CLAIM} seeds x {len(kinds)} models of the notebooks' schedule: "
             f"{total:.0f} CPU hours at the measured step times"
         )
-    with open(out / "curves.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(curve_rows[0]))
-        w.writeheader()
-        w.writerows(curve_rows)
-    with open(out / "checks.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["check", "quantity", "seed", "ours", "rel"])
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "curves.csv", curve_rows)
+    write_table(out / "checks.csv", rows, ["check", "quantity", "seed", "ours", "rel"])
     (out / "verdicts.txt").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     print(f"wrote {out / 'curves.csv'}, {out / 'checks.csv'}, {out / 'verdicts.txt'}")

@@ -46,7 +46,6 @@ the measured numbers and the conclusion.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import sys
@@ -63,6 +62,8 @@ from ._seed import (  # noqa: F401 - the script's public names
     load_seed,
     ours_to_seed,
     seed_to_ours,
+    verdict_line,
+    write_table,
 )
 
 CURVES = ("seed", "ours_seed_schedule", "ours_paper_core", "suite_paper_core")
@@ -85,25 +86,15 @@ def paper_core_config(seed: int):
 
 
 def our_model(config, seed_input: bool):
-    """Our untrained LNN of ``config`` (as ``bench.core._build.build_run`` makes it); with
+    """Our untrained LNN of ``config`` (``bench.core.model_of``, as a run makes it); with
     ``seed_input`` the seed's input (:class:`SeedFeatures`) instead of (cos q, sin q, qdot)."""
     import equinox as eqx
-    import jax
 
     import models
+    from bench.core import model_of
 
     scene = models.Scene(dof=2, angular=(not seed_input,) * 2)
-    model = models.make(
-        config.model,
-        scene,
-        key=jax.random.PRNGKey(config.seed),
-        width=config.width,
-        depth=config.depth,
-        activation=config.activation,
-        dtype=config.dtype,
-        dissipation=config.dissipation,
-        **dict(config.model_options),
-    )
+    model = model_of(config, scene)
     if seed_input:
         model = eqx.tree_at(lambda m: m.features, model, _seed_features_class()(scene))
     return model
@@ -256,10 +247,6 @@ def _compare_init(record, tag, n, ls, gs, lo, go):
             norms = float(np.linalg.norm(x_s)), float(np.linalg.norm(x_o))
             record("b", f"grad layer {i} {kind}{tag}", *norms, rel)
     return rel_a, worst
-
-
-def verdict_line(name, ok, detail, tol):
-    return f"({name}) {'agree' if ok else 'DIFFER'} within {tol}: {detail}"
 
 
 def main(argv=None) -> int:
@@ -454,10 +441,7 @@ def main(argv=None) -> int:
             alive[c] = not failed
         done += k
 
-    with open(out / "curves.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(curve_rows[0]))
-        w.writeheader()
-        w.writerows(curve_rows)
+    write_table(out / "curves.csv", curve_rows)
     if "seed" in curves:
         final = {r["curve"]: r for r in curve_rows if r["step"] == done}
         s = final["seed"]["heldout_l1"]
@@ -478,10 +462,7 @@ def main(argv=None) -> int:
                     f"{TOL_CURVE:.0%}",
                 )
             )
-    with open(out / "checks.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["check", "quantity", "seed", "ours", "rel"])
-        w.writeheader()
-        w.writerows(rows)
+    write_table(out / "checks.csv", rows, ["check", "quantity", "seed", "ours", "rel"])
     (out / "verdicts.txt").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     print(f"wrote {out / 'curves.csv'}, {out / 'checks.csv'}, {out / 'verdicts.txt'}")
