@@ -168,3 +168,43 @@ def test_our_model_with_stax_parameters_is_the_notebooks(kind):
         ]
     )
     np.testing.assert_allclose(ours, want, rtol=1e-9, atol=1e-12)
+
+
+def test_ours_seed_adam_steps_our_model_by_the_notebooks_optimiser():
+    """``ours_seed_adam``: the notebook's ``opt_update``, given the fraction done, steps our
+    parameters; at fraction 0 Adam's first step is -lr sign(gradient of the notebook's loss)."""
+    import types
+
+    import equinox as eqx
+    from jax.example_libraries import optimizers
+
+    from bench.core import train_config
+    from bench.sidebyside._relativistic_ours import OursSeedAdam, WeightedSeedBatches, ours_batch
+
+    lr = 3e-2  # not the run's own rate: the step must be the notebook optimiser's
+    opt_init, opt_update, get_params = optimizers.adam(lr)
+    nb = types.SimpleNamespace(opt_init=opt_init, opt_update=opt_update, get_params=get_params)
+    nb.steps = 100
+    config = dataclasses.replace(S.paper_core_config("hnn_p", 0), width=8, depth=2)
+    tcfg = train_config(config)
+    model = S.our_model(config, _stax_net(8)[0], tcfg.dtype)
+    rng = np.random.default_rng(3)
+    state = np.concatenate([rng.uniform(-10, 10, (16, 1)), rng.uniform(-0.9, 0.9, (16, 1))], 1)
+    g = 10 * rng.standard_normal((16, 1))
+    batch = (state, g, R.seed_targets("hnn_p", state, g))
+    ix = jnp.asarray(ours_batch("hnn_p", batch, tcfg.dtype))
+    loss = lambda m: WeightedSeedBatches("hnn_p").loss(m, None, ix, tcfg)
+    grads = eqx.filter_grad(loss)(model)
+    side = OursSeedAdam("hnn_p", model, tcfg, nb)
+    before = eqx.filter(model, eqx.is_inexact_array)
+    losses, failed = side.train([batch])
+    assert not failed and side.done == 1
+    np.testing.assert_allclose(losses, [float(loss(model))], rtol=1e-12)
+    after = eqx.filter(side.model, eqx.is_inexact_array)
+    moved = jax.tree.map(lambda a, b: np.asarray(a - b), after, before)
+    checked = 0
+    for d, gr in zip(jax.tree.leaves(moved), jax.tree.leaves(grads), strict=True):
+        big = np.abs(np.asarray(gr)) > 1e-6  # H's last bias has none: the field ignores it
+        np.testing.assert_allclose(d[big], -lr * np.sign(np.asarray(gr)[big]), rtol=1e-2)
+        checked += int(big.sum())
+    assert checked > 100

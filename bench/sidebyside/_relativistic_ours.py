@@ -132,3 +132,38 @@ class Ours:
             self._field(self.state[0], z.astype(self.tcfg.dtype), a.astype(self.tcfg.dtype))
         )
         return R.seed_form(self.kind, f, np.asarray(state, float)[:, 1:])
+
+
+class OursSeedAdam(Ours):
+    """Our model on the notebook's loss (:class:`WeightedSeedBatches`), stepped by the notebook's
+    own optimiser (the ``ours_seed_adam`` curve): its ``opt_update`` of
+    ``jax.example_libraries.optimizers`` (Adam on its one-cycle rate), given the run's fraction
+    done as its step count, as ``update_derivative`` gives it. With the model and the loss
+    already shown equal, what this curve leaves between ours and the seed's is the optimiser."""
+
+    def __init__(self, kind, model, tcfg, nb):
+        import equinox as eqx
+        import jax
+
+        super().__init__(kind, model, tcfg, WeightedSeedBatches(kind))
+        self.nb, self.done = nb, 0
+        self.opt_state = nb.opt_init(self.state[0])
+        objective = self.objective
+
+        def step(opt_state, fraction, ix):
+            params = nb.get_params(opt_state)
+            loss_of = lambda p: objective.loss(eqx.combine(p, self.static), None, ix, tcfg)
+            loss, grads = jax.value_and_grad(loss_of)(params)
+            return nb.opt_update(fraction, grads, opt_state), loss
+
+        self._step = jax.jit(step)
+
+    def train(self, batches):
+        losses = []
+        for b in batches:
+            ix = ours_batch(self.kind, b, self.tcfg.dtype)
+            self.opt_state, loss = self._step(self.opt_state, self.done / self.nb.steps, ix)
+            losses.append(float(loss))
+            self.done += 1
+        self.state = (self.nb.get_params(self.opt_state), *self.state[1:])
+        return np.asarray(losses), not np.all(np.isfinite(losses))

@@ -122,11 +122,11 @@ def custom_init_seed(cells: list[str]) -> int | None:
 def load_notebook(root, model: str) -> types.SimpleNamespace:
     """One relativistic notebook's code as a namespace: ``init(seed)`` its initial parameters
     (stax's init at PRNGKey(seed), then ``custom_init`` where the notebook calls it), ``loss``,
-    ``update_derivative``, ``OneCycleLR``, ``opt_init``, ``get_params``, ``gen_data_batch``,
-    ``qdotdot``, ``eom(params, states, g)`` its predictions as its loss compares them,
-    ``args``, ``batch`` (its loop's), ``minibatch_per``, ``steps`` (epochs x minibatches),
-    ``lr``, ``log`` (its printed (epoch, loss) lines) and ``printed_init`` (its printed loss at
-    initialisation, :func:`printed_init_loss`)."""
+    ``update_derivative``, ``OneCycleLR``, ``opt_init``, ``opt_update``, ``get_params``,
+    ``gen_data_batch``, ``qdotdot``, ``eom(params, states, g)`` its predictions as its loss
+    compares them, ``args``, ``batch`` (its loop's), ``minibatch_per``, ``steps`` (epochs x
+    minibatches), ``lr``, ``log`` (its printed (epoch, loss) lines) and ``printed_init`` (its
+    printed loss at initialisation, :func:`printed_init_loss`)."""
     import jax
     import jax.numpy as jnp
 
@@ -196,6 +196,7 @@ def load_notebook(root, model: str) -> types.SimpleNamespace:
         update_derivative=ns["update_derivative"],
         OneCycleLR=ns["OneCycleLR"],
         opt_init=ns["opt_init"],
+        opt_update=ns["opt_update"],
         get_params=ns["get_params"],
         gen_data_batch=ns["gen_data_batch"],
         qdotdot=ns["qdotdot"],

@@ -38,7 +38,9 @@ canonical HNN). Checks, with one-line verdicts per model:
   plain L1, float64), on the notebook's batches of 512 states (paper-core's are 32);
   ``ours_slow`` (not by default): the same at the notebook's effective starting rate
   (:data:`SLOW_LR`), and ``ours_weighted`` (not by default): our trainer on the notebook's
-  weighted loss: they tell the step size's part of a gap from the loss weights';
+  weighted loss: they tell the step size's part of a gap from the loss weights'; and
+  ``ours_seed_adam`` (not by default): our model on the notebook's loss, stepped by the
+  notebook's own optimiser and schedule: what it leaves between the sides is the optimiser;
 - (d) the budget: the step at which the seed's code reaches the final loss its notebook printed,
   or the loss reached and the measured seconds per step, and from them the CPU hours of the
   notebook's full schedule.
@@ -63,6 +65,7 @@ from ._relativistic_ours import (  # noqa: F401 - the script's public names
     CELLS,
     PROFILE,
     Ours,
+    OursSeedAdam,
     SeedBatches,
     WeightedSeedBatches,
     net_of,
@@ -78,7 +81,7 @@ from ._seed import (  # noqa: F401 - the script's public names
     write_table,
 )
 
-CURVES = ("seed", "ours", "ours_slow", "ours_weighted")
+CURVES = ("seed", "ours", "ours_slow", "ours_weighted", "ours_seed_adam")
 DEFAULT_CURVES = ("seed", "ours")
 # ``ours_slow``: our trainer at the notebook's effective starting rate (its Adam counts steps in
 # epoch fractions, so it moves at about a third of its one-cycle rate: about 2e-4)
@@ -212,6 +215,9 @@ def run_model(kind, a, root, curves, record, lines, curve_rows) -> dict:
     all_sides["ours_slow"] = lambda: Ours(kind, our_model(config, init, config.dtype), slow)
     all_sides["ours_weighted"] = lambda: Ours(
         kind, our_model(config, init, config.dtype), tcfg, WeightedSeedBatches(kind)
+    )
+    all_sides["ours_seed_adam"] = lambda: OursSeedAdam(
+        kind, our_model(config, init, config.dtype), tcfg, nb
     )
     sides = {c: all_sides[c]() for c in curves}
     hs, hg = R.held_out(a.n_eval, a.seed + 1_000_003)
