@@ -8,8 +8,15 @@ from __future__ import annotations
 import argparse
 import json
 
-from .core import PROFILES, RunConfig, check_choice, field_names, profile_defaults
-from .studies._options import float_arg, int_arg
+from .core import (
+    PROFILES,
+    RunConfig,
+    check_choice,
+    field_names,
+    float_arg,
+    int_arg,
+    profile_defaults,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

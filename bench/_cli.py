@@ -21,12 +21,14 @@ from pathlib import Path
 
 from . import _adhoc, _score  # _score registers the verb score
 from ._compare import OWN_DIR, reference_dir
-from .core import PROFILES, check_choice, commands
-from .studies._options import (
+from .core import (
+    PROFILES,
+    check_choice,
     check_sweep_args,
+    commands,
     int_arg,
-    run_experiments,
     seed_list,
+    sweep_from_args,
     sweep_options,
     usable_results,
 )
@@ -203,11 +205,9 @@ def _do_sweep(args, names) -> int:
         print("no experiments yet")
         return 0
     usable_results(args)
-    from .studies import run_seconds
-
-    # longest runs first: the workers finish together
+    # longest runs first (the registered cost model): the workers finish together
     seeds = seed_list(getattr(args, "seeds", None))
-    res = run_experiments(args, names, order=run_seconds, seeds=seeds)
+    res = sweep_from_args(args, names, seeds=seeds)
     for name, rows in res.items():
         counts = {}
         for r in rows:
@@ -218,7 +218,7 @@ def _do_sweep(args, names) -> int:
 
 def _cmd_preflight(args) -> int:
     from ._preflight import preflight
-    from .studies._options import model_list
+    from .core import model_list
 
     check_choice("profile", args.profile, list(PROFILES))
     rows = preflight(_sweep_names(args), args.profile, steps=args.steps, models=model_list(args))

@@ -11,10 +11,9 @@ import numpy as np
 import pandas as pd
 
 from .core import cell_key, expand, option, params_of, parse_pairs, row_cell_keys, variant
-from .kit import MODEL_LABELS, TRIVIAL_MODELS, discrimination, several_rates
+from .kit import MODEL_LABELS, TRIVIAL_MODELS, discrimination, several_rates, velocity_scores
 from .kit import fmt as _fmt
 from .kit import md_escape as _md_escape
-from .studies.paper import velocity_scores
 
 
 def _pm(mean, sem) -> str:

@@ -436,7 +436,7 @@ def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):
 
     ran = []
     monkeypatch.setattr(
-        _commands, "run_experiments", lambda args, names, **kw: ran.append(names) or {}
+        _commands, "sweep_from_args", lambda args, names, **kw: ran.append(names) or {}
     )
     assert main(["--results", str(tmp_path), "campaign", "--claims", "9, 12"]) == 0
     want = {n for n in C.campaign_experiments("paper-core") if E.get(n).claim in (9, 12)}
@@ -500,3 +500,18 @@ def test_a_replication_runs_only_cells_whose_own_seeds_are_stored(tmp_path):
     ready = C.replicable(tmp_path, "paper-core", ["coordinates"])
     assert all(map(ready, mine))
     assert not any(ready(c) for c in rep if c.system == "spring_pendulum")  # none stored
+
+
+def test_sweeps_order_their_runs_by_the_registered_cost_model(monkeypatch):
+    """The paper's campaign registers its ``run_seconds`` as the suite's cost model; without
+    one a run costs its training work; a cost model must be callable."""
+    import bench
+    from bench.core import _studies
+    from bench.studies.paper.campaign import run_seconds
+
+    c = bench.expand("second_order", "quick", seeds=[0])[0]
+    assert _studies.run_cost(c) == run_seconds(c) > 0
+    monkeypatch.setattr(_studies, "_COST_MODEL", [])
+    assert _studies.run_cost(c) == c.steps * c.batch * c.width
+    with pytest.raises(ValueError, match="callable"):
+        _studies.register_cost_model(3)

@@ -351,7 +351,7 @@ def test_section_and_figure_from_a_results_folder(tmp_path):
 # ------------------------------------------------------------------------ the command line
 def test_cli_diagnose_and_seeds_options(capsys):
     from bench._cli import main
-    from bench.studies._options import seed_list as _seed_list
+    from bench.core import seed_list as _seed_list
 
     with pytest.raises(SystemExit) as e:
         main(["diagnose-lnn", "--help"])

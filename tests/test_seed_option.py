@@ -6,7 +6,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from bench.studies._options import seed_list
+from bench.core import seed_list
 
 
 @pytest.mark.parametrize(

@@ -50,6 +50,11 @@ _MODULES = {
         "energy_violation_curve geometric_mean mse n_params perturbed_floor relative_error "
         "rollout_error state_difference symplectic_error valid_prediction_time wrap"
     ),
+    # command-line options shared by the CLI's verbs and the studies'
+    "_options": (
+        "check_sweep_args float_arg int_arg model_list seed_list sweep_from_args sweep_options "
+        "usable_results"
+    ),
     # the update rule and its learning-rate schedule
     "_optim": "lr_schedule optimizer",
     # the parameter cache
@@ -80,7 +85,7 @@ _MODULES = {
     # whether the registered models can run a configuration
     "_runnable": "check_runnable",
     # sweeps: many runs, the stored ones skipped, each row written as it arrives
-    "_runner": "imap_unordered run_experiments sweep to_velocity worker_pool",
+    "_runner": "imap_unordered sweep to_velocity worker_pool",
     # the results tables' columns
     "_schema": "SCHEMA_VERSION",
     # the results store: row files and the tables rebuilt from them
@@ -91,8 +96,8 @@ _MODULES = {
     ),
     # the registry of studies, their command-line verbs and report sections
     "_studies": (
-        "Command ReportContext ReportSection Study commands register_command register_section "
-        "register_study report_sections studies"
+        "Command ReportContext ReportSection Study commands register_command "
+        "register_cost_model register_section register_study report_sections studies"
     ),
     # the one training loop
     "_train": (

@@ -1,9 +1,10 @@
 """The one registry of studies (name -> experiments, verdict rule, figure, report section), of
-the command-line verbs they own and of the report sections they add before the experiments'.
+the command-line verbs they own, of the report sections they add before the experiments', and of
+the suite's cost model (an estimate of a run's seconds, by which sweeps order their runs).
 
 A study is a module under ``bench.studies`` (or a third-party module) that declares its
-experiments and calls :func:`register_study` at import. ``bench`` imports ``bench.studies``, so
-the built-in studies are registered whenever any part of ``bench`` is loaded. Third-party
+experiments and calls :func:`register_study` at import. The first read of a registry imports
+the built-in studies (``bench.studies``), then the third-party ones. Third-party
 studies are modules named by the Python entry-point group ``decon_bench.studies``; the tests add
 modules with ``DECON_EXTRA_EXPERIMENTS`` (comma-separated module names). Both are imported once,
 here, the first time the registry is read.
@@ -28,8 +29,10 @@ __all__ = [
     "commands",
     "register_command",
     "register_section",
+    "register_cost_model",
     "register_study",
     "report_sections",
+    "run_cost",
     "studies",
 ]
 
@@ -157,3 +160,25 @@ def report_sections() -> list[ReportSection]:
     """The registered report sections, in registration order (the report's order)."""
     load_plugins()
     return list(_SECTIONS.values())
+
+
+_COST_MODEL: list[Callable] = []
+
+
+def register_cost_model(seconds: Callable) -> Callable:
+    """Make ``seconds(config) -> float``, an estimate of one run's seconds, the suite's cost
+    model: sweeps run the longest runs first by it (:func:`run_cost`). The last one registered
+    counts."""
+    if not callable(seconds):
+        raise ValueError(f"register_cost_model expects a callable; got {type(seconds).__name__}")
+    _COST_MODEL[:] = [seconds]
+    return seconds
+
+
+def run_cost(config) -> float:
+    """The registered cost model's estimate of ``config``'s seconds; without one, a proxy
+    proportional to its training work (steps x batch x width)."""
+    load_plugins()
+    if _COST_MODEL:
+        return float(_COST_MODEL[0](config))
+    return float(config.steps * config.batch * config.width)

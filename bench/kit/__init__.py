@@ -28,8 +28,9 @@ margin), ``condition`` (a stated condition of other parts that must hold), ``sim
 fits better beyond the loss margin), ``gated``.
 
 Per-seed values (:mod:`._seeds`): ``at_lr`` (the rows at one learning rate), ``scored`` (failed
-runs at the worst error), ``cell_rows``, ``log_per_seed``, ``paired`` (per seed log(metric A /
-metric B)), ``curve_slopes``.
+runs at the worst error; ``velocity_scores``: momentum runs scored on their velocities),
+``cell_rows``, ``log_per_seed``, ``paired`` (per seed log(metric A / metric B)),
+``curve_slopes``.
 
 Verdict (:mod:`._verdict`, :mod:`._holm`): ``verdict`` is *reproduced* when every part holds,
 *partly reproduced* when some hold and some are contradicted, *not reproduced* when some are
@@ -127,6 +128,7 @@ from ._seeds import (
     scored,
     seed_sets,
     seed_span,
+    velocity_scores,
 )
 from ._sensitivity import Dependence, margin_dependence
 from ._so_share import so_share
@@ -193,6 +195,7 @@ __all__ = [
     "paper_spring",
     "required_seeds",
     "scored",
+    "velocity_scores",
     "seed_sets",
     "seed_span",
     # trivial predictors

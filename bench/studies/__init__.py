@@ -6,14 +6,13 @@ only when ``python -m bench perf`` measures).
 Importing this package registers every built-in study in :mod:`bench.core`'s registry
 (:func:`bench.core.studies`); the order of the imports is the report's order. A study imports
 ``bench.core``, the claims kit (``bench.kit``) and other studies, never the CLI or the report.
-:func:`run_seconds` is the suite's estimate of one run's time (the paper budget's cost model):
-sweeps start the longest runs first by it.
+The paper's campaign registers the suite's cost model (``run_seconds``, the paper budget's
+estimate of a run's time; :func:`bench.core.run_cost`): sweeps start the longest runs first by it.
 """
 
 from . import paper, tradeoff  # noqa: I001 - registration order
 from . import stability
 from . import learning
 from . import perf
-from .paper.campaign import run_seconds
 
-__all__ = ["learning", "paper", "perf", "run_seconds", "stability", "tradeoff"]
+__all__ = ["learning", "paper", "perf", "stability", "tradeoff"]

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...core import PROFILES, Command, check_choice, register_command
-from .._options import int_arg, usable_results
+from ...core import PROFILES, Command, check_choice, int_arg, register_command, usable_results
 
 
 def _arguments(p):

@@ -4,6 +4,7 @@ the wall-time budget that orders and plans them (``_budget``, from the measured 
 import). The selection, the order and how hours are estimated: docs/studies/campaign.md.
 """
 
+from ....core import register_cost_model
 from . import _commands  # noqa: F401 - registers the paper's verbs
 from ._budget import (
     MS_PER_STEP,
@@ -16,6 +17,8 @@ from ._budget import (
     total_seconds,
 )
 from ._campaign import CAMPAIGN_CLAIMS, campaign_experiments, plan, priority
+
+register_cost_model(run_seconds)  # sweeps run the longest runs first by it
 
 __all__ = [
     "CAMPAIGN_CLAIMS",

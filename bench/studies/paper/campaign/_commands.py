@@ -4,11 +4,14 @@ register their own verbs, in their folders."""
 
 from __future__ import annotations
 
-from ....core import PROFILES, Command, check_choice, register_command
-from ..._options import (
+from ....core import (
+    PROFILES,
+    Command,
+    check_choice,
     check_sweep_args,
     int_arg,
-    run_experiments,
+    register_command,
+    sweep_from_args,
     sweep_options,
     usable_results,
 )
@@ -159,7 +162,7 @@ def _campaign(args) -> int:
     key = priority(args.profile, seeds, order, claims)
     # a replication follows its cell's own seeds (a cell declared since runs them first)
     where = replicable(args.results, args.profile, names) if seeds else None
-    res = run_experiments(args, names, order=key, seeds=seeds, where=where)
+    res = sweep_from_args(args, names, order=key, seeds=seeds, where=where)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
     return 0

@@ -3,8 +3,7 @@ replayed and probed, into ``<results>/hnn_diagnosis.csv``."""
 
 from __future__ import annotations
 
-from ....core import Command, register_command
-from ..._options import int_arg, usable_results
+from ....core import Command, int_arg, register_command, usable_results
 
 
 def _arguments(p):

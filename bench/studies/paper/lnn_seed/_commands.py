@@ -3,8 +3,7 @@
 
 from __future__ import annotations
 
-from ....core import Command, register_command
-from ..._options import usable_results
+from ....core import Command, register_command, usable_results
 
 
 def _arguments(p):

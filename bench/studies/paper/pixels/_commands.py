@@ -4,8 +4,7 @@ changed (:mod:`._ablation`), into the ablation's CSV file."""
 
 from __future__ import annotations
 
-from ....core import Command, register_command
-from ..._options import seed_list, usable_results
+from ....core import Command, register_command, seed_list, usable_results
 from ._ablation import ABLATIONS
 
 

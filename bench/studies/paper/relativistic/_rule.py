@@ -24,28 +24,11 @@ from ....kit import (
     n_bad,
     non_trivial,
     policy,
-    scored,
     undecided,
+    velocity_scores,
     verdict,
 )
 from .._common import CLAIM_TITLES
-
-
-def velocity_scores(runs: pd.DataFrame, metric: str = "rollout_error") -> tuple[pd.Series, str]:
-    """Claim 7's scores on (q, qdot): ``metric`` for velocity runs, ``<metric>_velocity`` (the
-    prediction decoded to velocities) for momentum runs; failed runs at the worst error.
-    Returns (scores, note); rows from before the velocity column fall back to ``metric``."""
-    s = scored(runs, metric)
-    mom = runs["coordinates"] == "momentum" if len(runs) else pd.Series(dtype=bool)
-    col = f"{metric}_velocity"
-    note = ""
-    if mom.any():
-        if col in runs and pd.to_numeric(runs.loc[mom, col], errors="coerce").notna().any():
-            s = s.where(~mom, scored(runs, col))
-        else:
-            note = f"no {col} column: the (q, p) HNN is scored in (q, p)"
-    return s, note
-
 
 ROLLOUT_VARIANT = "rollout loss"
 _NAIVE = {"model": "hnn", "coordinates": "velocity", "opt:momentum_map": False}

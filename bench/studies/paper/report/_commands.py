@@ -4,8 +4,7 @@ the report reads it there)."""
 
 from __future__ import annotations
 
-from ....core import Command, register_command
-from ..._options import int_arg
+from ....core import Command, int_arg, register_command
 
 
 def _arguments(p):

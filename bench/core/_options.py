@@ -1,7 +1,8 @@
 """Command-line options and checks shared by the CLI's verbs and the verbs the studies register.
 
-Here, below the CLI, so that a study's verb parses ``--workers`` or ``--seeds`` and runs a sweep
-the way ``python -m bench sweep`` does without importing the CLI.
+Here, in the core beside the registry of verbs (:mod:`._studies`), so that a study's verb parses
+``--workers`` or ``--seeds`` and runs a sweep the way ``python -m bench sweep`` does without
+importing the CLI, and the CLI parses them without importing a study.
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ import math
 import re
 from pathlib import Path
 
-from ..core import PROFILES, check_choice
+from ._experiments import PROFILES
+from ._vocab import check_choice
 
 __all__ = [
     "SEEDS_FORMS",
@@ -19,8 +21,8 @@ __all__ = [
     "float_arg",
     "int_arg",
     "model_list",
-    "run_experiments",
     "seed_list",
+    "sweep_from_args",
     "sweep_options",
     "usable_results",
 ]
@@ -91,7 +93,7 @@ def check_sweep_args(args):
 
 def usable_results(args) -> Path:
     """The results folder, created and writable, or a one-line ValueError (exit code 2)."""
-    from ..core import check_results_dir
+    from ._store import check_results_dir
 
     return check_results_dir(args.results, create=True)
 
@@ -131,10 +133,12 @@ def model_list(args) -> list[str] | None:
     return names
 
 
-def run_experiments(args, names, *, order, seeds=None, where=None) -> dict:
+def sweep_from_args(args, names, *, order=None, seeds=None, where=None) -> dict:
     """One sweep of ``names`` with the :func:`sweep_options` of ``args`` (``where``: a
-    predicate on the runs to keep)."""
-    from ..core import run_experiments as run
+    predicate on the runs to keep), the longest runs first by ``order`` (default: the registered
+    cost model, :func:`bench.core.run_cost`)."""
+    from ._runner import run_experiments as run
+    from ._studies import run_cost
 
     return run(
         names,
@@ -143,7 +147,7 @@ def run_experiments(args, names, *, order, seeds=None, where=None) -> dict:
         seeds=seeds,
         models=model_list(args),
         where=where,
-        order=order,
+        order=run_cost if order is None else order,
         executor=args.executor,
         workers=None if args.workers == 0 else args.workers,
         address=args.address,
