@@ -1,14 +1,13 @@
 """A run as data: the frozen :class:`RunConfig`, its field vocabularies and its hashes.
 
-A :class:`RunConfig` is checked once, when it is built: every field's value, the system with
-its parameters and the dataset's shape (its ``systems.DatasetConfig``), and a pixel run's
-restrictions; each problem is a one-line ValueError naming what is allowed. What depends on the
-registered models (the model for the scene, the integrators its rollout accepts) is asked of
-the models by :func:`bench.core._runnable.check_runnable` before a sweep runs anything.
-
-The run's observation kind (``observation``, :mod:`bench.core._observation`) checks the
-values that concern it, and the fields that apply to one kind only (its ``options``) must stay
-at their defaults on the others.
+A :class:`RunConfig` is checked once, when it is built: every field's value, the fields that
+apply to one observation kind only (a kind's ``options``) at their defaults on the other kinds,
+then the run's own kind's checks (``observation``, :mod:`bench.core._observation`: e.g. a state
+run's system with its parameters and the dataset's shape, its ``systems.DatasetConfig``, or a
+pixel run's restrictions); each problem is a one-line ValueError naming what is allowed. What
+depends on the registered models (the model for the scene, the integrators its rollout accepts)
+is asked of the models by :func:`bench.core._runnable.check_runnable` before a sweep runs
+anything.
 
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
 of every field (a field declared with :func:`_hashed_unless_default`, e.g. ``eval_checkpoints``
