@@ -26,7 +26,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import bench.core._execute as execute
 import bench.core._runner as runner
 from bench._cli import main
 from bench.core import (
@@ -36,6 +35,7 @@ from bench.core import (
     _store,
     check_runnable,
     expand,
+    observation_kinds,
     register,
     storage_error,
 )
@@ -388,12 +388,12 @@ def test_full_disk_in_a_run_stops_the_sweep_not_recorded_as_failed(tmp_path, mon
     configs = expand(RESUME, "smoke")[:3]
     res = tmp_path / "res"
 
-    def build(config, cache_root):
+    def build(self, config, cache_root):  # the state runs' build step
         if config.seed == 1:
             raise OSError(errno.ENOSPC, "No space left on device", str(cache_root / "x.npz"))
         raise RuntimeError("a bug in this run")  # an ordinary failure: recorded, not fatal
 
-    monkeypatch.setattr(execute, "build_run", build)
+    monkeypatch.setattr(type(observation_kinds()["state"]), "build", build)
     with pytest.raises(StorageError, match="No space left on device.*after 1 new of 3 runs"):
         runner.sweep(configs, res, progress=False, cache_root=tmp_path / "cache")
     rows = _store.read_rows(res)

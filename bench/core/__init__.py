@@ -35,6 +35,8 @@ _MODULES = {
     "_evaluate": "CHECKPOINT_METRICS eval_integrator",
     # one run as a pipeline: build -> train -> evaluate -> record
     "_execute": "execute_run",
+    # the observation kinds of a run (what the models see) and their registry
+    "_observation": "Member Observation observation_kinds register_observation",
     # experiments as data, their profiles, papers and selections
     "_experiments": (
         "Experiment PAPERS PROFILES REPLICATION_SEEDS SELECTIONS available expand get "

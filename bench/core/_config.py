@@ -1,17 +1,20 @@
 """A run as data: the frozen :class:`RunConfig`, its field vocabularies and its hashes.
 
-A :class:`RunConfig` is checked once, when it is built: every field's value, the system with
-its parameters and the dataset's shape (its ``systems.DatasetConfig``), and a pixel run's
-restrictions; each problem is a one-line ValueError naming what is allowed. What depends on the
-registered models (the model for the scene, the integrators its rollout accepts) is asked of
-the models by :func:`bench.core._runnable.check_runnable` before a sweep runs anything.
+A :class:`RunConfig` is checked once, when it is built: every field's value, the fields that
+apply to one observation kind only (a kind's ``options``) at their defaults on the other kinds,
+then the run's own kind's checks (``observation``, :mod:`bench.core._observation`: e.g. a state
+run's system with its parameters and the dataset's shape, its ``systems.DatasetConfig``, or a
+pixel run's restrictions); each problem is a one-line ValueError naming what is allowed. What
+depends on the registered models (the model for the scene, the integrators its rollout accepts)
+is asked of the models by :func:`bench.core._runnable.check_runnable` before a sweep runs
+anything.
 
 A run's identity is its content: ``config_hash`` = sha256 of the canonical JSON (sorted keys)
-of every field (fields added later, ``eval_checkpoints`` and ``train_target``, count only when
-they differ from their defaults, 0 and "rollout"),
-``train_hash`` the same over every field except the ``eval_*`` ones, so runs
-that differ only in how they are evaluated share one training. Experiment and profile names
-are not part of either hash: experiments that expand to the same run share it.
+of every field (a field declared with :func:`_hashed_unless_default`, e.g. ``eval_checkpoints``
+or ``train_target``, counts only when it differs from its default), ``train_hash`` the same over
+every field except the ``eval_*`` ones, so runs that differ only in how they are evaluated
+share one training. Experiment and profile names are not part of either hash: experiments that
+expand to the same run share it.
 """
 
 from __future__ import annotations
@@ -25,18 +28,14 @@ from dataclasses import dataclass
 
 from models import METHODS as INTEGRATORS  # the one list of integrator names
 
+from ._observation import Observation, observation_kind, observation_kinds, observations
 from ._vocab import (  # noqa: F401 - the vocabularies, named here for the run's users too
-    CONTROLLED_DATA,
-    CONTROLLED_FIELDS,
     COORDINATES,
     DTYPES,
     FRAMES_ANGLES,
     LOSSES,
     LR_SCHEDULES,
-    MEASURED_FIELDS,
-    OBSERVATIONS,
     OPTIMIZERS,
-    PIXEL_DEFAULTS,
     PIXEL_MAX_ANGLE,
     PIXEL_MAX_SPEED,
     PIXEL_SIZE,
@@ -48,6 +47,15 @@ from ._vocab import (  # noqa: F401 - the vocabularies, named here for the run's
     _is_missing,
     check_choice,
 )
+
+_HASHED_AT_DEFAULT = "hashed_at_default"  # a field's metadata: False for the fields below
+
+
+def _hashed_unless_default(default):
+    """A RunConfig field that the hashes leave out while it holds ``default`` (a field the
+    stored runs were hashed without: they keep their hashes), read back as ``default`` from a
+    row that leaves its column empty."""
+    return dataclasses.field(default=default, metadata={_HASHED_AT_DEFAULT: False})
 
 
 @dataclass(frozen=True)
@@ -71,7 +79,8 @@ class RunConfig:
     n_train: int = 800
     chunk: int = 5
     dt: float = 0.03
-    duration: float = 10.0  # seconds simulated per trajectory (chunks and test windows in it)
+    # seconds simulated per trajectory (chunks and test windows in it)
+    duration: float = _hashed_unless_default(10.0)
     n_test: int = 200
     test_chunks: int = 20
     steps: int = 8000
@@ -83,32 +92,33 @@ class RunConfig:
     eval_integrator: str = "rk4_38"
     eval_substeps: int = 1
     eval_rtol: float = 1e-6
-    eval_checkpoints: int = 0  # learning-curve checkpoints (bench.core._fit.checkpoint_steps)
+    # learning-curve checkpoints (bench.core._fit.checkpoint_steps)
+    eval_checkpoints: int = _hashed_unless_default(0)
     dtype: str = "float32"
     seed: int = 0
     # what training fits: "rollout" (the chunks, through the integrator) or "derivative" (the
     # true dz/dt at the chunks' states: the HNN and LNN seeds' protocol; bench.core._train)
-    train_target: str = "rollout"
-    # what the models observe: "state" (z itself), "pixels" (rendered frames of the state,
-    # two stacked per observation, an autoencoder and latent dynamics: bench.core._pixels),
-    # "frames" (the VIN seed's task: single frames encoded to positions: bench.core._frames),
-    # "measured" (bench.core._measured) or "controlled" (a MuJoCo task under recorded
-    # controls: bench.core._controlled)
-    observation: str = "state"
+    train_target: str = _hashed_unless_default("rollout")
+    # what the models observe: the name of a registered kind (bench.core._observation), the
+    # built-in ones "state" (z itself), "pixels" (rendered frames of the state, two stacked per
+    # observation), "frames" (the VIN seed's single frames), "measured" (a measured trajectory)
+    # and "controlled" (a MuJoCo task under recorded controls): bench.core._kinds
+    observation: str = _hashed_unless_default("state")
     # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
     # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
     # no clipping); the learning-rate schedule from ``lr``; the weight decay (None: the
     # observation's default, 1e-4 for states and the HNN seed's 1e-5 for pixels)
-    optimizer: str = "adamw"
-    lr_schedule: str = "cosine"
-    weight_decay: float | None = None
-    # training states (with train_target "derivative"): () the dataset's chunks, or a box
+    optimizer: str = _hashed_unless_default("adamw")
+    lr_schedule: str = _hashed_unless_default("cosine")
+    weight_decay: float | None = _hashed_unless_default(None)
+    # state runs only: the training states (with train_target "derivative"): () the dataset's
+    # chunks, or a box
     # (q_low, q_high, qdot_low, qdot_high) from which fresh states are drawn uniformly for
     # every batch, each coordinate alike (the LNN seed's notebook; bench.core._box)
-    train_box: tuple = ()
-    # controlled runs: the networks' inputs and rate outputs standardised with the training
+    train_box: tuple = _hashed_unless_default(())
+    # controlled runs only: the networks' inputs and rate outputs standardised with the training
     # windows' statistics (models.Standardisation; the paper's MuJoCo code), or raw
-    standardise: bool = False
+    standardise: bool = _hashed_unless_default(False)
 
     def __post_init__(self):
         self._canonicalize()
@@ -164,7 +174,8 @@ class RunConfig:
 
     def _check(self) -> None:
         """The one check of a configuration (from ``__post_init__``): one-line ValueErrors
-        naming what is allowed."""
+        naming what is allowed; the fields of the other kinds' ``options`` at their defaults,
+        then the run's observation kind's own checks (:meth:`Observation.check`)."""
         if self.k is not None and self.k < 1:
             raise ValueError(f"k must be an integer >= 1; got {self.k}")
         for name in ("friction", "noise"):
@@ -194,91 +205,26 @@ class RunConfig:
         check_choice("loss", self.loss, LOSSES)
         check_choice("dtype", self.dtype, DTYPES)
         check_choice("train_target", self.train_target, TRAIN_TARGETS)
-        check_choice("observation", self.observation, OBSERVATIONS)
+        check_choice("observation", self.observation, observations())
         check_choice("optimizer", self.optimizer, OPTIMIZERS)
         check_choice("lr_schedule", self.lr_schedule, LR_SCHEDULES)
         wd = self.weight_decay
         if wd is not None and not (math.isfinite(wd) and wd >= 0):
             raise ValueError(f"weight_decay must be None or a finite number >= 0; got {wd}")
-        box = self.train_box
-        if box:
-            if len(box) != 4 or not all(math.isfinite(b) for b in box):
-                raise ValueError(
-                    f"train_box must be () or 4 finite numbers (q_low, q_high, qdot_low, "
-                    f"qdot_high); got {box}"
-                )
-            if not (box[0] < box[1] and box[2] < box[3]):
-                raise ValueError(
-                    f"train_box needs q_low < q_high and qdot_low < qdot_high; got {box}"
-                )
-            if self.train_target != "derivative" or self.coordinates != "velocity":
-                raise ValueError(
-                    "train_box needs train_target 'derivative' and coordinates 'velocity' "
-                    f"(states drawn in (q, qdot)); got {self.train_target!r}, {self.coordinates!r}"
-                )
-            if self.noise or self.random_args or self.observation != "state":
-                raise ValueError(
-                    "train_box supports no noise, random_args or pixels; allowed: their defaults"
-                )
-        if self.standardise and self.observation != "controlled":
-            raise ValueError(
-                "standardise is supported by controlled runs only (the paper's MuJoCo "
-                f"protocol); got observation {self.observation!r}; allowed: False"
-            )
-        if self.observation in ("pixels", "frames"):
-            self._check_pixels()
-        elif self.observation == "measured":
-            self._check_measured()
-        elif self.observation == "controlled":
-            self._check_controlled()
-        else:  # the system, its parameters and the dataset's shape (systems checks them)
-            object.__setattr__(self, "_dataset", _dataset_config(self._dataset_fields()))
+        kind = observation_kind(self.observation)
+        self._check_options(kind)
+        kind.check(self)
 
-    def _check_pixels(self) -> None:
-        import systems
-
-        if self.chunk < 3:
-            raise ValueError(
-                f"pixel runs need chunk >= 3 frames (two observations); got chunk={self.chunk}"
-            )
-        for name, default in PIXEL_DEFAULTS:
-            if getattr(self, name) != default:
-                what = f"{name} {getattr(self, name)!r}"
-                raise ValueError(f"pixel runs support no {what}; allowed: {default!r}")
-        system = _system(self.system, tuple(sorted(self.system_kwargs().items())))
-        systems.reach(system)  # the renderable systems (ValueError naming them)
-        self.pixel_dataset_config()
-
-    def _check_measured(self) -> None:
-        from systems import real_pendulum
-
-        allowed = real_pendulum.DATASETS
-        check_choice("measured dataset (system of a measured run)", self.system, allowed)
-        for name, value in MEASURED_FIELDS:
-            if getattr(self, name) != value:
-                what = f"{name} {getattr(self, name)!r}"
-                raise ValueError(f"measured runs support no {what}; allowed: {value!r}")
-
-    def _check_controlled(self) -> None:
-        import systems
-
-        allowed = list(systems.MUJOCO_TASKS)
-        check_choice("MuJoCo task (system of a controlled run)", self.system, allowed)
-        for name, value in CONTROLLED_FIELDS:
-            if getattr(self, name) != value:
-                what = f"{name} {getattr(self, name)!r}"
-                raise ValueError(f"controlled runs support no {what}; allowed: {value!r}")
-        data = dict(self.system_params)
-        if set(data) != {"data"} or data["data"] not in CONTROLLED_DATA:
-            raise ValueError(
-                f"controlled runs need system_params (('data', d),) with d in {CONTROLLED_DATA}"
-                f"; got {self.system_params!r}"
-            )
-        task_dt = systems.MUJOCO_TASKS[self.system].dt
-        if abs(self.dt - task_dt) > 1e-12:
-            raise ValueError(f"dt of {self.system} is the task's, {task_dt}; got {self.dt}")
-        if self.chunk < 2:
-            raise ValueError(f"controlled runs need chunk >= 2 states; got {self.chunk}")
+    def _check_options(self, kind: Observation) -> None:
+        """The fields that apply to another kind only (its ``options``) at their defaults."""
+        mine = {name for name, _ in kind.options}
+        for other in observation_kinds().values():
+            for name, default in other.options:
+                if name not in mine and getattr(self, name) != default:
+                    raise ValueError(
+                        f"{name} applies to {other.runs} only (observation {other.name!r}); "
+                        f"got observation {self.observation!r}; allowed: {default!r}"
+                    )
 
     def to_dict(self) -> dict:
         """Every field, JSON-ready (tuples of pairs become lists)."""
@@ -297,9 +243,9 @@ class RunConfig:
         for f in dataclasses.fields(cls):  # optional fields come back from tables as NaN
             if f.default is None and f.name in kw and _is_missing(kw[f.name]):
                 kw[f.name] = None
-            # a field added later is empty in the rows written before it: its default
-            elif f.name in _NEW_FIELDS and f.name in kw and _is_missing(kw[f.name]):
-                kw[f.name] = _NEW_FIELDS[f.name]
+            # a field the stored runs were hashed without is empty in their rows: its default
+            elif not _hashed_at_default(f) and f.name in kw and _is_missing(kw[f.name]):
+                kw[f.name] = f.default
         if "dissipation" in kw and kw["dissipation"] is not None:
             kw["dissipation"] = bool(kw["dissipation"])
         return cls(**kw)
@@ -331,10 +277,13 @@ class RunConfig:
         )
 
     def dataset_config(self):
-        """The ``systems.DatasetConfig`` of this run's training and test data (a state run's
-        was built, and so checked, with the run)."""
+        """The ``systems.DatasetConfig`` of this run's training and test data (built once per
+        run; a state run's when the run is built, which checks it)."""
         built = self.__dict__.get("_dataset")
-        return built if built is not None else _dataset_config(self._dataset_fields())
+        if built is None:
+            built = _dataset_config(self._dataset_fields())
+            object.__setattr__(self, "_dataset", built)
+        return built
 
     def pixel_dataset_config(self):
         """A pixel run's ``systems.PixelDatasetConfig``: ``n_train`` training and ``n_test``
@@ -361,9 +310,10 @@ class RunConfig:
         )
 
     def _identity(self) -> dict:
-        """The fields a hash covers: every one, except those of :data:`_NEW_FIELDS` left at
-        their default (fields added later, so that older runs keep their hashes)."""
-        return {a: b for a, b in self.to_dict().items() if _NEW_FIELDS.get(a, _NO) != b}
+        """The fields a hash covers: every one, except those declared with
+        :func:`_hashed_unless_default` that hold their default."""
+        unhashed = _unhashed_defaults()
+        return {a: b for a, b in self.to_dict().items() if unhashed.get(a, _NO) != b}
 
     @property
     def config_hash(self) -> str:
@@ -377,18 +327,17 @@ class RunConfig:
 
 
 _NO = object()
-# Fields added after results were stored, with the default that leaves them out of the hashes.
-_NEW_FIELDS = {
-    "eval_checkpoints": 0,
-    "train_target": "rollout",
-    "duration": 10.0,
-    "observation": "state",
-    "optimizer": "adamw",
-    "lr_schedule": "cosine",
-    "weight_decay": None,
-    "train_box": (),
-    "standardise": False,
-}
+
+
+def _hashed_at_default(f: dataclasses.Field) -> bool:
+    return f.metadata.get(_HASHED_AT_DEFAULT, True)
+
+
+@functools.cache
+def _unhashed_defaults() -> dict:
+    """RunConfig field -> the default at which the hashes leave it out (the fields declared
+    with :func:`_hashed_unless_default`)."""
+    return {f.name: f.default for f in dataclasses.fields(RunConfig) if not _hashed_at_default(f)}
 
 
 @functools.cache
@@ -403,19 +352,6 @@ def _dataset_config(fields: tuple):
     import systems
 
     return systems.DatasetConfig(**dict(fields))
-
-
-@functools.lru_cache(maxsize=256)
-def _system(name: str, params: tuple):
-    """``systems.make(name, **params)``, to check a pixel run's system (and ask it whether it
-    renders); jax's float32 warning is moot here, where only the parameters are checked."""
-    import warnings
-
-    import systems
-
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", "Explicitly requested dtype", UserWarning)
-        return systems.make(name, **dict(params))
 
 
 def field_names() -> tuple[str, ...]:

@@ -1,47 +1,40 @@
-"""Whether the registered models can run a configuration, asked before a sweep starts: the
-model for the run's scene and the integrators the model's rollout accepts (a tiny model built
-and traced once per distinct key, never trained). The configuration's own values, its system
-and its dataset's shape were checked when the :class:`RunConfig` was built."""
+"""Whether the registered models can run a configuration, asked before a sweep starts, of the
+run's observation kind: for a state run, the model for the run's scene and the integrators the
+model's rollout accepts (a tiny model built and traced once per distinct key, never trained).
+The configuration's own values, its system and its dataset's shape were checked when the
+:class:`RunConfig` was built."""
 
 from __future__ import annotations
 
 import functools
 
 from ._config import INTEGRATORS, RunConfig, check_choice
+from ._observation import observation_kind
 
 
 def check_runnable(cfg: RunConfig) -> RunConfig:
     """Raise a one-line ValueError, before any training, for a run the models cannot run.
 
-    The model's name, the model for the run's scene (its options, the coordinates it accepts)
-    and each integrator with that model. The integrator rule is the model's capability, asked
-    of ``models.rollout`` itself (an abstract trace, no compile): e.g. leapfrog needs a
+    The model's name, then the model for the run, as its observation kind checks it
+    (:meth:`bench.core._observation.Observation.check_model`; a state run's:
+    :func:`check_state_model`).
+    """
+    import models
+
+    check_choice("model", cfg.model, models.available())
+    observation_kind(cfg.observation).check_model(cfg)
+    return cfg
+
+
+def check_state_model(cfg: RunConfig) -> None:
+    """The model for a state run's scene (its options, the coordinates it accepts) and each
+    integrator with that model. The integrator rule is the model's capability, asked of
+    ``models.rollout`` itself (an abstract trace, no compile): e.g. leapfrog needs a
     second-order continuous model, so ``node`` with ``leapfrog`` is rejected with the
     integrators that ``node`` allows. Checks are cached per model, scene and method.
     """
     import models
 
-    check_choice("model", cfg.model, models.available())
-    if cfg.observation == "pixels":  # its own models (bench.core._pixels)
-        from ._pixels import check_pixel_model
-
-        check_pixel_model(cfg)
-        return cfg
-    if cfg.observation == "frames":  # the VIN seed's latent models (bench.core._frames)
-        from ._frames import check_frame_model
-
-        check_frame_model(cfg)
-        return cfg
-    if cfg.observation == "measured":  # a measured trajectory (bench.core._measured)
-        from ._measured import check_measured_model
-
-        check_measured_model(cfg)
-        return cfg
-    if cfg.observation == "controlled":  # a MuJoCo task under controls (bench.core._controlled)
-        from ._controlled import check_controlled_model
-
-        check_controlled_model(cfg)
-        return cfg
     scene_key = _scene_key(cfg)
     model_key = _model_key(cfg)
     _check_model(model_key, scene_key)
@@ -63,7 +56,6 @@ def check_runnable(cfg: RunConfig) -> RunConfig:
                 f"{what} {method!r} cannot run model {cfg.model!r} ({problem}); "
                 f"allowed for {cfg.model!r}: {', '.join(allowed) or '(none)'}"
             )
-    return cfg
 
 
 def _scene_key(cfg: RunConfig) -> tuple:

@@ -1,7 +1,7 @@
 """The vocabularies of a run's fields and the checks of single values, shared by
-:class:`~bench.core._config.RunConfig` and its users: each allowed set of names, the pixel,
-frames, measured and controlled runs' fixed fields, and one-line errors naming what is
-allowed."""
+:class:`~bench.core._config.RunConfig` and its users: each allowed set of names (that of
+``observation`` read from the registry of observation kinds, :mod:`bench.core._observation`),
+the pixel runs' sizes and starts, and one-line errors naming what is allowed."""
 
 from __future__ import annotations
 
@@ -11,19 +11,17 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 
+from ._observation import observations
+
 COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
-# what the models see (pixels: bench.core._pixels; frames: bench.core._frames; measured: a
-# measured trajectory read from a file, bench.core._measured; controlled: a MuJoCo task's
-# transitions under recorded controls, bench.core._controlled)
-OBSERVATIONS = ("state", "pixels", "frames", "measured", "controlled")
 OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
 # |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)
-# (Pendulum-v0's reset). PIXEL_DEFAULTS: the fields a pixel run leaves at their defaults.
+# (Pendulum-v0's reset).
 PIXEL_SIZE = 28
 PIXEL_MAX_ANGLE = math.pi / 6
 PIXEL_MAX_SPEED = 1.0
@@ -32,36 +30,6 @@ PIXEL_MAX_SPEED = 1.0
 # steindoringi/Variational_Integrator_Networks, systems.py), far from rest so that the frames
 # go round most of the circle.
 FRAMES_ANGLES = (math.pi / 2, math.pi - 0.1)
-PIXEL_DEFAULTS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "rollout"),
-    ("friction", 0.0),
-)
-# A measured run's fixed fields (observation "measured": the states of the file, taken as
-# canonical, and their finite differences as targets)
-MEASURED_FIELDS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "derivative"),
-    ("coordinates", "momentum"),
-    ("friction", 0.0),
-    ("system_params", ()),
-    ("k", None),
-)
-# A controlled run's fixed fields (the raw state [q, v] of a MuJoCo task, rollout targets), and
-# its data: system_params (("data", "file"),) for the task's file, (("data", "stand-in"),) for
-# the random-control stand-in of the tests
-CONTROLLED_FIELDS = (
-    ("noise", 0.0),
-    ("random_args", False),
-    ("train_target", "rollout"),
-    ("coordinates", "velocity"),
-    ("friction", 0.0),
-    ("k", None),
-    ("train_box", ()),
-)
-CONTROLLED_DATA = ("file", "stand-in")
 
 
 def _frozen(v):
@@ -109,3 +77,11 @@ def check_choice(what: str, value, allowed: Sequence[str]) -> None:
     if close:
         msg += f" (did you mean {close[0]!r}?)"
     raise ValueError(msg)
+
+
+def __getattr__(name: str):
+    # OBSERVATIONS, the names of the registered observation kinds, read when asked for: a kind
+    # registered after this module's import is in it
+    if name == "OBSERVATIONS":
+        return observations()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
