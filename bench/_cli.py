@@ -173,7 +173,7 @@ def _cmd_list(args) -> int:
 
 def paper_list(given: str | None) -> tuple[str, ...]:
     """``--papers A,B`` as a tuple of :data:`bench.core._experiments.PAPERS` (None: all)."""
-    from .core import PAPERS, check_choice
+    from .core import PAPERS
 
     if given is None:
         return PAPERS
@@ -336,7 +336,6 @@ def _cmd_bench(args) -> int:
 
 
 def _data_mujoco(args) -> int:
-    import json
     import time
 
     import systems

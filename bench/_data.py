@@ -84,7 +84,6 @@ def _dataset_name(c, varying: Sequence[str]) -> str:
 
 def select(system: str, profile: str, k=None, seeds=None) -> tuple[dict, list[str]]:
     """(DatasetConfig -> the experiments using it, notes) for ``system`` at ``profile``."""
-    import systems
 
     from .core import check_choice
 
@@ -135,7 +134,6 @@ def export(
     progress=print,
 ) -> dict:
     """Write the datasets of ``system`` at ``profile`` to ``out``; returns the card."""
-    import systems
 
     from .core import check_choice, provenance
 

@@ -283,7 +283,6 @@ def train_policy(
 
 def data_card(run: SACRun, split: mj.Split) -> dict:
     """``_mujoco.data_card`` of a split of the run's buffer, with the policy's training."""
-    import equinox
     import optax as _optax
 
     c = run.config
@@ -307,7 +306,7 @@ def data_card(run: SACRun, split: mj.Split) -> dict:
         "jax_x64": bool(jax.config.jax_enable_x64),
         "versions": {
             "jax": jax.__version__,
-            "equinox": equinox.__version__,
+            "equinox": eqx.__version__,
             "optax": _optax.__version__,
             "numpy": np.__version__,
         },

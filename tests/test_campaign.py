@@ -355,7 +355,6 @@ def test_plan_reads_a_stored_run_of_every_claim(tmp_path):
     """One stored run of each campaign experiment (a pixel task's included, whose data are its
     own and whose config describes no trajectory dataset): the plan counts each, and fails on
     none (the status once stopped at the first stored pixel run)."""
-    from bench.core import _store
 
     runs = C.campaign_runs("paper-core")
     first = {}

@@ -216,9 +216,7 @@ def test_loader_in_the_folder_runs_without_the_suite(exported, tmp_path):
     )
     # -I: isolated (no site-packages of the user, no cwd on the path); -S: no site at all,
     # so the editable install of the suite is invisible; numpy comes in through PYTHONPATH
-    import numpy
-
-    env = {"PYTHONPATH": str(__import__("pathlib").Path(numpy.__file__).parents[1])}
+    env = {"PYTHONPATH": str(__import__("pathlib").Path(np.__file__).parents[1])}
     out = subprocess.run(
         [sys.executable, "-S", "-c", code], cwd=folder, capture_output=True, text=True, env=env
     )
@@ -358,10 +356,8 @@ def test_export_refuses_a_non_empty_folder_and_loses_nothing(tmp_path, capsys):
 def test_the_docs_state_what_the_export_writes():
     """docs/overview.md's example states the number of datasets and arrays that the export of
     the chain pendulum at k = 2, quick, writes (counted without generating them)."""
-    import re
     from pathlib import Path
 
-    from bench import data_loader
     from bench._data import select
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "overview.md").read_text()

@@ -104,9 +104,9 @@ def test_claims_table_reads_every_column_and_refuses_a_report_without_one():
 
 
 def test_the_seeds_protocols_come_from_each_claims_section():
-    from bench import findings as F
     from bench.kit._protocols import HEADER, ROWS, Protocol, protocol_table
 
+    F = findings
     assert F.PROTOCOL_HEADER == HEADER
     rows = dict.fromkeys(ROWS, "-")
     ours = Protocol({**rows, "data": "a", "loss": "squared error", "steps": "100"})

@@ -403,8 +403,7 @@ def test_the_paper_core_diagnosis_reads_the_campaigns_own_pure_lnns():
     """At paper-core the Hessian diagnosis trains nothing of its own: its models are the pure
     LNNs of the seed's two protocols exactly as the campaign runs them (their cached
     parameters), with no init part, rollout-trained LNNs or ablations."""
-    from bench.core import expand, get
-    from bench.studies.paper.lnn_seed import _diagnosis as D
+    from bench.core import get
 
     got = D._trained_models("paper-core", None)
     want = {

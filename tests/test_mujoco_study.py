@@ -252,7 +252,6 @@ def test_the_stand_in_alone_gives_no_signed_verdict():
 
 
 def test_the_task_files_are_judged_and_the_stand_in_left_out():
-    import pandas as pd
 
     runs = pd.concat([_tables(), _tables(CONTRADICT, data=X.STAND_IN)], ignore_index=True)
     v = X.claim_16(runs)

@@ -437,7 +437,6 @@ def test_a_claims_declared_runs_count_every_study_that_declares_its_experiments(
     """Claim 7's seed protocol is declared by a study of its own: its runs count toward the
     claim's stored/declared runs (else a campaign folder reads claim 7 as complete, not pending,
     with none of the seed protocol's runs stored)."""
-    import pandas as pd
 
     from bench.kit._replication import stored_counts
 

@@ -262,8 +262,6 @@ def perturbed_floor(
 
 def n_params(model) -> int:
     """Number of scalars in the model's inexact arrays (eqx.filter(model, eqx.is_inexact_array))."""
-    import equinox as eqx
-    import jax
 
     leaves = jax.tree_util.tree_leaves(eqx.filter(model, eqx.is_inexact_array))
     return int(sum(int(np.size(x)) for x in leaves))

@@ -367,8 +367,6 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
     that saved it is the code that runs now (otherwise it trains from the start)."""
     import json
 
-    import systems
-
     from ....core import RECORD, RESUME, params_dir, saved_by_this_code
 
     cache_root = Path(cache_root or systems.cache_root())
