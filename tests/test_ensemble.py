@@ -77,6 +77,8 @@ def test_member_equals_single_run_over_20_steps(trained):
         assert _max_rel(m.model, s.model) < 1e-4
     # and the training did something: the loss fell
     assert members[0].losses[-1] < members[0].losses[0]
+    # a member's share of the program's FLOPs is a single run's step, give or take the mapping
+    assert members[0].flops_per_step == pytest.approx(singles[0].flops_per_step, rel=0.02)
 
 
 def test_diverged_member_recorded_and_isolated(trained):

@@ -14,7 +14,7 @@ import pytest
 import bench.core._train as train_mod
 import models
 import systems
-from bench.core import TrainConfig, train
+from bench.core import TrainConfig, Training, train, train_ensemble
 from models import Integrator, rollout, rollout_batch
 from models._base import AbstractContinuousModel
 
@@ -100,6 +100,36 @@ def test_same_seed_same_losses_and_no_recompile(oscillators, node_run):
     assert train_mod._TRACES[0] == before and again.compile_seconds == 0.0
     other = train(make("node", oscillators), oscillators, dataclasses.replace(SMALL, seed=1))
     assert not np.array_equal(other.losses, first.losses)
+
+
+def test_one_program_for_every_rate_and_for_a_one_member_ensemble(oscillators, node_run):
+    # the learning rate is an input of the compiled block, not part of it
+    first, _ = node_run
+    before = train_mod._TRACES[0]
+    faster = train(make("node", oscillators), oscillators, dataclasses.replace(SMALL, lr=2e-2))
+    assert train_mod._TRACES[0] == before and faster.compile_seconds == 0.0
+    assert not np.array_equal(faster.losses, first.losses)
+    # bench.train is the one-member training: the ensemble of one is the same run, bit for bit
+    (alone,) = train_ensemble([make("node", oscillators)], [oscillators], [SMALL])
+    assert train_mod._TRACES[0] == before and alone.compile_seconds == 0.0
+    np.testing.assert_array_equal(alone.losses, first.losses)
+    for a, b in zip(jax.tree.leaves(alone.model), jax.tree.leaves(first.model), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert alone.flops_per_step == first.flops_per_step > 0
+
+
+def test_the_block_is_the_trainings_program(oscillators, node_run):
+    # Training (what perf times) runs the block that bench.train runs: same losses, no compile
+    first, _ = node_run
+    training = Training([make("node", oscillators)], [oscillators], [SMALL])
+    assert training.compile_seconds == 0.0 and training.flops == first.flops_per_step
+    losses, failed = training.advance()
+    assert losses.shape == failed.shape == (SMALL.steps_per_call, 1) and not failed.any()
+    np.testing.assert_array_equal(losses[:, 0], first.losses[: SMALL.steps_per_call])
+    assert training.done == SMALL.steps_per_call and training.train_seconds > 0
+    pair = [make("node", oscillators, seed=s) for s in (0, 1)]
+    with pytest.raises(ValueError, match="one member"):  # resuming is a single run's
+        train_mod.drive(pair, [oscillators] * 2, [SMALL] * 2, resume=object())
 
 
 def test_first_loss_is_the_defined_l2_loss(oscillators, node_run):

@@ -101,10 +101,12 @@ _MODULES = {
         "Command ReportContext ReportSection Study commands register_command "
         "register_cost_model register_section register_study report_sections studies"
     ),
-    # the one training loop
-    "_train": (
-        "Batches TrainConfig TrainResult compiled_block loss_fn make_step prepare train train_block"
-    ),
+    # what a training fits by default: chunks of states, their loss, batches and arrays
+    "_objective": "Batches loss_fn prepare",
+    # the one training loop: one run or an ensemble, as one compiled program
+    "_train": "Training make_step train",
+    # a training's settings and result
+    "_train_config": "TrainConfig TrainResult",
 }
 # Public under another name than their module's: there a run kind's step or columns, named as
 # every kind names them (build, train_config, METRIC_COLUMNS), or a word its module makes plain.

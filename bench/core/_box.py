@@ -44,7 +44,7 @@ class BoxStates:
 @dataclass(frozen=True)
 class BoxObjective:
     """The objective (``bench.train``'s ``objective``) of a run with a ``train_box``: the
-    derivative loss (:func:`bench.core._train.loss_fn`, ``target="derivative"``) on batches of
+    derivative loss (:func:`bench.core._objective.loss_fn`, ``target="derivative"``) on batches of
     :class:`BoxStates` of the system ``system`` with ``system_params``."""
 
     system: str
@@ -65,7 +65,7 @@ class BoxObjective:
     def loss(self, model, data, ix, config):
         import jax.numpy as jnp
 
-        from ._train import loss_fn
+        from ._objective import loss_fn
 
         z, dz = ix[:, None, 0], ix[:, None, 1]  # (B, 1, 2d): one state per "chunk"
         args = jnp.zeros((z.shape[0], 0), z.dtype)

@@ -1,29 +1,30 @@
-"""Ensembles: runs that differ only in seed, learning rate or noise train as one program: the
-one training step (:func:`bench.core._train.make_step`) of their objective vmapped over members
-in one ``lax.scan``. Each member keeps its own batches and divergence flags, so member m is the
-single run of its config up to float32 round-off. An ensemble is a variant of a run's train
-step (:func:`bench.core._execute.ensemble_member`), for the observation kinds that declare how
-their runs train as members (:class:`bench.core._execute.Member`: state and controlled runs): a
+"""Ensembles: runs that differ only in seed, learning rate or noise train as one program, the
+M-member training of the one training loop (:func:`bench.core._train.drive`: the one step of
+their objective mapped over members in one ``lax.scan``; a single run is its one-member case).
+Each member keeps its own batches and divergence flags, so member m is the single run of its
+config up to float32 round-off. An ensemble is a variant of a run's train step
+(:func:`bench.core._execute.ensemble_member`), for the observation kinds that declare how their
+runs train as members (:class:`bench.core._execute.Member`: state and controlled runs): a
 member's row is the row of its single run, plus ``ensemble_size``, with 1/M of the ensemble's
-``train_seconds`` and ``compile_seconds``.
+``train_seconds``, ``compile_seconds`` and ``flops_per_step``. Here: which runs group
+(:func:`group_key`, :func:`plan_groups`), their training (:func:`train_ensemble`), their test
+rollouts as one program and the execution of a group (:func:`execute_group`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 import systems
 
 from ._config import RunConfig, check_choice
 from ._errors import one_line, storage_error
 from ._params import cache_key, cached_params_meta, params_dir
+from ._train_config import shared_config
 
 MODES = ("auto", "on", "off")
 # RunConfig fields that may differ between the members of one ensemble (no shape changes).
@@ -42,199 +43,23 @@ def enabled(mode: str) -> bool:
 
 
 # ------------------------------------------------------------------------------ training
-def _stack(trees):
-    import jax
-    import jax.numpy as jnp
-
-    return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
-
-
-def _member(tree, i):
-    import equinox as eqx
-    import jax
-
-    return jax.tree.map(lambda x: x[i] if eqx.is_array(x) else x, tree)
-
-
-def _ensemble_block(inputs, params, opt_state, dead, good, *, static, config, objective):
-    """``len(idx)`` steps of every member: lax.scan over vmap(make_step) over members."""
-    import jax
-
-    from ._train import _TRACES, make_step
-
-    _TRACES[0] += 1
-    data, lr, idx, active = inputs
-
-    def member_step(carry, xs, data, lr):
-        return make_step(static, config, data, lr, objective=objective)(carry, xs)
-
-    vstep = jax.vmap(member_step, in_axes=(0, (0, None), 0, 0))
-
-    def body(carry, xs):
-        return vstep(carry, xs, data, lr)
-
-    (params, opt_state, dead, good), (losses, failed) = jax.lax.scan(
-        body, (params, opt_state, dead, good), (idx, active)
-    )
-    return params, opt_state, dead, good, losses, failed
-
-
-_COMPILED: dict = {}
-
-
-def _compiled(inputs, params, static, opt_state, dead, good, config, objective):
-    import equinox as eqx
-    import jax
-
-    key = (
-        jax.tree.structure((params, static, opt_state)),
-        tuple(jax.tree.leaves(static)),
-        tuple((x.shape, x.dtype) for x in jax.tree.leaves((inputs, params, opt_state))),
-        config,
-        objective,
-    )
-    hit = _COMPILED.get(key)
-    if hit is not None:
-        return hit, 0.0
-    fn = eqx.filter_jit(_ensemble_block, donate="all-except-first")
-    t0 = time.perf_counter()
-    compiled = fn.lower(
-        inputs, params, opt_state, dead, good, static=static, config=config, objective=objective
-    )
-    compiled = compiled.compile()
-    seconds = time.perf_counter() - t0
-
-    def run(inputs, params, opt_state, dead, good):
-        return compiled(
-            inputs, params, opt_state, dead, good, static=static, config=config, objective=objective
-        )
-
-    _COMPILED[key] = run
-    return run, seconds
-
-
-def _common_config(configs):
-    """The members' shared TrainConfig (seed 0, lr 1); ValueError when they differ otherwise."""
-    from ._train import TrainConfig
-
-    if not configs:
-        raise ValueError("an ensemble needs at least one member")
-    keys = []
-    for c in configs:
-        if not isinstance(c, TrainConfig):
-            raise ValueError(f"config must be a bench.TrainConfig, got {type(c).__name__}")
-        keys.append(dataclasses.replace(c, seed=0, lr=1.0, log_every=1))
-    for k in keys[1:]:
-        if k != keys[0]:
-            raise ValueError("ensemble members may differ only in seed and lr (TrainConfig)")
-    return keys[0]
-
-
 def train_ensemble(models: Sequence, datasets: Sequence, configs: Sequence, objective=None):
     """Train ``models[m]`` on ``datasets[m]`` with ``configs[m]`` as one program, each fitting
-    ``objective`` (default :data:`bench.core._train.STATES`, the datasets' chunks of states).
+    ``objective`` (default :data:`bench.core._objective.STATES`, the datasets' chunks of
+    states): the M-member training of the one training loop (:func:`bench.core._train.drive`).
 
     Returns one :class:`bench.TrainResult` per member, each as :func:`bench.train` would
-    return it for that member alone (``train_seconds``, ``compile_seconds``: 1/M of the
-    ensemble's). ValueError when the members' configs differ in more than seed and lr, or
-    their models or data differ in structure or shape.
+    return it for that member alone (``train_seconds``, ``compile_seconds``,
+    ``flops_per_step``: 1/M of the ensemble's). ValueError when the members' configs differ in
+    more than seed and lr, or their models or data differ in structure or shape. No progress
+    bar and no resume: those are a single run's.
     """
-    import equinox as eqx
-    import jax
-    import jax.numpy as jnp
+    from ._objective import STATES
+    from ._train import drive
 
-    from ._optim import optimizer
-    from ._train import STATES, Snapshot, TrainResult
-
-    m_count = len(models)
-    if not (m_count == len(datasets) == len(configs)):
+    if not (len(models) == len(datasets) == len(configs)):
         raise ValueError("train_ensemble needs as many datasets and configs as models")
-    cfg = _common_config(configs)
-    objective = STATES if objective is None else objective
-    data = [objective.data(m, d, c) for m, d, c in zip(models, datasets, configs, strict=True)]
-    parts = [eqx.partition(m, eqx.is_inexact_array) for m in models]
-    static = parts[0][1]
-    for i in range(1, m_count):
-        same = jax.tree.structure(parts[i][0]) == jax.tree.structure(parts[0][0])
-        same = same and bool(eqx.tree_equal(parts[i][1], static))
-        same = same and all(
-            a.shape == b.shape
-            for a, b in zip(jax.tree.leaves(parts[i][0]), jax.tree.leaves(parts[0][0]), strict=True)
-        )
-        if not same:
-            raise ValueError(f"ensemble member {i}'s model differs in structure from member 0")
-        if any(a.shape != b.shape for a, b in zip(data[i], data[0], strict=True)):
-            raise ValueError(f"ensemble member {i}'s training data differ in shape from member 0")
-    params = _stack([p for p, _ in parts])  # new buffers: the callers' models stay valid
-    good = jax.tree.map(jnp.copy, params)
-    opt_state = jax.vmap(optimizer(cfg).init)(params)
-    dead = jnp.zeros(m_count, bool)
-    stacked = tuple(jnp.stack(x) for x in zip(*data, strict=True))
-    lr = jnp.asarray([c.lr for c in configs], jnp.dtype(cfg.dtype))
-    k = min(cfg.steps_per_call, cfg.steps)
-    batches = [objective.batches(d, c) for d, c in zip(data, configs, strict=True)]
-
-    def inputs(start):
-        idx = np.stack([b.take(k) for b in batches], axis=1)  # (k, M, B)
-        active = np.arange(start, start + k) < cfg.steps
-        return (stacked, lr, jnp.asarray(idx), jnp.asarray(active))
-
-    block_in = inputs(0)
-    program_cfg = dataclasses.replace(cfg, checkpoints=())  # snapshots are taken outside it
-    run, compile_seconds = _compiled(
-        block_in, params, static, opt_state, dead, good, program_cfg, objective
-    )
-
-    losses: list[list[np.ndarray]] = [[] for _ in range(m_count)]
-    diverged: list[int | None] = [None] * m_count
-    snapshots: list[list] = [[] for _ in range(m_count)]
-    pending = list(cfg.checkpoints)
-    train_seconds = 0.0
-    done = 0
-    while done < cfg.steps and any(d is None for d in diverged):
-        if done > 0:
-            block_in = inputs(done)
-        t0 = time.perf_counter()
-        params, opt_state, dead, good, block_losses, failed = run(
-            block_in, params, opt_state, dead, good
-        )
-        block_losses = np.asarray(block_losses)[: cfg.steps - done]  # (k, M); waits
-        train_seconds += time.perf_counter() - t0
-        failed = np.asarray(failed)[: cfg.steps - done]
-        for i in range(m_count):
-            if diverged[i] is not None:
-                continue
-            bad = np.flatnonzero(failed[:, i])
-            if bad.size:
-                losses[i].append(block_losses[: bad[0], i])
-                diverged[i] = done + int(bad[0])
-            else:
-                losses[i].append(block_losses[:, i])
-        done += len(block_losses)
-        if pending and done >= pending[0]:  # as in bench.core._train.train, per live member
-            kept = params if done >= cfg.steps else jax.tree.map(jnp.copy, params)
-            for i in range(m_count):
-                if diverged[i] is None:
-                    model_i = eqx.combine(_member(kept, i), static)
-                    snapshots[i].append(Snapshot(done, train_seconds / m_count, model_i))
-            while pending and done >= pending[0]:
-                pending.pop(0)
-    out = []
-    for i in range(m_count):
-        ok = diverged[i] is None
-        out.append(
-            TrainResult(
-                model=eqx.combine(_member(params if ok else good, i), static),
-                losses=np.concatenate(losses[i]) if losses[i] else np.zeros(0),
-                status="ok" if ok else "diverged",
-                diverged_step=diverged[i],
-                train_seconds=train_seconds / m_count,
-                compile_seconds=compile_seconds / m_count,
-                steps_done=done if ok else diverged[i],
-                snapshots=tuple(snapshots[i]),
-            )
-        )
-    return out
+    return drive(models, datasets, configs, STATES if objective is None else objective)
 
 
 # ------------------------------------------------------------------------------ grouping
@@ -257,7 +82,7 @@ def group_key(config: RunConfig) -> str:
     }
     member = _kind(config)
     if member is not None:
-        d["train_config"] = repr(_common_config([member.train_config(config)]))
+        d["train_config"] = repr(shared_config([member.train_config(config)]))
     return json.dumps(d, sort_keys=True, default=str)
 
 
@@ -320,6 +145,7 @@ def rollout_members(configs: Sequence[RunConfig], datasets: Sequence, models: Se
     import models as M
 
     from ._evaluate import eval_integrator
+    from ._train import _member, _stack
 
     c = configs[0]
     integ = eval_integrator(c)

@@ -49,7 +49,7 @@ def train_config(config: RunConfig, *, block: int | None = None, weight_decay=No
     TrainConfig's, 1e-4)."""
     import models
 
-    from ._train import TrainConfig
+    from ._train_config import TrainConfig
 
     decay = config.weight_decay if config.weight_decay is not None else weight_decay
     block = TRAIN_BLOCK if block is None else block
@@ -73,7 +73,7 @@ def train_config(config: RunConfig, *, block: int | None = None, weight_decay=No
 def objective(config: RunConfig):
     """What a state run fits: its dataset's chunks, or fresh states from its ``train_box``."""
     from ._box import BoxObjective
-    from ._train import STATES
+    from ._objective import STATES
 
     if not config.train_box:
         return STATES

@@ -1,8 +1,8 @@
 """The optimisation of a training run: the update rule (:func:`optimizer`: the suite's AdamW with
 clipping, or the seeds' Adam with an L2 term) and its learning-rate schedule
 (:func:`lr_schedule`), both read off a training configuration ``config`` (any object with
-the fields of :class:`~bench.core._train.TrainConfig` they name: steps, lr, lr_floor, schedule,
-optimizer, weight_decay, clip).
+the fields of :class:`~bench.core._train_config.TrainConfig` they name: steps, lr, lr_floor,
+schedule, optimizer, weight_decay, clip).
 """
 
 from __future__ import annotations

@@ -74,7 +74,7 @@ def _load_snapshots(pdir: Path, meta: dict, checkpoints: tuple, like, final) -> 
     so that the run retrains, when they were others or their file is damaged)."""
     import equinox as eqx
 
-    from ._train import Snapshot
+    from ._train_config import Snapshot
 
     if not checkpoints:
         return ()

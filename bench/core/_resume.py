@@ -73,8 +73,8 @@ class ResumePoint:
     def save(self, done, block, params, opt_state, good, snapshots, losses, seconds, cpu):
         """Keep the state after ``done`` steps in blocks of ``block``: ``params``,
         ``opt_state``, ``good`` as :func:`bench.train` carries them, its ``snapshots`` so far
-        (:class:`bench.core._train.Snapshot`), its ``losses`` (a list of arrays), and the wall
-        and CPU seconds spent."""
+        (:class:`bench.core._train_config.Snapshot`), its ``losses`` (a list of arrays), and
+        the wall and CPU seconds spent."""
         import equinox as eqx
 
         snaps = [eqx.filter(s.model, eqx.is_inexact_array) for s in snapshots]

@@ -25,15 +25,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import systems  # noqa: E402
-from bench.core import (  # noqa: E402
-    Batches,
-    build_run,
-    compiled_block,
-    expand,
-    optimizer,
-    prepare,
-    train_config,
-)
+from bench.core import Training, build_run, expand, prepare, train_config  # noqa: E402
 
 
 def main(system: str, seed: int, lr: float, n_steps: int) -> None:
@@ -53,16 +45,11 @@ def main(system: str, seed: int, lr: float, n_steps: int) -> None:
         f"{np.median(rates):.3g}, 99th percentile {np.percentile(rates, 99):.3g}, "
         f"max {rates.max():.3g}"
     )
-    params, static = eqx.partition(model, eqx.is_inexact_array)
-    params = jax.tree.map(jnp.copy, params)  # the blocks donate their state buffers
-    opt_state = optimizer(tc).init(params)
-    good, dead = jax.tree.map(jnp.copy, params), jnp.asarray(False)
-    batches = Batches(z_all.shape[0], tc.batch, tc.seed)
+    training = Training([model], [data], [tc])  # the trainer's own program, one step a block
     states, states_args = z_all[:, 0], args_all
 
     @eqx.filter_jit
-    def probe(p):
-        m = eqx.combine(p, static)
+    def probe(m):
         minv = jax.vmap(lambda q, a: m.hamiltonian_part.inverse_mass.matrix(q, a))(
             states[:, :dof], states_args
         )
@@ -72,21 +59,17 @@ def main(system: str, seed: int, lr: float, n_steps: int) -> None:
         return eig.min(), eig.max(), acc.max(), jnp.argmax(acc)
 
     def show(step, loss=None):
-        lo, hi, acc, at = (float(x) for x in probe(params))
-        head = "init" if loss is None else f"step {step}: loss {loss:.4g}, dead {bool(dead)};"
+        lo, hi, acc, at = (float(x) for x in probe(training.model(0)))
+        dead = bool(training.dead[0])
+        head = "init" if loss is None else f"step {step}: loss {loss:.4g}, dead {dead};"
         print(f"{head} eig M^-1 [{lo:.3g}, {hi:.3g}], max |qddot| {acc:.4g} (window {int(at)})")
         return int(at)
 
     at = show(0)
-    for step in range(1, n_steps + 1):
-        idx = jnp.asarray(batches.take(1))
-        active = jnp.asarray(np.array([step <= tc.steps]))
-        compiled, _ = compiled_block(params, static, opt_state, dead, good, arrays, idx, active, tc)
-        params, opt_state, dead, good, block, _ = compiled(
-            arrays, params, opt_state, dead, good, idx, active
-        )
-        at = show(step, float(np.asarray(block)[0]))
-        if bool(dead):
+    for step in range(1, min(n_steps, tc.steps) + 1):
+        block, _ = training.advance()
+        at = show(step, float(block[0, 0]))
+        if training.dead[0]:
             break
     print(f"window {at}'s first state (q, qdot): {np.round(np.asarray(states[at]), 3).tolist()}")
 

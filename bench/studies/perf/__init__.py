@@ -5,16 +5,18 @@ angles), MLP width 256 x 2 hidden layers, batch 200 chunks of 5 points, rk4_38 o
 float32. The training data are synthetic (timing does not depend on their values; no simulation
 needed).
 
-Per model: the median ms per training step, timed over blocks of ``block`` steps run as one
-compiled ``lax.scan`` exactly as ``bench.train`` runs them (compile first, then ``repeats``
-blocks, each waited for); the compile time; the median ms of a 40 x 100-step test rollout
-(jitted ``rollout_batch``, no gradient); the step's FLOPs from XLA's cost analysis of one
-step; and the FLOP floor = FLOPs / measured float32 matmul peak. The load average is recorded
-beside each measurement because the machine may be shared.
+Per model: the median ms per training step, timed over blocks of ``block`` steps of the very
+program that ``bench.train`` runs (the training loop's compiled block, ``bench.core.Training``:
+compile first, then ``repeats`` blocks, each waited for); the compile time; the median ms of a
+40 x 100-step test rollout (jitted ``rollout_batch``, no gradient); the step's FLOPs from XLA's
+cost analysis of that same block (one step, each loop body counted once); and the FLOP floor =
+FLOPs / measured float32 matmul peak. ``--seeds`` times 3 seeds as one ensemble of the same
+training loop. The load average is recorded beside each measurement because the machine may be
+shared.
 
 ``python -m bench perf --ensemble`` (:func:`ensemble_table`) writes
 ``results/perf_ensemble.csv``: training runs per minute, M runs as one ensemble
-(``bench.core._ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
+(``bench.core.train_ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
 paper models.
 
 ``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``

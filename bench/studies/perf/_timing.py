@@ -1,7 +1,10 @@
-"""The timings: training step, test rollout, FLOPs and the matmul peak (see the package)."""
+"""The timings: training step, test rollout, FLOPs and the matmul peak (see the package). The
+training step is timed, and its FLOPs counted, on the program that training runs: the one
+training loop's compiled block (``bench.core.Training``), for one model or several seeds."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -19,7 +22,7 @@ import numpy as np  # noqa: E402
 
 from models import Integrator, rollout_batch  # noqa: E402
 
-from ...core import Batches, compiled_block, loss_fn, optimizer, train_block  # noqa: E402
+from ...core import Training  # noqa: E402
 
 # ms per step and per 40 x 100-step rollout of the PyTorch reference (mean of its two runs).
 REFERENCE = {
@@ -78,65 +81,26 @@ def matmul_peak_gflops(n=2048, repeats=7) -> float:
     return 2 * n**3 / np.median(times) / 1e9
 
 
-def _flops(compiled) -> float:
-    cost = compiled.cost_analysis()
-    if isinstance(cost, list | tuple):
-        cost = cost[0]
-    return float(cost.get("flops", np.nan)) if cost else np.nan
-
-
-def step_flops(model, data, config) -> float:
-    """FLOPs of one training step (loss, gradient, optimiser update) by XLA's cost analysis.
-
-    One step is analysed outside the scan because the analysis counts a loop body once.
-    """
-    params, static = eqx.partition(model, eqx.is_inexact_array)
-    opt = optimizer(config)
-    z, args, ts = data
-    idx = jnp.arange(config.batch)
-
-    def one(params, opt_state):
-        m = eqx.combine(params, static)
-        loss, grads = eqx.filter_value_and_grad(loss_fn)(m, z[idx], args[idx], ts, config)
-        updates, opt_state = opt.update(grads, opt_state, params)
-        return eqx.apply_updates(params, updates), opt_state, loss
-
-    compiled = eqx.filter_jit(one).lower(params, opt.init(params)).compile()
-    return _flops(compiled.compiled)
-
-
-def _prepare(model, dataset, config):
-    from ...core import prepare
-
-    data = prepare(model, dataset, config)
-    params, static = eqx.partition(model, eqx.is_inexact_array)
-    params = jax.tree.map(jnp.copy, params)
-    return data, params, static, optimizer(config).init(params)
+def _time_blocks(training, repeats) -> tuple[np.ndarray, list]:
+    """ms per step of ``repeats`` blocks of ``training`` after one that warms up (allocations,
+    caches), and the load average after each."""
+    per_step, loads = [], []
+    for r in range(repeats + 1):
+        before = training.train_seconds
+        training.advance()
+        if r:
+            per_step.append(1e3 * (training.train_seconds - before) / training.block)
+            loads.append(_load())
+    return np.array(per_step), loads
 
 
 def time_steps(model, dataset, config, repeats):
-    """(per-step ms of each timed block, compile seconds, block length)."""
-    data, params, static, opt_state = _prepare(model, dataset, config)
-    k = config.steps_per_call
-    batches = Batches(data[0].shape[0], config.batch, config.seed)
-    active = jnp.ones((k,), bool)
-    dead = jnp.asarray(False)
-    good = jax.tree.map(jnp.copy, params)
-    idx = jnp.asarray(batches.take(k))
-    run, compile_s = compiled_block(
-        params, static, opt_state, dead, good, data, idx, active, config
-    )
-    state = (params, opt_state, dead, good)
-    per_step, loads = [], []
-    for r in range(repeats + 1):  # the first block warms up (allocations, caches)
-        idx = jnp.asarray(batches.take(k))
-        t0 = time.perf_counter()
-        *state, losses, _ = run(data, *state, idx, active)
-        jax.block_until_ready(losses)
-        if r:
-            per_step.append(1e3 * (time.perf_counter() - t0) / k)
-            loads.append(_load())
-    return np.array(per_step), compile_s, loads
+    """(per-step ms of each timed block, compile seconds, load averages, the step's FLOPs): the
+    training loop's own compiled block for ``model`` (its FLOPs: ``bench.core._train``'s
+    ``step_flops``, one step with each loop body counted once)."""
+    training = Training([model], [dataset], [config])
+    per_step, loads = _time_blocks(training, repeats)
+    return per_step, training.compile_seconds, loads, training.flops
 
 
 def time_rollout(model, repeats, dtype="float32"):
@@ -154,60 +118,30 @@ def time_rollout(model, repeats, dtype="float32"):
 
 
 def time_seeds(name, dataset, config, n_seeds=3, repeats=3):
-    """ms per step for n_seeds trained as one vmapped program, and per seed sequentially."""
+    """ms per step for n_seeds trained as one program (an ensemble of the training loop), and
+    per seed sequentially."""
     models_ = [_make(name, jax.random.key(s)) for s in range(n_seeds)]
-    prepared = [_prepare(m, dataset, config) for m in models_]
-    data, _, static, _ = prepared[0]
-    stack = lambda *xs: jnp.stack(xs)
-    params = jax.tree.map(stack, *[p[1] for p in prepared])
-    opt_state = jax.tree.map(stack, *[p[3] for p in prepared])
-    k = config.steps_per_call
-    active = jnp.ones((k,), bool)
-    dead = jnp.zeros((n_seeds,), bool)
-    good = jax.tree.map(jnp.copy, params)
-    cfg = config
-
-    def many(data, idx, params, opt_state, dead, good):
-        def one(i, p, o, d, g):
-            return train_block((data, i, active), p, o, d, g, static=static, config=cfg)
-
-        return jax.vmap(one)(idx, params, opt_state, dead, good)
-
-    batches = [Batches(data[0].shape[0], config.batch, s) for s in range(n_seeds)]
-    take = lambda: jnp.asarray(np.stack([b.take(k) for b in batches]))
-    f = eqx.filter_jit(many)
-    t0 = time.perf_counter()
-    compiled = f.lower(data, take(), params, opt_state, dead, good).compile()
-    compile_s = time.perf_counter() - t0
-    state = (params, opt_state, dead, good)
-    times = []
-    for r in range(repeats + 1):
-        idx = take()
-        t0 = time.perf_counter()
-        *state, losses, _ = compiled(data, idx, *state)
-        jax.block_until_ready(losses)
-        if r:
-            times.append(1e3 * (time.perf_counter() - t0) / k)
-    vmapped = float(np.median(times))
-    single, _, _ = time_steps(models_[0], dataset, config, repeats)
+    configs = [dataclasses.replace(config, seed=s) for s in range(n_seeds)]
+    training = Training(models_, [dataset] * n_seeds, configs)
+    vmapped = float(np.median(_time_blocks(training, repeats)[0]))
+    single = time_steps(models_[0], dataset, config, repeats)[0]
     return {
         "model": name,
         "seeds": n_seeds,
         "vmapped_ms_per_step": vmapped,
         "sequential_ms_per_step": n_seeds * float(np.median(single)),
         "speedup_vmapped": n_seeds * float(np.median(single)) / vmapped,
-        "vmapped_compile_s": compile_s,
+        "vmapped_compile_s": training.compile_seconds,
         "load_avg": _load(),
     }
 
 
 def bench_model(name, dataset, config, repeats, peak_gflops):
     model = _make(name, jax.random.key(0))
-    data = _prepare(model, dataset, config)[0]
     load0 = _load()
-    steps, compile_s, loads = time_steps(model, dataset, config, repeats)
+    steps, compile_s, loads, flops = time_steps(model, dataset, config, repeats)
     roll = time_rollout(model, repeats)
-    gflop = step_flops(model, data, config) / 1e9
+    gflop = flops / 1e9
     ref_step, ref_roll = REFERENCE.get(name, (np.nan, np.nan))
     med = float(np.median(steps))
     q1, q3 = np.percentile(steps, [25, 75])

@@ -108,16 +108,15 @@ def _stored_losses(cfg: RunConfig, cache_root: Path) -> np.ndarray | None:
 
 
 def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> list[dict]:
-    """The run's first ``n_steps`` (whole blocks) through the trainer's own compiled block
-    (:func:`bench.core._train.compiled_block`), probed before the first step and after each
-    block. ``loss``: the batch loss of the step at the probe (the last step's at the end);
+    """The run's first ``n_steps`` (whole blocks) through the training loop's own compiled
+    block (``bench.core.Training``), probed before the first step and after each block.
+    ``loss``: the batch loss of the step at the probe (the last step's at the end);
     ``block_loss``: the mean over the block before it; ``stored_loss``: the stored run's loss
     at the same step (``suite`` only; NaN where its cache is absent)."""
     import equinox as eqx
     import jax
-    import jax.numpy as jnp
 
-    from ....core import Batches, build_run, compiled_block, optimizer, prepare, train_config
+    from ....core import Training, build_run, prepare, train_config
 
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {', '.join(VARIANTS)}; got {variant!r}")
@@ -127,31 +126,18 @@ def _replay(cfg: RunConfig, variant: str, n_steps: int, cache_root: Path) -> lis
         model = reference_biases(model, jax.random.PRNGKey(10_000 + cfg.seed))
     elif variant == "lr_1e-3":
         tc = dataclasses.replace(tc, lr=LOW_LR)
-    arrays = prepare(model, data, tc)
-    z_all, args_all = arrays[0], arrays[1]
-    params, static = eqx.partition(model, eqx.is_inexact_array)
-    params = jax.tree.map(jnp.copy, params)  # the blocks donate their state buffers
-    opt_state = optimizer(tc).init(params)
-    good = jax.tree.map(jnp.copy, params)
-    dead = jnp.asarray(False)
-    k = min(tc.steps_per_call, tc.steps)
-    batches = Batches(z_all.shape[0], tc.batch, tc.seed)
+    z_all, args_all = prepare(model, data, tc)[:2]
+    training = Training([model], [data], [tc])
     states, states_args = z_all[:N_STATES, 0], args_all[:N_STATES]
-    probe = eqx.filter_jit(lambda p: _probe(eqx.combine(p, static), states, states_args, scene.dof))
+    probe = eqx.filter_jit(lambda m: _probe(m, states, states_args, scene.dof))
     stored = _stored_losses(cfg, cache_root) if variant.startswith("suite") else None
 
-    probes = [(0, [float(x) for x in probe(params)])]
+    probes = [(0, [float(x) for x in probe(training.model(0))])]
     losses: list[float] = []
-    while len(losses) < n_steps and not bool(dead):
-        done = len(losses)
-        idx = jnp.asarray(batches.take(k))
-        active = jnp.asarray(np.arange(done, done + k) < tc.steps)
-        compiled, _ = compiled_block(params, static, opt_state, dead, good, arrays, idx, active, tc)
-        params, opt_state, dead, good, block, _ = compiled(
-            arrays, params, opt_state, dead, good, idx, active
-        )
-        losses.extend(float(x) for x in np.asarray(block)[: tc.steps - done])
-        probes.append((len(losses), [float(x) for x in probe(params)]))
+    while len(losses) < n_steps and training.done < tc.steps and not bool(training.dead[0]):
+        block, _ = training.advance()
+        losses.extend(float(x) for x in block[:, 0])
+        probes.append((len(losses), [float(x) for x in probe(training.model(0))]))
     same = np.nan
     if stored is not None:  # the leading steps at which the replay's loss is the stored run's
         n = min(len(stored), len(losses))
