@@ -168,6 +168,26 @@ def test_bench_layers_point_one_way():
     assert not _upward(graph), "upward imports: " + "; ".join(_upward(graph))
 
 
+def _top_reaching_studies(graph: dict[str, set[str]]) -> list[str]:
+    """The imports of a study by a module above the studies (the CLI, the tables, the report,
+    the side-by-side scripts): they reach the studies through the core's registry only."""
+    return [
+        f"{a} imports {b}"
+        for a in sorted(graph)
+        if _layer(a) == len(LAYERS)
+        for b in sorted(graph[a])
+        if _layer(b) == LAYERS.index("bench.studies")
+    ]
+
+
+def test_no_module_above_the_studies_imports_a_study():
+    graph = _module_graph()
+    assert "bench._cli" in graph and "bench._tables" in graph and "bench._report" in graph
+    assert _top_reaching_studies(graph) == []
+    graph["bench._cli"] = graph["bench._cli"] | {"bench.studies.paper.energy"}
+    assert _top_reaching_studies(graph) == ["bench._cli imports bench.studies.paper.energy"]
+
+
 def test_graph_checks_can_fail(tmp_path):
     # A synthetic package: core imports a study lazily and the study imports core back.
     (tmp_path / "bench" / "core").mkdir(parents=True)

@@ -19,7 +19,7 @@ shared.
 (``bench.core.train_ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
 paper models.
 
-``python -m bench.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
+``python -m bench.studies.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
 writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
 ``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the
 ``compile_cache`` column); ``DECON_JAX_CACHE=0`` measures cold compiles.

@@ -16,7 +16,7 @@ def _arguments(p):
 def _run(args) -> int:
     from ._main import main  # pins the threads: imported only to measure
 
-    # its own defaults; `python -m bench.perf --help` lists its options; written to --results
+    # its own defaults (`python -m bench.studies.perf --help`); written to --results
     results = usable_results(args)
     ens = getattr(args, "ensemble", False)
     name = "perf_ensemble.csv" if ens else "perf.csv"

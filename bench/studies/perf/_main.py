@@ -1,4 +1,4 @@
-"""``python -m bench perf`` / ``python -m bench.perf``: the command line of the benchmark."""
+"""``python -m bench perf`` / ``python -m bench.studies.perf``: the benchmark's command line."""
 
 from __future__ import annotations
 

@@ -185,7 +185,7 @@ def flag_sweep(models_arg, repeats):
         cmd = [
             sys.executable,
             "-m",
-            "bench.perf",
+            "bench.studies.perf",
             "--models",
             models_arg,
             "--repeats",
