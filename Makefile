@@ -26,7 +26,8 @@ UV_COMPILE = $(UV) pip compile pyproject.toml --extra ray --extra dev \
 
 install: $(STAMP)
 
-# The stamp is older than the lock or pyproject.toml when dependencies changed: reinstall then.
+# The stamp is older than the lock or pyproject.toml when dependencies changed: reinstall then
+# (a campaign's start does so only when no campaign runs from this venv).
 $(STAMP): pyproject.toml $(LOCK)
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
@@ -146,10 +147,10 @@ CAMPAIGN_FIRST ?=
 campaign_pid = $$(cat $(CAMPAIGN_PID) 2>/dev/null)
 campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
 
-paper-core: $(STAMP)
+paper-core:
 	@mkdir -p .cache
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
-	else rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) FIRST="$(CAMPAIGN_FIRST)" \
+	else $(MAKE) --no-print-directory $(STAMP) && rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) FIRST="$(CAMPAIGN_FIRST)" \
 		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
 		{ [ -z "$$FIRST" ] || { nice -n 19 "$$@" --claims "$$FIRST" && \
 			nice -n 19 "$$@" --replication --claims "$$FIRST"; }; } && \
@@ -160,7 +161,10 @@ paper-core: $(STAMP)
 		echo $$! > $(CAMPAIGN_PID); \
 		echo "paper-core: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
 
-paper-core-status: $(STAMP)
+# A status reads the venv it finds (it installs one only where there is none): it never
+# reinstalls one under a running campaign.
+VENV_FOUND = $(if $(wildcard $(STAMP)),,$(STAMP))
+paper-core-status: $(VENV_FOUND)
 	@if $(campaign_alive); then state=$$(ps -o stat= -p $(campaign_pid) | cut -c1); \
 		if [ "$$state" = T ]; then echo "paper-core: paused (process group $(campaign_pid))"; \
 		else echo "paper-core: running (process group $(campaign_pid))"; fi; \
@@ -190,10 +194,10 @@ paper-core-stop:
 # links first. It shares paper-core's process-group file: one campaign runs at a time, and the
 # paper-k-* verbs are paper-core's. Rows hash as the paper profile's, a GPU's count alike.
 PAPER_K_CLAIMS ?= 4 3 1 2
-paper-k: $(STAMP)
+paper-k:
 	@mkdir -p .cache
 	@if $(campaign_alive); then echo "paper-k: a campaign is already running (process group $(campaign_pid))"; \
-	else rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) CLAIMS="$(PAPER_K_CLAIMS)" \
+	else $(MAKE) --no-print-directory $(STAMP) && rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) CLAIMS="$(PAPER_K_CLAIMS)" \
 		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
 		for c in $$CLAIMS; do nice -n 19 "$$@" --claims $$c && \
 			nice -n 19 "$$@" --replication --claims $$c || exit 1; done' sh \
@@ -202,7 +206,7 @@ paper-k: $(STAMP)
 		echo $$! > $(CAMPAIGN_PID); \
 		echo "paper-k: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
 
-paper-k-status: $(STAMP)
+paper-k-status: $(VENV_FOUND)
 	@$(MAKE) --no-print-directory paper-core-status CAMPAIGN_PROFILE=paper-k
 
 paper-k-pause: paper-core-pause
