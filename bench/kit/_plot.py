@@ -30,6 +30,7 @@ SYSTEM_LABELS = {
 COLORS = {
     "node": "#1f77b4",
     "node_so": "#2ca02c",
+    "node_so_pq": "#98df8a",  # NODE+SO as the Deconstructing paper's code builds it
     "hnn": "#d62728",
     "hnn_force": "#d62728",  # the HNN of the MuJoCo tasks (Fig. 7)
     "hnn_so": "#ff7f0e",

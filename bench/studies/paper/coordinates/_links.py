@@ -9,7 +9,9 @@ import pandas as pd
 
 from ..report import LINKS, PROFILE
 
-FIGURE_MODELS = ("node", "node_so", "hnn", "hnn_so")
+FIGURE_MODELS = ("node", "node_so", "node_so_pq", "hnn", "hnn_so")
+# the paper's form of NODE+SO, drawn dashed beside ours
+DASHED = ("node_so_pq",)
 FIGURE_METRICS = {"rollout_error": "rollout error", "mse": "test MSE"}
 
 
@@ -32,9 +34,11 @@ def link_rows(runs: pd.DataFrame) -> pd.DataFrame:
 def fig_links(results_dir) -> list:
     """Fig. 5 in the paper's form: the error against the number of links k per model, the
     chain (angles) and the spring (Cartesian) side by side, the rollout error above and the
-    test MSE (what the paper's plotting code draws) below. Geometric mean over the stored
+    test MSE (what the paper's plotting code draws) below; NODE+SO in the paper's form
+    (``node_so_pq``) dashed beside ours. Geometric mean over the stored
     seeds with its 90% t interval; failed and diverged runs enter at the worst error, as the
-    verdicts score them, and are marked (x, with their count). Nothing where the folder holds
+    verdicts score them, and are marked (x, with their count); a point resting on fewer seeds
+    than its k's others says how many. Nothing where the folder holds
     runs at one k only."""
     from pathlib import Path
 
@@ -59,6 +63,7 @@ def fig_links(results_dir) -> list:
         return []
     systems = ("chain_pendulum", "spring_pendulum")
     metrics = [m for m in FIGURE_METRICS if m in rows]
+    seeds_at = {int(k): g["seed"].nunique() for k, g in rows.groupby("k")}
     fig, axes = subplots(len(metrics), 2, figsize=(9, 3.8 * len(metrics)), squeeze=False)
     for i, metric in enumerate(metrics):
         for j, system in enumerate(systems):
@@ -84,7 +89,7 @@ def fig_links(results_dir) -> list:
                     pts.append((int(k), mu, half, int(bad.loc[idx].sum()), len(x)))
                 if not pts:
                     continue
-                ks, mu, half, nbad, _ = (np.array(v) for v in zip(*pts, strict=True))
+                ks, mu, half, nbad, n = (np.array(v) for v in zip(*pts, strict=True))
                 label = MODEL_LABELS.get(model, model)
                 if model in TRIVIAL_STYLE:
                     color, style = TRIVIAL_STYLE[model]
@@ -98,17 +103,22 @@ def fig_links(results_dir) -> list:
                     yerr=[np.exp(mu) - np.exp(mu - half), np.exp(mu + half) - np.exp(mu)],
                     marker="o",
                     capsize=3,
+                    linestyle="--" if model in DASHED else "-",
                     color=COLORS.get(model),
                     label=label,
                 )
-                for kk, y, nb in zip(ks, np.exp(mu), nbad, strict=True):
+                for kk, y, nb, nn in zip(ks, np.exp(mu), nbad, n, strict=True):
+                    notes = [f"{nb} failed"] if nb else []
+                    if nn < seeds_at[kk]:
+                        notes.append(f"{nn} seed" + ("s" if nn > 1 else ""))
                     if nb:
                         ax.plot([kk], [y], "x", color="black", markersize=9)
+                    if notes:
                         ax.annotate(
-                            f"{nb} failed",
+                            ", ".join(notes),
                             (kk, y),
                             textcoords="offset points",
-                            xytext=(4, 4),
+                            xytext=(4, -10) if model in DASHED else (4, 4),
                             fontsize=7,
                         )
             ax.set_yscale("log")
