@@ -1,6 +1,8 @@
 """The claims at every number of links (bench.studies.paper.report._links) on synthetic stored
 runs of the paper profile's Fig. 5 cells at k = 1..4, seeds 0-9 (no training)."""
 
+import copy
+import dataclasses
 import re
 
 import pandas as pd
@@ -92,6 +94,45 @@ def test_the_section_names_pending_readings_and_seeds(fig5):
     # k = 2 alone is paper-core's own reading: no section
     ctx.runs = runs[runs["k"] == 2]
     assert L.links_section(ctx) == []
+
+
+def test_the_section_says_which_parts_change_with_k(fig5):
+    runs, curves = fig5
+    got = {r.label: r for r in L.readings(runs, curves)}
+    key = "4 (MSE, spring from paper)"
+    keys = [(key, 4)]
+    k3 = got["k = 3"]
+    # two readings that agree: nothing to say
+    twin = copy.deepcopy(k3)
+    twin.label = "k = 4"
+    assert L.disagreements([k3, twin], keys) == []
+    # the twin's spring part contradicted (the gap does not vanish there): the line names it
+    reading = twin.judgement.reading(key)
+    spring = next(p for p in reading.parts if p.name.startswith("spring"))
+    was = spring.status
+    assert was != "contradicts"
+    spring.status = "contradicts"
+    twin.judgement.final = [
+        dataclasses.replace(v, verdict=R.PARTLY) if v.key == key else v
+        for v in twin.judgement.final
+    ]
+    (line,) = L.disagreements([k3, twin], keys)
+    assert line.startswith(f"- claim {key}: k = 3 ")
+    assert f"{spring.name}: {was} at k = 3" in line and "contradicts at k = 4" in line
+    # a part whose status is the same at both k is not listed
+    assert "chain" not in line.split(". ", 1)[1]
+    # a reading still pending is left out
+    twin.counts = {4: (1, 2)}
+    assert L.disagreements([k3, twin], keys) == []
+    # the synthetic cells read otherwise at k = 1 than at k = 3: the section carries the line
+    (differ,) = L.disagreements([got["k = 1"], k3], keys)
+    assert "spring edge" in differ
+    text = "\n".join(L.links_section(type("Ctx", (), {"runs": runs, "curves": curves})))
+    assert "Where the numbers of links disagree" in text
+    # claim 2 names each weight's cell with its k: the part is matched across k without it
+    assert L._part_name("node_so_symreg chain_pendulum k=3 w=0.001: gain") == (
+        "node_so_symreg chain_pendulum w=0.001: gain"
+    )
 
 
 def test_the_figure_draws_error_against_k(fig5, tmp_path):

@@ -12,6 +12,10 @@ agree), once per k and once over every k, where the rule pools k as the paper do
 - claim 3 (Fig. 4) and claim 2 (Fig. 3) are judged per k only: claim 3's rule reads one k
   (k = 2 where present), claim 2's one grid of weights per k.
 
+Where the judged readings of a claim disagree, the section says which parts change status
+between them (:func:`disagreements`): the numbers of links are the paper's own sweep, so a
+verdict that holds at one k and not at another is a finding, not noise to pool away.
+
 A reading is *pending (n of m runs)* until every cell the campaigns declare for it on the
 primary seeds is stored (the campaigns' cells: :data:`CAMPAIGN_SELECTIONS`); a pooled reading
 waits for every k.
@@ -20,6 +24,7 @@ waits for every k.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import pandas as pd
@@ -108,6 +113,55 @@ def _cell(r: LinkReading, key: str, claim: int) -> str:
     return f"**{v.label()}**{eff}, seeds {seeds}"
 
 
+def _part_name(name: str) -> str:
+    """A part's name without its cell's k (claim 2 names each weight's cell with it)."""
+    return re.sub(r"\s*\bk=\d+\b", "", name).strip()
+
+
+def disagreements(got: list[LinkReading], keys) -> list[str]:
+    """One line per claim whose judged readings (every k alone and pooled; pending ones left
+    out) give different verdicts: the verdict of each, then each part whose status differs,
+    with its estimate and 90% interval at each k, so the reader sees which sentence of the
+    claim depends on the number of links. Empty where they agree."""
+    out = []
+    for key, claim in keys:
+        judged = []
+        for r in got:
+            n, m = r.counts.get(claim, (0, 0))
+            if not m or n < m or r.judgement is None:
+                continue
+            if not any(v.key == key for v in r.judgement.final):
+                continue
+            final = next(v for v in r.judgement.final if v.key == key)
+            judged.append((r.label, final, r.judgement.reading(key)))
+        if len({f.label() for _, f, _ in judged}) < 2:
+            continue
+        by_part: dict[str, list[tuple[str, object]]] = {}
+        for label, _, reading in judged:
+            for p in reading.parts:
+                if p.role == "part":
+                    by_part.setdefault(_part_name(p.name), []).append((label, p))
+        changes = []
+        for name, seen in by_part.items():
+            if len({p.status for _, p in seen}) < 2:
+                continue
+            each = []
+            for label, p in seen:
+                ci = f" [{p.lo:.3g}, {p.hi:.3g}]" if math.isfinite(p.lo) else ""
+                est = f" ({p.point:.3g}{ci})" if math.isfinite(p.point) else ""
+                each.append(f"{p.status} at {label}{est}")
+            changes.append(f"{name}: " + ", ".join(each))
+        verdicts = "; ".join(f"{label} {f.label()}" for label, f, _ in judged)
+        why = (
+            "; ".join(changes)
+            if changes
+            else "no part changes status (the seed sets' agreement or the discrimination "
+            "checks differ)"
+        )
+        out.append(f"- claim {key}: {verdicts}. {why}")
+    return out
+
+
 def links_section(ctx) -> list[str]:
     """The claims of Figs. 2-5 per number of links and pooled over them (module docstring)."""
     got = readings(ctx.runs, ctx.curves)
@@ -140,4 +194,13 @@ def links_section(ctx) -> list[str]:
     ]
     for key, claim in keys:
         out.append(f"| {key} | " + " | ".join(_cell(r, key, claim) for r in got) + " |")
+    differ = disagreements(got, keys)
+    if differ:
+        out += [
+            "",
+            "Where the numbers of links disagree (each judged reading's verdict, then the parts "
+            "whose status changes with k, estimate and 90% interval):",
+            "",
+            *differ,
+        ]
     return [*out, ""]
