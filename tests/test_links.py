@@ -121,6 +121,18 @@ def test_the_section_says_which_parts_change_with_k(fig5):
     assert f"{spring.name}: {was} at k = 3" in line and "contradicts at k = 4" in line
     # a part whose status is the same at both k is not listed
     assert "chain" not in line.split(". ", 1)[1]
+    # no part changes, but the twin's replication demoted its verdict: the line says so
+    demoted = copy.deepcopy(k3)
+    demoted.label = "k = 4"
+    own = demoted.judgement.reading(key).label()
+    demoted.judgement.final = [
+        dataclasses.replace(v, verdict=R.INCONCLUSIVE) if v.key == key else v
+        for v in demoted.judgement.final
+    ]
+    (line,) = L.disagreements([k3, demoted], keys)
+    assert line.endswith(
+        f"no part changes status; k = 4 reads {own} on its seeds, {R.INCONCLUSIVE} in the end"
+    )
     # a reading still pending is left out
     twin.counts = {4: (1, 2)}
     assert L.disagreements([k3, twin], keys) == []

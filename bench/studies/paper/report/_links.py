@@ -122,7 +122,9 @@ def disagreements(got: list[LinkReading], keys) -> list[str]:
     """One line per claim whose judged readings (every k alone and pooled; pending ones left
     out) give different verdicts: the verdict of each, then each part whose status differs,
     with its estimate and 90% interval at each k, so the reader sees which sentence of the
-    claim depends on the number of links. Empty where they agree."""
+    claim depends on the number of links; where no part does, the readings whose final
+    verdict is not their seeds' own (a replication check demoted it). Empty where they
+    agree."""
     out = []
     for key, claim in keys:
         judged = []
@@ -152,12 +154,12 @@ def disagreements(got: list[LinkReading], keys) -> list[str]:
                 each.append(f"{p.status} at {label}{est}")
             changes.append(f"{name}: " + ", ".join(each))
         verdicts = "; ".join(f"{label} {f.label()}" for label, f, _ in judged)
-        why = (
-            "; ".join(changes)
-            if changes
-            else "no part changes status (the seed sets' agreement or the discrimination "
-            "checks differ)"
-        )
+        demoted = [
+            f"{label} reads {reading.label()} on its seeds, {f.label()} in the end"
+            for label, f, reading in judged
+            if reading.label() != f.label()
+        ]
+        why = "; ".join(changes or ["no part changes status", *demoted])
         out.append(f"- claim {key}: {verdicts}. {why}")
     return out
 
