@@ -130,11 +130,25 @@ def fig_links(results_dir) -> list:
                 + (" (angles)" if system == "chain_pendulum" else " (Cartesian)")
             )
             ax.grid(alpha=0.3)
-    axes[0][1].legend(fontsize=7, loc="best")
+    # one legend under the panels: inside one it covers the trivial predictor's line
+    handles, labels = {}, []
+    for ax in (a for row in axes for a in row):
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in handles:
+                handles[lab] = h
+                labels.append(lab)
+    fig.legend(
+        [handles[lab] for lab in labels],
+        labels,
+        fontsize=7,
+        loc="lower center",
+        ncol=min(len(labels), 6),
+        frameon=False,
+    )
     per_k = "; ".join(
         f"k = {int(k)}: seeds {seed_span(sorted(int(s) for s in g['seed'].unique()))}"
         for k, g in rows.groupby("k")
     )
     fig.suptitle(f"Fig. 5 over k: NODE+SO vs HNN+SO by coordinates\n({per_k})", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    fig.tight_layout(rect=(0, 0.04, 1, 0.95))
     return save_figure(fig, Path(results_dir) / "figures", "fig5_coordinates_links")
