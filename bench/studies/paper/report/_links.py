@@ -132,9 +132,9 @@ def disagreements(got: list[LinkReading], keys) -> list[str]:
             n, m = r.counts.get(claim, (0, 0))
             if not m or n < m or r.judgement is None:
                 continue
-            if not any(v.key == key for v in r.judgement.final):
+            final = next((v for v in r.judgement.final if v.key == key), None)
+            if final is None:
                 continue
-            final = next(v for v in r.judgement.final if v.key == key)
             judged.append((r.label, final, r.judgement.reading(key)))
         if len({f.label() for _, f, _ in judged}) < 2:
             continue
