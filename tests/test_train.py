@@ -313,3 +313,38 @@ def test_prepare_drops_parameters_the_scene_does_not_take():
         "node", models.Scene(dof=1, angular=(False,), n_args=1), key=jax.random.PRNGKey(0), width=4
     )
     assert train_mod.prepare(with_g, data, TrainConfig(steps=1, batch=2))[1].shape == (4, 1)
+
+
+def test_perf_cells_are_the_experiments_own_trainable_cells():
+    from bench.core import expand
+    from bench.studies.perf._cells import cell_configs
+
+    configs = cell_configs("coordinates", "paper-k", k=4)
+    cells = {(c.system, c.model, c.k) for c in configs}
+    trainable = {
+        (c.system, c.model, c.k)
+        for c in expand("coordinates", "paper-k", seeds=[0])
+        if c.k == 4 and c.model not in models.trivial_models()
+    }
+    assert cells == trainable and len(configs) == len(cells)  # one variant (start) per cell
+    assert {c.seed for c in configs} == {0} and all(c.batch == 200 for c in configs)
+    only = cell_configs("coordinates", "paper-k", k=4, names={"hnn_so"})
+    assert {c.model for c in only} == {"hnn_so"}
+    with pytest.raises(SystemExit, match="no trainable cells of 'coordinates'.*k = 7"):
+        cell_configs("coordinates", "paper-k", k=7)
+
+
+@pytest.mark.slow
+def test_perf_cells_smoke(tmp_path):
+    from bench.studies.perf import main
+
+    out = tmp_path / "cells.csv"
+    argv = ["--cells", "coordinates", "--profile", "smoke", "--models", "node_so", "--quick"]
+    assert main([*argv, "--out", str(out)]) == 0
+    import pandas as pd
+
+    rows = pd.read_csv(out)
+    assert set(rows["model"]) == {"node_so"} and (rows["ms_per_step_median"] > 0).all()
+    assert (rows["step_gflop"] > 0).all() and (rows["of_peak"] > 0).all()
+    with pytest.raises(SystemExit, match="unknown experiment 'coordinatez'"):
+        main(["--cells", "coordinates,coordinatez"])

@@ -19,6 +19,10 @@ shared.
 (``bench.core.train_ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
 paper models.
 
+``python -m bench.studies.perf --cells EXPERIMENTS [--profile P] [--k K]`` times the training
+step of experiments' own cells instead (:mod:`._cells`: their data, model and batch; one core
+under ``taskset``) and writes ``results/perf_cells.csv``.
+
 ``python -m bench.studies.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
 writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
 ``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the

@@ -31,6 +31,29 @@ from ._timing import (
 )
 
 
+def _cells_main(a) -> int:
+    from ._cells import cell_configs, cell_rows
+
+    names = {n for n in (a.models or "").split(",") if n}
+    try:
+        cells = [
+            (e, c)
+            for e in a.cells.split(",")
+            for c in cell_configs(e, a.profile, a.k, names, a.seed)
+        ]
+    except ValueError as e:  # an unknown experiment or profile: the one line naming the allowed
+        raise SystemExit(str(e)) from None
+    rows = cell_rows(cells, a.profile, 3 if a.quick else max(1, a.repeats))
+    if not a.no_write:
+        import pandas as pd
+
+        out = Path(a.out or "results/perf_cells.csv")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        pd.DataFrame(rows).to_csv(out, index=False)
+        print(f"wrote {out}")
+    return 0
+
+
 def main(argv=None) -> int:
     import models
 
@@ -62,11 +85,24 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--out", default=None, help="default results/perf.csv (--ensemble: perf_ensemble.csv)"
     )
+    parser.add_argument(
+        "--cells",
+        metavar="EXPERIMENTS",
+        default=None,
+        help="time the training step of the own cells of EXPERIMENTS (comma-separated) under "
+        "--profile instead, in blocks of the run's own size (results/perf_cells.csv; run under "
+        "`taskset -c 1` to time one core, as a campaign worker runs)",
+    )
+    parser.add_argument("--profile", default="paper-core", help="the cells' profile (--cells)")
+    parser.add_argument("--k", type=int, default=None, help="only the cells at k links (--cells)")
+    parser.add_argument("--seed", type=int, default=0, help="the cells' seed (--cells)")
     parser.add_argument("--no-write", action="store_true")
     parser.add_argument("--json", action="store_true", help="print the rows as one JSON line")
     a = parser.parse_args(argv)
     if a.ensemble:
         return _ensemble_main(a, (lambda *x: print(*x, file=sys.stderr)) if a.json else print)
+    if a.cells:
+        return _cells_main(a)
     a.out = a.out or "results/perf.csv"
     a.models = a.models or ",".join(
         n

@@ -1,0 +1,90 @@
+"""``python -m bench.studies.perf --cells EXPERIMENTS``: the training step of experiments' own
+cells (their data, model, batch and width under a profile), not the synthetic chain-2 setting;
+several experiments comma-separated.
+
+A campaign worker trains one run on one core, so the figure to hold a step against is one
+core's matmul rate: run it as a worker runs, ``taskset -c 1 python -m bench.studies.perf
+--cells coordinates --profile paper-k --k 4``. Each cell (system, model, k; one seed, the first
+of its starts) is timed over ``repeats`` blocks after one that warms up; its FLOPs are XLA's
+count of the compiled block (:func:`bench.core._train.step_flops`), and ``of_peak`` is the
+step's FLOP rate over the float32 matmul peak measured in the same process."""
+
+from __future__ import annotations
+
+import datetime
+import os
+
+import numpy as np
+
+from ...core import Training, build_run, cpu_count, expand, train_config
+from ._timing import _time_blocks, matmul_peak_gflops
+
+
+def cell_configs(experiment, profile, k=None, names=None, seed=0) -> list:
+    """One configuration per (system, model, k) of ``experiment`` under ``profile`` (seed
+    ``seed``), trivial models left out: the first of a cell's variants (its starts, say), since
+    they train the same program on data of the same shape."""
+    import models
+
+    trivial = set(models.trivial_models())
+    cells = {}
+    for c in expand(experiment, profile, seeds=[seed]):
+        if c.model in trivial or (k is not None and c.k != k):
+            continue
+        if names and c.model not in names:
+            continue
+        cells.setdefault((c.system, c.model, c.k), c)
+    if not cells:
+        raise SystemExit(
+            f"no trainable cells of {experiment!r} under {profile!r}"
+            + (f" at k = {k}" if k is not None else "")
+            + (f" for models {sorted(names)}" if names else "")
+        )
+    return list(cells.values())
+
+
+def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
+    """ms per training step of each ``(experiment, configuration)`` of ``cells`` (under
+    ``profile``), its FLOP rate and its share of the peak."""
+    from systems import cache_root
+
+    peak = matmul_peak_gflops()
+    say(f"float32 matmul peak {peak:.0f} GFLOP/s on {cpu_count()} core(s)")
+    date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    rows = []
+    for experiment, c in cells:
+        _, data, _, model = build_run(c, cache_root())
+        training = Training([model], [data], [train_config(c)])
+        steps, loads = _time_blocks(training, repeats)
+        med = float(np.median(steps))
+        gflop = training.flops / 1e9
+        rows.append(
+            {
+                "experiment": experiment,
+                "profile": profile,
+                "system": c.system,
+                "model": c.model,
+                "k": c.k,
+                "batch": c.batch,
+                "width": c.width,
+                "ms_per_step_median": med,
+                "ms_per_step_min": float(steps.min()),
+                "ms_per_step_max": float(steps.max()),
+                "step_gflop": gflop,
+                "gflops": gflop / med * 1e3,
+                "peak_gflops": peak,
+                "of_peak": gflop / med * 1e3 / peak,
+                "compile_s": training.compile_seconds,
+                "cores": cpu_count(),
+                "load_avg": float(np.median(loads)),
+                "xla_flags": os.environ.get("XLA_FLAGS", ""),
+                "date": date,
+            }
+        )
+        r = rows[-1]
+        say(
+            f"{experiment:13s} {c.system:16s} k={c.k} {c.model:12s} {med:8.2f} ms/step  "
+            f"{gflop:6.2f} GFLOP  {r['gflops']:5.1f} GFLOP/s ({r['of_peak']:.0%} of peak)  "
+            f"load {r['load_avg']:.2f}"
+        )
+    return rows
