@@ -330,6 +330,8 @@ def test_perf_cells_are_the_experiments_own_trainable_cells():
     assert {c.seed for c in configs} == {0} and all(c.batch == 200 for c in configs)
     only = cell_configs("coordinates", "paper-k", k=4, names={"hnn_so"})
     assert {c.model for c in only} == {"hnn_so"}
+    spring = cell_configs("coordinates", "paper-k", k=4, systems={"spring_pendulum"})
+    assert {c.system for c in spring} == {"spring_pendulum"} and len(spring) == len(cells) // 2
     with pytest.raises(SystemExit, match="no trainable cells of 'coordinates'.*k = 7"):
         cell_configs("coordinates", "paper-k", k=7)
 

@@ -20,9 +20,10 @@ from ...core import Training, build_run, cpu_count, expand, train_config
 from ._timing import _time_blocks, matmul_peak_gflops
 
 
-def cell_configs(experiment, profile, k=None, names=None, seed=0) -> list:
+def cell_configs(experiment, profile, k=None, names=None, seed=0, systems=None) -> list:
     """One configuration per (system, model, k) of ``experiment`` under ``profile`` (seed
-    ``seed``), trivial models left out: the first of a cell's variants (its starts, say), since
+    ``seed``; only ``names``' models and ``systems``' systems where given), trivial models
+    left out: the first of a cell's variants (its starts, say), since
     they train the same program on data of the same shape."""
     import models
 
@@ -31,7 +32,7 @@ def cell_configs(experiment, profile, k=None, names=None, seed=0) -> list:
     for c in expand(experiment, profile, seeds=[seed]):
         if c.model in trivial or (k is not None and c.k != k):
             continue
-        if names and c.model not in names:
+        if (names and c.model not in names) or (systems and c.system not in systems):
             continue
         cells.setdefault((c.system, c.model, c.k), c)
     if not cells:
@@ -39,6 +40,7 @@ def cell_configs(experiment, profile, k=None, names=None, seed=0) -> list:
             f"no trainable cells of {experiment!r} under {profile!r}"
             + (f" at k = {k}" if k is not None else "")
             + (f" for models {sorted(names)}" if names else "")
+            + (f" on systems {sorted(systems)}" if systems else "")
         )
     return list(cells.values())
 

@@ -35,11 +35,12 @@ def _cells_main(a) -> int:
     from ._cells import cell_configs, cell_rows
 
     names = {n for n in (a.models or "").split(",") if n}
+    systems = {n for n in (a.systems or "").split(",") if n}
     try:
         cells = [
             (e, c)
             for e in a.cells.split(",")
-            for c in cell_configs(e, a.profile, a.k, names, a.seed)
+            for c in cell_configs(e, a.profile, a.k, names, a.seed, systems)
         ]
     except ValueError as e:  # an unknown experiment or profile: the one line naming the allowed
         raise SystemExit(str(e)) from None
@@ -96,6 +97,9 @@ def main(argv=None) -> int:
     parser.add_argument("--profile", default="paper-core", help="the cells' profile (--cells)")
     parser.add_argument("--k", type=int, default=None, help="only the cells at k links (--cells)")
     parser.add_argument("--seed", type=int, default=0, help="the cells' seed (--cells)")
+    parser.add_argument(
+        "--systems", default=None, help="comma-separated: only these systems' cells (--cells)"
+    )
     parser.add_argument("--no-write", action="store_true")
     parser.add_argument("--json", action="store_true", help="print the rows as one JSON line")
     a = parser.parse_args(argv)
