@@ -332,7 +332,7 @@ def test_perf_cells_are_the_experiments_own_trainable_cells():
     assert {c.model for c in only} == {"hnn_so"}
     spring = cell_configs("coordinates", "paper-k", k=4, systems={"spring_pendulum"})
     assert {c.system for c in spring} == {"spring_pendulum"} and len(spring) == len(cells) // 2
-    with pytest.raises(SystemExit, match="no trainable cells of 'coordinates'.*k = 7"):
+    with pytest.raises(SystemExit, match="coordinates.*k = 7; it has k 1, 3, 4; models hnn_so"):
         cell_configs("coordinates", "paper-k", k=7)
 
 

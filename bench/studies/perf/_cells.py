@@ -28,19 +28,25 @@ def cell_configs(experiment, profile, k=None, names=None, seed=0, systems=None) 
     import models
 
     trivial = set(models.trivial_models())
+    trainable = [c for c in expand(experiment, profile, seeds=[seed]) if c.model not in trivial]
     cells = {}
-    for c in expand(experiment, profile, seeds=[seed]):
-        if c.model in trivial or (k is not None and c.k != k):
+    for c in trainable:
+        if (k is not None and c.k != k) or (names and c.model not in names):
             continue
-        if (names and c.model not in names) or (systems and c.system not in systems):
+        if systems and c.system not in systems:
             continue
         cells.setdefault((c.system, c.model, c.k), c)
     if not cells:
+
+        def offered(field):
+            return ", ".join(sorted({str(getattr(c, field)) for c in trainable}))
+
         raise SystemExit(
             f"no trainable cells of {experiment!r} under {profile!r}"
             + (f" at k = {k}" if k is not None else "")
             + (f" for models {sorted(names)}" if names else "")
             + (f" on systems {sorted(systems)}" if systems else "")
+            + f"; it has k {offered('k')}; models {offered('model')}; systems {offered('system')}"
         )
     return list(cells.values())
 
