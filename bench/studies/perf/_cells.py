@@ -23,8 +23,8 @@ from ._timing import _time_blocks, matmul_peak_gflops
 def cell_configs(experiment, profile, k=None, names=None, seed=0, systems=None) -> list:
     """One configuration per (system, model, k) of ``experiment`` under ``profile`` (seed
     ``seed``; only ``names``' models and ``systems``' systems where given), trivial models
-    left out: the first of a cell's variants (its starts, say), since
-    they train the same program on data of the same shape."""
+    left out: the first of a cell's variants (its starts, say), since they train the same
+    program on data of the same shape."""
     import models
 
     trivial = set(models.trivial_models())
@@ -66,6 +66,7 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
         steps, loads = _time_blocks(training, repeats)
         med = float(np.median(steps))
         gflop = training.flops / 1e9
+        rate = gflop / med * 1e3
         rows.append(
             {
                 "experiment": experiment,
@@ -79,9 +80,9 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
                 "ms_per_step_min": float(steps.min()),
                 "ms_per_step_max": float(steps.max()),
                 "step_gflop": gflop,
-                "gflops": gflop / med * 1e3,
+                "gflops": rate,
                 "peak_gflops": peak,
-                "of_peak": gflop / med * 1e3 / peak,
+                "of_peak": rate / peak,
                 "compile_s": training.compile_seconds,
                 "cores": cpu_count(),
                 "load_avg": float(np.median(loads)),
@@ -89,10 +90,9 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
                 "date": date,
             }
         )
-        r = rows[-1]
         say(
             f"{experiment:13s} {c.system:16s} k={c.k} {c.model:12s} {med:8.2f} ms/step  "
-            f"{gflop:6.2f} GFLOP  {r['gflops']:5.1f} GFLOP/s ({r['of_peak']:.0%} of peak)  "
-            f"load {r['load_avg']:.2f}"
+            f"{gflop:6.2f} GFLOP  {rate:5.1f} GFLOP/s ({rate / peak:.0%} of peak)  "
+            f"load {rows[-1]['load_avg']:.2f}"
         )
     return rows
