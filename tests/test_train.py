@@ -336,6 +336,29 @@ def test_perf_cells_are_the_experiments_own_trainable_cells():
         cell_configs("coordinates", "paper-k", k=7)
 
 
+def test_perf_cells_refuse_kinds_that_train_alone():
+    from bench.studies.perf._cells import cell_configs
+
+    assert {c.observation for c in cell_configs("mujoco", "smoke")} == {"controlled"}
+    with pytest.raises(SystemExit, match="state and controlled runs.*has pixels runs"):
+        cell_configs("pixel_pendulum_hnn", "smoke")
+
+
+@pytest.mark.slow
+def test_perf_cells_controlled_smoke(tmp_path):
+    """A MuJoCo cell (the stand-in data at smoke) is built and fitted as its run's train step
+    does: its controls reach the objective."""
+    from bench.studies.perf import main
+
+    out = tmp_path / "cells.csv"
+    argv = ["--cells", "mujoco", "--profile", "smoke", "--models", "node_so", "--quick"]
+    assert main([*argv, "--systems", "HopperFull-v0", "--out", str(out)]) == 0
+    import pandas as pd
+
+    rows = pd.read_csv(out)
+    assert list(rows["system"]) == ["HopperFull-v0"] and (rows["ms_per_step_median"] > 0).all()
+
+
 @pytest.mark.slow
 def test_perf_cells_smoke(tmp_path):
     from bench.studies.perf import main

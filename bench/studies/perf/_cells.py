@@ -1,13 +1,17 @@
 """``python -m bench.studies.perf --cells EXPERIMENTS``: the training step of experiments' own
-cells (their data, model, batch and width under a profile), not the synthetic chain-2 setting;
-several experiments comma-separated.
+cells (their data, model, objective, batch and width under a profile), not the synthetic
+chain-2 setting; several experiments comma-separated. A cell is built and fitted as its run's
+own train step does (its observation kind's :class:`bench.core.Member`): state and controlled
+runs (MuJoCo's, say); the kinds that train alone (pixels) are refused with one line.
 
 A campaign worker trains one run on one core, so the figure to hold a step against is one
 core's matmul rate: run it as a worker runs, ``taskset -c 1 python -m bench.studies.perf
 --cells coordinates --profile paper-k --k 4``. Each cell (system, model, k; one seed, the first
 of its starts) is timed over ``repeats`` blocks after one that warms up; its FLOPs are XLA's
 count of the compiled block (:func:`bench.core._train.step_flops`), and ``of_peak`` is the
-step's FLOP rate over the float32 matmul peak measured in the same process."""
+step's FLOP rate over the float32 matmul peak measured in the same process. XLA counts a loop's
+body once, so where a rollout loops rather than unrolls (8 Euler substeps per interval, say)
+both are lower bounds, comparable only between cells that loop alike."""
 
 from __future__ import annotations
 
@@ -16,7 +20,8 @@ import os
 
 import numpy as np
 
-from ...core import Training, build_run, cpu_count, expand, train_config
+from ...core import Training, cpu_count, expand
+from ...core._execute import steps_of
 from ._timing import _time_blocks, matmul_peak_gflops
 
 
@@ -29,6 +34,12 @@ def cell_configs(experiment, profile, k=None, names=None, seed=0, systems=None) 
 
     trivial = set(models.trivial_models())
     trainable = [c for c in expand(experiment, profile, seeds=[seed]) if c.model not in trivial]
+    alone = sorted({c.observation for c in trainable if steps_of(c).member is None})
+    if alone:
+        raise SystemExit(
+            f"perf --cells times cells that train by the one training loop (state and "
+            f"controlled runs); {experiment!r} has {', '.join(alone)} runs"
+        )
     cells = {}
     for c in trainable:
         if (k is not None and c.k != k) or (names and c.model not in names):
@@ -61,8 +72,9 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
     date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     rows = []
     for experiment, c in cells:
-        _, data, _, model = build_run(c, cache_root())
-        training = Training([model], [data], [train_config(c)])
+        member = steps_of(c).member  # what the run's own train step fits, and how
+        model, data, objective = member.inputs(c, steps_of(c).build(c, cache_root()))
+        training = Training([model], [data], [member.train_config(c)], objective)
         steps, loads = _time_blocks(training, repeats)
         med = float(np.median(steps))
         gflop = training.flops / 1e9
@@ -95,4 +107,8 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
             f"{gflop:6.2f} GFLOP  {rate:5.1f} GFLOP/s ({rate / peak:.0%} of peak)  "
             f"load {rows[-1]['load_avg']:.2f}"
         )
+    say(
+        "GFLOP: XLA's count with each loop body once (step_flops): where a rollout loops (more "
+        "than 4 substeps, as MuJoCo's 8, or a long chunk) the rate and share are lower bounds"
+    )
     return rows
