@@ -189,3 +189,14 @@ def relative_max(a, b) -> float:
     """max |a - b| / max |b|."""
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
     return float(np.max(np.abs(a - b)) / max(float(np.max(np.abs(b))), 1e-300))
+
+
+def l2_to_gradient(state: dict, grads: dict, prefix: str, weight_decay: float) -> float:
+    """||weight_decay theta|| / ||g|| over the paper's ``prefix`` network: how much of the first
+    step of its ``Adam(weight_decay=...)`` (an L2 term added to the gradient, then normalised
+    per entry) is the decay rather than the data; AdamW's decoupled decay does not enter Adam's
+    normalisation."""
+    keys = [k for k in grads if k.startswith(prefix + ".")]
+    theta = np.sqrt(sum(np.sum(np.square(np.asarray(state[k], float))) for k in keys))
+    g = np.sqrt(sum(np.sum(np.square(np.asarray(grads[k], float))) for k in keys))
+    return float(weight_decay * theta / max(g, 1e-300))
