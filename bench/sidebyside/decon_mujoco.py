@@ -69,7 +69,7 @@ TOL_GRAD = {"32": 1e-3, "64": 1e-9}  # (b) worst layer, ||g_paper - g_ours|| / |
 # (c) the named reason of a curve that differs from the paper's
 REASONS = {
     "mapped": "the update rule: the suite's AdamW (decoupled decay, cosine per step) against "
-    "the paper's Adam with an L2 term (cosine per epoch), a deliberate departure that "
+    "the paper's Adam with an L2 term (cosine per epoch), the suite's departure, which "
     "mapped_paper_opt isolates",
     "mapped_paper_opt": "none known: the paper's start and update rule",
     "suite": "the update rule (as mapped) and the suite's own initial draw",
