@@ -111,7 +111,10 @@ _MODULES = {
 # Public under another name than their module's: there a run kind's step or columns, named as
 # every kind names them (build, train_config, METRIC_COLUMNS), or a word its module makes plain.
 _RENAMED = {
+    "CONTROLLED": ("_controlled", "CONTROLLED"),
     "CONTROLLED_COLUMNS": ("_controlled", "METRIC_COLUMNS"),
+    "controlled_mse": ("_controlled", "normalised_mse"),
+    "controlled_predictor": ("_controlled", "predictor"),
     "MEASURED_COLUMNS": ("_measured", "METRIC_COLUMNS"),
     "build_pixels": ("_pixels", "build"),
     "ensemble_enabled": ("_ensemble", "enabled"),

@@ -234,7 +234,7 @@ def _rollouts(trivial: bool):
     )
 
 
-def _predictor(c: RunConfig, model):
+def predictor(c: RunConfig, model):
     """f(m, z0s, ts, u) -> states (N, T, 2d): the rollout under controls u (N, T - 1, nu) with
     the run's evaluation integrator, or a trivial predictor's closed form."""
     import models
@@ -264,7 +264,7 @@ def evaluate(c: RunConfig, built: Built, model, meta: dict, cache_root):
 
     split, w = built.split, built.windows
     dtype = jnp.dtype(c.dtype)
-    predict = _predictor(c, model)
+    predict = predictor(c, model)
 
     def run(z, u):
         ts = jnp.asarray(np.arange(z.shape[1]) * c.dt, dtype)

@@ -19,8 +19,7 @@ class Ours:
         import jax
         import jax.numpy as jnp
 
-        from bench.core import make_step, optimizer
-        from bench.core._controlled import CONTROLLED, _predictor
+        from bench.core import CONTROLLED, controlled_predictor, make_step, optimizer
 
         self.data = CONTROLLED.data(model, windows, tcfg)
         params, self.static = eqx.partition(model, eqx.is_inexact_array)
@@ -34,7 +33,7 @@ class Ours:
             lambda state, idx: jax.lax.scan(step, state, (idx, jnp.ones(idx.shape[0], bool)))
         )
         self._compiled: dict = {}
-        self._predict = _predictor(config, model)
+        self._predict = controlled_predictor(config, model)
         self.dtype = jnp.dtype(tcfg.dtype)
         self.seconds, self.steps = 0.0, 0
 
@@ -90,7 +89,7 @@ def plain_step(static, tcfg, data, opt):
     import equinox as eqx
     import jax.numpy as jnp
 
-    from bench.core._controlled import CONTROLLED
+    from bench.core import CONTROLLED
 
     def step(carry, xs):
         params, opt_state, dead, good = carry
@@ -120,7 +119,7 @@ def loss_and_grad(model, windows, ix, tcfg):
     import equinox as eqx
     import jax.numpy as jnp
 
-    from bench.core._controlled import CONTROLLED
+    from bench.core import CONTROLLED
 
     data = CONTROLLED.data(model, windows, tcfg)
     loss, g = eqx.filter_value_and_grad(lambda m: CONTROLLED.loss(m, data, jnp.asarray(ix), tcfg))(
@@ -132,6 +131,6 @@ def loss_and_grad(model, windows, ix, tcfg):
 def normalised_mse(pred, z, scale) -> float:
     """The paper's ``test_mse`` of one batch: mean over windows, times (t = 0 included) and
     components of ((pred - z) / z_std)^2; NaN if a prediction is not finite."""
-    from bench.core._controlled import normalised_mse as nmse
+    from bench.core import controlled_mse as nmse
 
     return nmse(np.asarray(pred, float), np.asarray(z, float), np.asarray(scale, float))

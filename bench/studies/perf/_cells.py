@@ -20,8 +20,7 @@ import os
 
 import numpy as np
 
-from ...core import Training, cpu_count, expand
-from ...core._execute import steps_of
+from ...core import Training, cpu_count, expand, observation_kinds
 from ._timing import _time_blocks, matmul_peak_gflops
 
 
@@ -34,7 +33,8 @@ def cell_configs(experiment, profile, k=None, names=None, seed=0, systems=None) 
 
     trivial = set(models.trivial_models())
     trainable = [c for c in expand(experiment, profile, seeds=[seed]) if c.model not in trivial]
-    alone = sorted({c.observation for c in trainable if steps_of(c).member is None})
+    kinds = observation_kinds()
+    alone = sorted({c.observation for c in trainable if kinds[c.observation].member is None})
     if alone:
         raise SystemExit(
             f"perf --cells times cells that train by the one training loop (state and "
@@ -72,8 +72,9 @@ def cell_rows(cells, profile, repeats, say=print) -> list[dict]:
     date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     rows = []
     for experiment, c in cells:
-        member = steps_of(c).member  # what the run's own train step fits, and how
-        model, data, objective = member.inputs(c, steps_of(c).build(c, cache_root()))
+        kind = observation_kinds()[c.observation]
+        member = kind.member  # what the run's own train step fits, and how
+        model, data, objective = member.inputs(c, kind.build(c, cache_root()))
         training = Training([model], [data], [member.train_config(c)], objective)
         steps, loads = _time_blocks(training, repeats)
         med = float(np.median(steps))
