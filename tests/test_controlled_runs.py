@@ -104,8 +104,9 @@ def test_a_task_file_is_read_and_checked_against_its_card(monkeypatch, tmp_path)
     ep, card = D.stand_in(TASK, 300)
     assert not [c for c in expand("mujoco", "paper")]  # no file: no runs
     path = D.save_data(ep, {"policy": "test", "policy_budget": "none"})
-    # the four models at 2e-4; NODE, NODE+SO, the HNN and the paper's HNN at 5e-3
-    assert [c.system for c in expand("mujoco", "paper")] == [TASK] * (4 + 4) * 5
+    # the four models at 2e-4; NODE, NODE+SO, the HNN and the paper's HNN at 5e-3; the
+    # paper's three models at 5e-3 under its update rule
+    assert [c.system for c in expand("mujoco", "paper")] == [TASK] * (4 + 4 + 3) * 5
     assert not expand("mujoco", "quick")  # quick runs HalfCheetahFull-v0 only
     c = RunConfig(**{**SMOKE, "system_params": X.FILE, "n_generated": 250}, model="node")
     got, source, sha = C.load_episodes(c)

@@ -111,6 +111,35 @@ def test_adam_l2_is_adam_on_the_gradient_plus_decay():
     assert abs(float(u[0])) == pytest.approx(lr, rel=1e-3)
 
 
+def test_adam_l2_clip_clips_the_gradient_before_the_l2_term():
+    """``adam_l2_clip`` against PyTorch's ``clip_grad_norm_(1)`` then ``Adam(weight_decay=w)``
+    written out: the gradient's norm is clipped, the decay then added unclipped."""
+    lr, w, b1, b2, eps, clip = 1e-2, 0.5, 0.9, 0.999, 1e-8, 1.0
+    cfg = TrainConfig(
+        steps=10, lr=lr, weight_decay=w, optimizer="adam_l2_clip", schedule="constant", clip=clip
+    )
+    opt = optimizer(cfg)
+    theta = jnp.array([1.0, -2.0, 0.5])
+    grads = [jnp.array([3.0, 4.0, 0.0]), jnp.array([0.1, -0.2, 0.05])]  # the first norm 5
+    state = opt.init(theta)
+    p, m, v = np.asarray(theta, float), np.zeros(3), np.zeros(3)
+    for t, g in enumerate(grads, start=1):
+        updates, state = opt.update(g, state, theta)
+        theta = optax.apply_updates(theta, updates)
+        g = np.asarray(g, float)
+        gg = g * min(1.0, clip / np.linalg.norm(g)) + w * p
+        m, v = b1 * m + (1 - b1) * gg, b2 * v + (1 - b2) * gg**2
+        p = p - lr * (m / (1 - b1**t)) / (np.sqrt(v / (1 - b2**t)) + eps)
+        np.testing.assert_allclose(np.asarray(theta), p, rtol=1e-5)
+    # unclipped, the first step (Adam's is about -lr sign) turns the other way in the second
+    # component: 4 - 0.5 * 2 > 0, where 0.8 - 0.5 * 2 < 0
+    theta0 = jnp.array([1.0, -2.0, 0.5])
+    for name, sign in (("adam_l2_clip", 1.0), ("adam_l2", -1.0)):
+        o = optimizer(TrainConfig(steps=10, lr=lr, weight_decay=w, optimizer=name, clip=clip))
+        u, _ = o.update(grads[0], o.init(theta0), theta0)
+        assert float(u[1]) == pytest.approx(sign * lr, rel=1e-3)
+
+
 def test_run_fields_are_validated_and_out_of_the_hash_at_their_defaults():
     base = RunConfig(system="chain_pendulum", k=2)
     same = RunConfig(
@@ -142,7 +171,7 @@ def test_run_fields_are_validated_and_out_of_the_hash_at_their_defaults():
     for kw, needle in bad:
         with pytest.raises(ValueError, match=needle):
             RunConfig(system="chain_pendulum", k=2, **kw)
-    with pytest.raises(ValueError, match="optimizer .* allowed adamw, adam_l2"):
+    with pytest.raises(ValueError, match="optimizer .* allowed adamw, adam_l2, adam_l2_clip"):
         TrainConfig(optimizer="sgd")
     with pytest.raises(ValueError, match="schedule .* allowed cosine, onecycle, constant"):
         TrainConfig(schedule="step")

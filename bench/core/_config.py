@@ -105,8 +105,9 @@ class RunConfig:
     # and "controlled" (a MuJoCo task under recorded controls): bench.core._kinds
     observation: str = _hashed_unless_default("state")
     # the optimisation (bench.core._optim.optimizer): "adamw" (the suite's: clipping, AdamW,
-    # decoupled weight decay) or "adam_l2" (the seeds': Adam with an L2 term in the gradient,
-    # no clipping); the learning-rate schedule from ``lr``; the weight decay (None: the
+    # decoupled weight decay), "adam_l2" (the seeds': Adam with an L2 term in the gradient,
+    # no clipping) or "adam_l2_clip" (the same after clipping the gradient: the Deconstructing
+    # paper's MuJoCo code); the learning-rate schedule from ``lr``; the weight decay (None: the
     # observation's default, 1e-4 for states and the HNN seed's 1e-5 for pixels)
     optimizer: str = _hashed_unless_default("adamw")
     lr_schedule: str = _hashed_unless_default("cosine")

@@ -1,6 +1,6 @@
 """The optimisation of a training run: the update rule (:func:`optimizer`: the suite's AdamW with
-clipping, or the seeds' Adam with an L2 term) and its learning-rate schedule
-(:func:`lr_schedule`), both read off a training configuration ``config`` (any object with
+clipping, or the papers' Adam with an L2 term, with or without clipping) and its learning-rate
+schedule (:func:`lr_schedule`), both read off a training configuration ``config`` (any object with
 the fields of :class:`~bench.core._train_config.TrainConfig` they name: steps, lr, lr_floor,
 schedule, optimizer, weight_decay, clip).
 """
@@ -10,7 +10,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 import optax
 
-OPTIMIZERS = ("adamw", "adam_l2")  # :func:`optimizer`
+from ._vocab import OPTIMIZERS  # noqa: F401 (the names :func:`optimizer` takes)
+
 SCHEDULES = ("cosine", "onecycle", "constant")  # :func:`lr_schedule`
 ONECYCLE_START, ONECYCLE_DIV = 0.2, 1e4  # the LNN seed notebook's OneCycleLR
 
@@ -43,13 +44,19 @@ def optimizer(config, lr=None) -> optax.GradientTransformation:
 
     - ``"adamw"`` (the suite's): clip_by_global_norm(clip) -> AdamW(weight_decay, decoupled);
     - ``"adam_l2"`` (the seeds': PyTorch's ``Adam(weight_decay=w)``, and the LNN notebook's
-      L2 term): Adam on g + w theta, no clipping.
+      L2 term): Adam on g + w theta, no clipping;
+    - ``"adam_l2_clip"`` (the Deconstructing paper's MuJoCo training, ``mujoco.py``'s
+      ``clip_grad_norm_(1)`` then ``Adam(weight_decay=w)``): Adam on clip(g) + w theta, the
+      gradient clipped to norm ``clip`` before the L2 term joins it.
 
     ``lr`` overrides ``config.lr`` (a traced scalar in an ensemble).
     """
     schedule = lr_schedule(config, lr)
-    if config.optimizer == "adam_l2":
-        return optax.chain(optax.add_decayed_weights(config.weight_decay), optax.adam(schedule))
+    if config.optimizer in ("adam_l2", "adam_l2_clip"):
+        l2 = (optax.add_decayed_weights(config.weight_decay), optax.adam(schedule))
+        if config.optimizer == "adam_l2":
+            return optax.chain(*l2)
+        return optax.chain(optax.clip_by_global_norm(config.clip), *l2)
     return optax.chain(
         optax.clip_by_global_norm(config.clip),
         optax.adamw(schedule, weight_decay=config.weight_decay),

@@ -86,8 +86,9 @@ _CONFIG = {
     ),
     "optimizer": (
         "-",
-        "adamw (the suite's: clipping, AdamW with decoupled weight decay) or adam_l2 (the "
-        "seeds': Adam with an L2 term in the gradient, no clipping); empty before the field: adamw",
+        "adamw (the suite's: clipping, AdamW with decoupled weight decay), adam_l2 (the "
+        "seeds': Adam with an L2 term in the gradient, no clipping) or adam_l2_clip (the "
+        "same after clipping: the paper's MuJoCo code); empty before the field: adamw",
     ),
     "lr_schedule": (
         "-",

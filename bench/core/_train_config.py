@@ -45,7 +45,7 @@ class TrainConfig:
     steps_per_call: int = 100  # steps per compiled block (1: one dispatch per step)
     checkpoints: tuple[int, ...] = ()  # steps whose parameters are kept (TrainResult.snapshots)
     target: str = "rollout"  # "rollout" or "derivative" (bench.core._objective.loss_fn)
-    optimizer: str = "adamw"  # "adamw" or "adam_l2" (bench.core._optim.optimizer)
+    optimizer: str = "adamw"  # "adamw", "adam_l2", "adam_l2_clip" (bench.core._optim)
     schedule: str = "cosine"  # "cosine", "onecycle" or "constant" (bench.core._optim)
 
     def __post_init__(self):

@@ -17,7 +17,7 @@ COORDINATES = ("velocity", "momentum")
 LOSSES = ("l1", "l2")
 DTYPES = ("float32", "float64")
 TRAIN_TARGETS = ("rollout", "derivative")
-OPTIMIZERS = ("adamw", "adam_l2")  # bench.core._optim.optimizer
+OPTIMIZERS = ("adamw", "adam_l2", "adam_l2_clip")  # bench.core._optim.optimizer
 LR_SCHEDULES = ("cosine", "onecycle", "constant")  # bench.core._optim.lr_schedule
 # A pixel run's data (the HNN seed's task 5): frames of PIXEL_SIZE x PIXEL_SIZE pixels, starts
 # |q0| < PIXEL_MAX_ANGLE (the seed's pi/6), qdot0 ~ U(-PIXEL_MAX_SPEED, PIXEL_MAX_SPEED)

@@ -78,13 +78,19 @@ TOL_CURVE = 0.25  # (c) late training and held-out MSE of a curve within 25 % of
 
 
 def run_config(task: str, model: str, seed: int):
-    """The ``paper-core`` cell of ``model`` on ``task`` at the code's rate :data:`CODE_LR`."""
+    """The ``paper-core`` cell of ``model`` on ``task`` at the code's rate :data:`CODE_LR`,
+    trained by the suite's AdamW (the experiment's cells under the paper's rule, ``adam_l2_clip``,
+    are the same chain as :func:`~bench.sidebyside._mujoco_ours.paper_optimizer` with a cosine
+    stepped per step rather than per epoch)."""
     import bench
 
     cells = [
         c
         for c in bench.expand("mujoco", PROFILE, seeds=[seed])
-        if c.system == task and c.model == model and abs(c.lr - CODE_LR) < 1e-12
+        if c.system == task
+        and c.model == model
+        and abs(c.lr - CODE_LR) < 1e-12
+        and c.optimizer == "adamw"
     ]
     if len(cells) != 1:
         raise ValueError(f"{len(cells)} {PROFILE} cells of {model} on {task} at lr {CODE_LR}")
@@ -103,12 +109,12 @@ def run_paper(python, root, inp, out, log) -> dict:
 
 def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     """Every check of model ``name``; returns the verdict lines."""
-    from bench.core import Batches
-    from bench.core import _controlled as C
+    from bench.core import Batches, model_of, observation_kinds
 
     c = run_config(a.task, name, a.seed)
-    built = C.build(c)
-    tcfg = C.train_config(c)
+    kind = observation_kinds()[c.observation]  # the controlled run's own steps
+    built = kind.build(c, None)
+    tcfg = kind.member.train_config(c)
     w = built.windows
     out.mkdir(parents=True, exist_ok=True)
     z, u = np.asarray(w.z_train), np.asarray(w.u_train)
@@ -208,7 +214,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     mapped = {}
     for tag, dtype in (("32", "float32"), ("64", "float64")):
         c_t = dataclasses.replace(c, dtype=dtype)
-        model = C._model(c_t, c.width, c.depth, built.model.scene.standardisation)
+        model = model_of(c_t, built.model.scene, width=c.width, depth=c.depth)
         model = M.with_paper_weights(name, model, state)
         mapped[tag] = model
         tc = dataclasses.replace(tcfg, dtype=dtype)

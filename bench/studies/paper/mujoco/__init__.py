@@ -29,6 +29,8 @@ from ._rule import (
     NAME,
     NOT_JUDGED,
     PAPER_HNN,
+    PAPER_RULE,
+    PAPER_RULE_MODELS,
     TASKS,
     claim_16,
     claim_16_readings,
@@ -151,7 +153,11 @@ _SMOKE = {
 
 def _at_lr(c: RunConfig) -> bool:
     """App. C's lr for the suite's models, the code's for those of :data:`CODE_LR_MODELS` (the
-    HNNs' not at quick), the paper's HNN at the code's only."""
+    HNNs' not at quick), the paper's HNN at the code's only; under the reference's update rule
+    (:data:`PAPER_RULE`) the paper's three models (:data:`PAPER_RULE_MODELS`) at the code's lr
+    only, not at quick."""
+    if c.optimizer == PAPER_RULE:
+        return c.lr == CODE_LR and c.model in PAPER_RULE_MODELS and c.steps != QUICK_STEPS
     if c.lr == LR:
         return c.model != PAPER_HNN
     return c.model in CODE_LR_MODELS and (c.model not in CODE_LR_HNNS or c.steps != QUICK_STEPS)
@@ -189,6 +195,7 @@ EXPERIMENT = Experiment(
         "system_params": (FILE,),
         "model_options": ((), *MODEL_OPTIONS.values()),
         "lr": (LR, CODE_LR),
+        "optimizer": (_PAPER["optimizer"], PAPER_RULE),
         "test_chunks": (TEST_CHUNKS, *SHORT_TEST_CHUNKS.values()),
         "train_substeps": tuple(sorted({_PAPER["train_substeps"], *SUBSTEPS.values()})),
         "eval_substeps": tuple(sorted({_PAPER["eval_substeps"], *SUBSTEPS.values()})),
@@ -202,7 +209,9 @@ EXPERIMENT = Experiment(
     },
     include=_include,
     claim=CLAIM,
-    supplementary=lambda c: c.lr == CODE_LR and c.model in CODE_LR_HNNS,
+    supplementary=lambda c: (
+        (c.lr == CODE_LR and c.model in CODE_LR_HNNS) or c.optimizer == PAPER_RULE
+    ),
 )
 EXPERIMENTS = (EXPERIMENT,)
 STEM = "fig7_mujoco"

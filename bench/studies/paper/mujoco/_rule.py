@@ -48,6 +48,9 @@ __all__ = [
     "at_code_lr",
     "code_lr_rows",
     "PAPER_HNN",
+    "PAPER_RULE",
+    "PAPER_RULE_MODELS",
+    "optimizer_of",
     "code_lr_parts",
     "controlled",
     "data_kind",
@@ -85,6 +88,11 @@ NOT_JUDGED = "not judged: stand-in data"
 # model has run there (its HNN cells are a further reading), at App. C's otherwise; the other
 # rate's reading is named beside it, not judged.
 LR, CODE_LR = 2e-4, 5e-3
+# The reference's update rule (fit_net: clip_grad_norm_(1), then Adam whose weight_decay adds an
+# L2 term to the gradient; bench.core._optim), beside the suite's AdamW: the paper's three
+# models at the code's lr under it are a further reading ("the paper's models and update rule")
+PAPER_RULE, SUITE_RULE = "adam_l2_clip", "adamw"
+PAPER_RULE_MODELS = ("node", "node_so", "hnn_force_paper")
 EFFECT = "log(test MSE NODE / NODE+SO), mean over tasks per seed"
 
 
@@ -103,11 +111,20 @@ def declared_options(runs: pd.DataFrame) -> pd.Series:
     )
 
 
-def controlled(runs: pd.DataFrame) -> pd.DataFrame:
-    """The claim's rows: Fig. 7's tasks, the four cells' models with their declared options."""
+def optimizer_of(rows: pd.DataFrame) -> pd.Series:
+    """Each row's update rule (rows stored before the field: the suite's AdamW)."""
+    if "optimizer" not in rows:
+        return pd.Series(SUITE_RULE, index=rows.index)
+    return rows["optimizer"].fillna(SUITE_RULE).replace("", SUITE_RULE)
+
+
+def controlled(runs: pd.DataFrame, optimizer: str = SUITE_RULE) -> pd.DataFrame:
+    """The claim's rows: Fig. 7's tasks, the four cells' models with their declared options,
+    trained by ``optimizer`` (the suite's AdamW unless named)."""
     if not len(runs) or "system" not in runs:
         return runs.iloc[0:0]
     rows = runs[runs["system"].isin(TASKS) & runs["model"].isin([*MODELS, PAPER_HNN])]
+    rows = rows[optimizer_of(rows) == optimizer] if len(rows) else rows
     return rows[declared_options(rows)] if len(rows) else rows
 
 
@@ -355,14 +372,28 @@ def claim_16(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
 
 
 def claim_16_readings(runs: pd.DataFrame, curves: pd.DataFrame | None = None) -> list:
-    """Claim 16 (:func:`claim_16`) and, where the paper's HNN (:data:`PAPER_HNN`) has run at
-    the code's lr on the task files, the same rule with it in the HNN's place ("the paper's
-    HNN"): whether Fig. 7's HNN underperformed through its construction."""
+    """Claim 16 (:func:`claim_16`) and, on the task files at the code's lr:
+
+    - where the paper's HNN (:data:`PAPER_HNN`) has run under the suite's AdamW, the same rule
+      with it in the HNN's place ("the paper's HNN"): whether Fig. 7's HNN underperformed
+      through its construction;
+    - where the paper's three models (:data:`PAPER_RULE_MODELS`) have run under the
+      reference's update rule (:data:`PAPER_RULE`), the same rule on them ("the paper's models
+      and update rule"): Fig. 7's whole setting, whose Adam adds the weight decay to the
+      gradient (docs/sidebyside.md: it stalls the HNN's training fit on Hopper)."""
     out = [claim_16(runs)]
     r = controlled(runs)
     files = r[data_kind(r) == "file"] if len(r) else r
     if len(files) and at_code_lr(files, PAPER_HNN):
         out.append(judge(code_lr_rows(files, PAPER_HNN), variant="the paper's HNN"))
+    rule = controlled(runs, PAPER_RULE)
+    rule = rule[data_kind(rule) == "file"] if len(rule) else rule
+    if len(rule) and at_code_lr(rule, PAPER_HNN):
+        # the constant-velocity predictor does not train: its rows are App. C's, AdamW's
+        triv = at_lr(files, LR) if len(files) else files
+        triv = triv[triv["model"] == TRIVIAL["model"]] if len(triv) else triv
+        rows = code_lr_rows(pd.concat([rule, triv], ignore_index=True), PAPER_HNN)
+        out.append(judge(rows, variant="the paper's models and update rule"))
     return out
 
 
