@@ -7,7 +7,7 @@ elementwise operations that vmap and differentiate cheaply. Larger matrices use 
 A solve with a factor of :data:`_SPLIT` rows or more reads the factor's entries through one
 split, whose derivative is one concatenation. Read one index at a time, each entry's derivative
 is a pad to the whole matrix, and summing the pads costs O(n^4): with 12 x 12 factors (the
-spring pendulum at k = 4) it was a quarter of a training step. Below :data:`_SPLIT` the
+spring pendulum at k = 4) a profile put a quarter of the hnn step there. Below :data:`_SPLIT` the
 per-index reads stay: they cost less there, and the two forms round differently in float32
 (the same sums, fused otherwise), so switching would move the stored runs of every model that
 solves with a small factor (the spring at k = 3 and HalfCheetah have 9 degrees of freedom).
