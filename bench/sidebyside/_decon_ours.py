@@ -10,7 +10,26 @@ import numpy as np
 from ._decon import first_point_term
 
 
-class Ours:
+class CompiledBlocks:
+    """Blocks of training steps: ``_run`` (jitted: ``(state, idx) -> (state, (losses, _))``,
+    a scan over the batches ``idx``) compiled once per block length into ``_compiled`` and
+    timed without its compilation (``seconds``, ``steps``); set by the subclass."""
+
+    def train(self, idx) -> np.ndarray:
+        import jax.numpy as jnp
+
+        idx = jnp.asarray(idx)
+        if idx.shape not in self._compiled:
+            self._compiled[idx.shape] = self._run.lower(self.state, idx).compile()
+        t0 = time.perf_counter()
+        self.state, (losses, _) = self._compiled[idx.shape](self.state, idx)
+        losses = np.asarray(losses, float)
+        self.seconds += time.perf_counter() - t0
+        self.steps += idx.shape[0]
+        return losses
+
+
+class Ours(CompiledBlocks):
     """Our trainer's step (``make_step``) on ``model``: blocks of steps compiled once per
     block length, timed without their compilation."""
 
@@ -41,19 +60,6 @@ class Ours:
             )
         )
         self.dtype = dtype
-
-    def train(self, idx) -> np.ndarray:
-        import jax.numpy as jnp
-
-        idx = jnp.asarray(idx)
-        if idx.shape not in self._compiled:
-            self._compiled[idx.shape] = self._run.lower(self.state, idx).compile()
-        t0 = time.perf_counter()
-        self.state, (losses, _) = self._compiled[idx.shape](self.state, idx)
-        losses = np.asarray(losses, float)
-        self.seconds += time.perf_counter() - t0
-        self.steps += idx.shape[0]
-        return losses
 
     def predict(self, z0, ts) -> np.ndarray:
         import jax.numpy as jnp

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._decon import set_mlp
 from ._seed import SeedCodeError, check_checkout  # noqa: F401 (raised through check_checkout)
 
 EXPECTED = (
@@ -67,22 +68,6 @@ def mlp_to_torch(weights, biases, prefix: str) -> dict:
         out[f"{prefix}.{2 * i}.weight"] = np.asarray(w).T
         out[f"{prefix}.{2 * i}.bias"] = np.asarray(b)
     return out
-
-
-def set_mlp(mlp, weights, biases):
-    """``mlp`` (our MLP) with the given arrays, cast to its dtype; shapes must agree."""
-    import equinox as eqx
-    import jax.numpy as jnp
-
-    if len(weights) != len(mlp.weights):
-        raise ValueError(f"{len(weights)} layers against {len(mlp.weights)}")
-    ws, bs = [], []
-    for w, b, w0, b0 in zip(weights, biases, mlp.weights, mlp.biases, strict=True):
-        if tuple(np.shape(w)) != tuple(w0.shape) or tuple(np.shape(b)) != tuple(b0.shape):
-            raise ValueError(f"shapes {np.shape(w)}, {np.shape(b)} against {w0.shape}, {b0.shape}")
-        ws.append(jnp.asarray(w, w0.dtype))
-        bs.append(jnp.asarray(b, b0.dtype))
-    return eqx.tree_at(lambda m: (m.weights, m.biases), mlp, (tuple(ws), tuple(bs)))
 
 
 def with_paper_weights(name: str, model, state: dict):

@@ -5,12 +5,12 @@ MSE."""
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
+from ._decon_ours import CompiledBlocks
 
-class Ours:
+
+class Ours(CompiledBlocks):
     """The campaign's training step on ``model``: blocks of steps compiled once per block
     length, timed without their compilation; ``predict`` is the run's test rollout."""
 
@@ -36,19 +36,6 @@ class Ours:
         self._predict = controlled_predictor(config, model)
         self.dtype = jnp.dtype(tcfg.dtype)
         self.seconds, self.steps = 0.0, 0
-
-    def train(self, idx) -> np.ndarray:
-        import jax.numpy as jnp
-
-        idx = jnp.asarray(idx)
-        if idx.shape not in self._compiled:
-            self._compiled[idx.shape] = self._run.lower(self.state, idx).compile()
-        t0 = time.perf_counter()
-        self.state, (losses, _) = self._compiled[idx.shape](self.state, idx)
-        losses = np.asarray(losses, float)
-        self.seconds += time.perf_counter() - t0
-        self.steps += idx.shape[0]
-        return losses
 
     def model(self):
         import equinox as eqx
