@@ -12,6 +12,7 @@ from bench.core import _store
 from bench.studies import paper as P
 from bench.studies.paper._common import SYMREG_WEIGHTS_CORE
 from bench.studies.paper.campaign import _campaign as C
+from bench.studies.paper.campaign._budget import run_seconds
 
 NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 
@@ -99,6 +100,25 @@ def test_campaign_order_settles_claims_6_4_1_3_first():
     first = {c.config_hash for c in E.expand("loss", "paper-core")}
     assert all(c.config_hash in first for c in ordered[: len(first)])
     assert ordered[0].model == "hnn_so"  # longest first within the claim
+
+
+def test_a_claims_further_readings_follow_its_own_cells_cheapest_first():
+    """Within claim 16: its own cells (longest first), then its further readings shortest
+    first, so the paper's update-rule cells (NODEs at 5e-3, one-step HNN) are not held behind
+    the HNNs at 5e-3 (the costliest runs of the campaign)."""
+    runs = [c for n, c in C.campaign_runs("paper-core") if n == "mujoco"]
+    key = C.priority("paper-core")
+    ordered = sorted(runs, key=key, reverse=True)
+    assert [c.config_hash for c in ordered] == [c.config_hash for c in runs]
+    further = [E.is_supplementary(E.get("mujoco"), c) for c in ordered]
+    first = further.index(True)
+    assert first > 0 and all(further[first:])  # own cells, then further readings
+    own = [run_seconds(c) for c in ordered[:first]]
+    more = [run_seconds(c) for c in ordered[first:]]
+    assert own == sorted(own, reverse=True) and more == sorted(more)
+    rule = [i for i, c in enumerate(ordered) if c.optimizer == "adam_l2_clip"]
+    ours = [i for i, c in enumerate(ordered) if c.model == "hnn_force" and c.lr == 5e-3]
+    assert rule and ours and max(rule) < min(ours)
 
 
 def test_plan_counts_stored_runs_and_their_hours(tmp_path):

@@ -14,7 +14,16 @@ import pandas as pd
 
 import systems
 
-from ....core import available, done_hashes, expand, get, holds_runs, read_rows, replication_seeds
+from ....core import (
+    available,
+    done_hashes,
+    expand,
+    get,
+    holds_runs,
+    is_supplementary,
+    read_rows,
+    replication_seeds,
+)
 from ._budget import data_seconds, run_seconds, total_seconds
 
 # The row columns summed as the campaign's training and evaluation time (the "CPU
@@ -111,15 +120,25 @@ def campaign_runs(
     profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS, claims=None
 ) -> list[tuple[str, object]]:
     """``(experiment, RunConfig)`` of every unique run of the campaign, in the order they start:
-    by claim (``order``), then longest first (the estimate); on ``seeds`` instead of the
-    profile's (its replication seeds); only ``claims``' where given."""
+    by claim (``order``), then as :func:`priority` orders a claim's runs; on ``seeds`` instead of
+    the profile's (its replication seeds); only ``claims``' where given."""
     out, seen = [], set()
     for name in campaign_experiments(profile, order, claims):
         cfgs = [c for c in expand(name, profile, seeds=seeds) if c.config_hash not in seen]
         seen.update(c.config_hash for c in cfgs)
-        cfgs.sort(key=lambda c: (-_links(c), run_seconds(c)), reverse=True)
+        further = {c.config_hash for c in cfgs if is_supplementary(get(name), c)}
+        cfgs.sort(key=lambda c: _within_claim(c, c.config_hash in further), reverse=True)
         out += [(name, c) for c in cfgs]
     return out
+
+
+def _within_claim(c, further: bool) -> tuple:
+    """The order of a claim's runs (largest key first): fewer links first (:func:`_links`);
+    the claim's own cells before its further readings; its own cells longest first (the
+    workers end together), a further reading's shortest first, since a reading joins the
+    verdict only when all its runs are stored (a cheap one is not held behind a costly one)."""
+    seconds = run_seconds(c)
+    return (-_links(c), not further, -seconds if further else seconds)
 
 
 def replicable(results_dir, profile: str, names) -> object:
@@ -148,15 +167,20 @@ def _links(c) -> int:
 
 def priority(profile: str = "paper-core", seeds=None, order=CAMPAIGN_CLAIMS, claims=None):
     """A sort key for ``bench.core._runner.sweep(order=...)`` (which starts the largest keys
-    first): earlier claims first (``order``), then fewer links (k) first, then longest runs
-    first."""
-    rank = {}
+    first): earlier claims first (``order``), then within a claim as :func:`_within_claim`
+    (fewer links first; the claim's own cells longest first, then its further readings
+    shortest first)."""
+    rank, further = {}, set()
     for i, name in enumerate(campaign_experiments(profile, order, claims)):
         for c in expand(name, profile, seeds=seeds):
-            rank.setdefault(c.config_hash, i)
+            if c.config_hash in rank:  # the first experiment that has it places it
+                continue
+            rank[c.config_hash] = i
+            if is_supplementary(get(name), c):
+                further.add(c.config_hash)
 
     def key(c):
-        return (-rank.get(c.config_hash, len(rank)), -_links(c), run_seconds(c))
+        return (-rank.get(c.config_hash, len(rank)), *_within_claim(c, c.config_hash in further))
 
     return key
 

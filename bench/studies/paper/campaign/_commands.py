@@ -158,7 +158,7 @@ def _campaign(args) -> int:
     kind = "signed verdicts: claims" if args.signed else "claims"
     only = f" ({kind} {_claims(claims)})" if claims is not None else ""
     print(f"campaign {args.profile}{which}{only} -> {args.results}: {', '.join(names)}", flush=True)
-    # claim by claim, longest runs first within a claim
+    # claim by claim; within a claim its own cells longest first, then its further readings
     key = priority(args.profile, seeds, order, claims)
     # a replication follows its cell's own seeds (a cell declared since runs them first)
     where = replicable(args.results, args.profile, names) if seeds else None
