@@ -128,7 +128,7 @@ def test_plan_counts_stored_runs_and_their_hours(tmp_path):
     assert total["runs"] == len(runs) and total["stored"] == 0
     assert total["wall_hours_left"] == pytest.approx(total["cpu_hours_left"] / 2)
     # store the first claim's hnn_so runs as if they had taken twice the estimate
-    from bench.studies.paper.campaign._budget import run_seconds, total_seconds
+    from bench.studies.paper.campaign._budget import total_seconds
 
     done = [c for n, c in runs if n == "loss" and c.model == "hnn_so"]
     for c in done:
@@ -216,7 +216,7 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch)
     by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at
     the cost lnn_seed.MEASURED records (the rollout-trained scaling said 0.5 h, not 2.6)."""
     from bench.studies.paper import lnn_seed
-    from bench.studies.paper.campaign._budget import data_seconds, run_seconds, total_seconds
+    from bench.studies.paper.campaign._budget import data_seconds, total_seconds
 
     m = lnn_seed.MEASURED
     cfgs = E.expand("lnn_seed_double_pendulum", "paper-core")
@@ -268,8 +268,6 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch)
 def test_symplectic_runs_are_costed_as_measured_with_and_without_the_penalty():
     """Claim 2's paper-core runs: 112 ms a step with the penalty, 34 ms at weight 0 (which
     skips it), measured on the campaign's rows; the quick-to-paper scaling said 550 s for each."""
-    from bench.studies.paper.campaign._budget import run_seconds
-
     cfgs = E.expand("symplectic", "paper-core")
     by_w = {}
     for c in cfgs:
