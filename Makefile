@@ -169,7 +169,7 @@ paper-core-status: $(VENV_FOUND)
 		if [ "$$state" = T ]; then echo "paper-core: paused (process group $(campaign_pid))"; \
 		else echo "paper-core: running (process group $(campaign_pid))"; fi; \
 	else echo "paper-core: not running"; fi
-	@$(PY) -m bench --results $(CAMPAIGN_DIR) estimate --profile $(CAMPAIGN_PROFILE) --workers $(CAMPAIGN_WORKERS)
+	@$(PY) -m bench --results $(CAMPAIGN_DIR) estimate --profile $(CAMPAIGN_PROFILE) --workers $(CAMPAIGN_WORKERS) $(CAMPAIGN_ESTIMATE)
 
 paper-core-pause:
 	@$(campaign_alive) && env kill -s STOP -- -$(campaign_pid) && echo "paper-core: paused" || echo "paper-core: not running"
@@ -207,7 +207,8 @@ paper-k:
 		echo "paper-k: started in the background (process group $$(cat $(CAMPAIGN_PID)), nice 19, log $(CAMPAIGN_LOG))"; fi
 
 paper-k-status: $(VENV_FOUND)
-	@$(MAKE) --no-print-directory paper-core-status CAMPAIGN_PROFILE=paper-k
+	@$(MAKE) --no-print-directory paper-core-status CAMPAIGN_PROFILE=paper-k \
+		CAMPAIGN_ESTIMATE="--claims '$(PAPER_K_CLAIMS)'"
 
 paper-k-pause: paper-core-pause
 paper-k-resume: paper-core-resume

@@ -43,6 +43,7 @@ BAD = [
         ["campaign", "--profile", "paper-core", "--claims", "9,99"],
         "unknown claim '99'; allowed: 1,",
     ),
+    (["estimate", "--profile", "paper-k", "--claims", "4 99"], "unknown claim '99'; allowed: 1,"),
 ]
 
 
@@ -202,3 +203,15 @@ def test_bench_papers_selects_the_declared_experiments():
         "lnn",
         "vin",
     }
+
+
+def test_estimate_in_a_given_order_prints_each_seed_set_in_that_order(capsys, tmp_path):
+    """make paper-k's status: its claims one at a time in the order given, the profile's
+    seeds then the replication seeds, each table's rows in that order."""
+    args = ["--results", str(tmp_path), "estimate", "--profile", "paper-k", "--claims"]
+    assert main([*args, "3 4"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert any(x.startswith("order: claims 3, 4, one at a time") for x in lines), lines
+    rows = [x.split()[0] for x in lines if x.split()[:1] in (["3"], ["4"])]
+    assert rows == ["3", "4", "3", "4"], lines
+    assert sum(x.startswith("paper-k, replication seeds") for x in lines) == 1

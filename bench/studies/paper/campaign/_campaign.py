@@ -345,14 +345,18 @@ def _ratio(measured: float, estimated: float, default: float = 1.0) -> float:
     return measured / estimated if estimated > 0 else default
 
 
-def format_plan(df: pd.DataFrame, profile: str, workers: int, seeds=None, which=None) -> str:
+def format_plan(
+    df: pd.DataFrame, profile: str, workers: int, seeds=None, which=None, order=None
+) -> str:
     """The plan as a fixed-width text table (``python -m bench estimate``); ``seeds``: the
-    replication phase's, and ``which``: the claims it holds, named in the title."""
+    replication phase's, ``which``: the claims it holds, named in the title, and ``order``:
+    the order of its claims in words (the campaign's own where None)."""
     title = f"{profile}, replication seeds {', '.join(map(str, seeds))}" if seeds else profile
     which = f"{title}, {which}" if which else title
     if not len(df):
         return f"{which}: no runs"
-    order = "campaign order, signed verdicts first" if seeds else "campaign order"
+    if order is None:
+        order = "campaign order, signed verdicts first" if seeds else "campaign order"
     lines = [
         f"{which}: runs and hours per claim, in {order} (hours: the estimator's; done: "
         "the stored runs' wall seconds, waiting included; t+e: of those, training and "

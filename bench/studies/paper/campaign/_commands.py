@@ -20,6 +20,13 @@ from ....core import (
 def _estimate_arguments(p):
     p.add_argument("--profile", default="paper-core", help=f"one of {', '.join(PROFILES)}")
     p.add_argument("--workers", type=int_arg("workers"), default=2, help="for the wall hours")
+    p.add_argument(
+        "--claims",
+        default=None,
+        metavar="4,3,1,2",
+        help="the plan of a campaign that runs these claims in this order, each on the "
+        "profile's seeds then its replication seeds (make paper-k's)",
+    )
 
 
 def _estimate(args) -> int:
@@ -41,6 +48,8 @@ def _estimate(args) -> int:
     own = plan(args.profile, args.results, workers=args.workers, order=first)
     print(f"results: {args.results}")
     seeds = replication_seeds(args.profile)
+    if args.claims is not None:
+        return _estimate_in_order(args, _claim_order(args.claims), seeds)
     if not (args.profile in SELECTIONS and seeds):
         print(format_plan(own, args.profile, args.workers))
         return 0
@@ -67,8 +76,45 @@ def _estimate(args) -> int:
     return 0
 
 
+def _estimate_in_order(args, order: tuple, seeds) -> int:
+    """The plan of ``make paper-k``: the claims of ``order`` one at a time, each on the
+    profile's seeds and then on its replication seeds."""
+    from ._campaign import format_plan, plan
+
+    then = f", then on its replication seeds {_span(seeds)}" if seeds else ""
+    print(f"order: claims {_claims_in(order)}, one at a time, each on the profile's seeds{then}")
+    claims = frozenset(order)
+    own = plan(args.profile, args.results, workers=args.workers, order=order, claims=claims)
+    print(format_plan(own, args.profile, args.workers, order="the order above"))
+    if seeds:
+        rep = _rep(args, seeds, own, order, claims)
+        print()
+        print(format_plan(rep, args.profile, args.workers, seeds=seeds, order="the order above"))
+    return 0
+
+
+def _span(seeds) -> str:
+    s = sorted(seeds)
+    return f"{s[0]}-{s[-1]}" if s == list(range(s[0], s[-1] + 1)) else ", ".join(map(str, s))
+
+
+def _claim_order(text: str) -> tuple:
+    """The claims of ``--claims`` in the order given, each once."""
+    _claim_list(text)
+    return tuple(dict.fromkeys(int(part) for part in _parts(text)))
+
+
+def _parts(text: str) -> list[str]:
+    """The parts of a list of claims, separated by commas or spaces."""
+    return [p.strip() for p in str(text).replace(" ", ",").split(",") if p.strip()]
+
+
 def _claims(claims) -> str:
-    return ", ".join(map(str, sorted(claims))) or "none"
+    return _claims_in(sorted(claims))
+
+
+def _claims_in(claims) -> str:
+    return ", ".join(map(str, claims)) or "none"
 
 
 def _rep(args, seeds, prior, order, claims):
@@ -109,12 +155,12 @@ def _campaign_arguments(p):
 
 
 def _claim_list(text: str) -> frozenset:
-    """The claims of ``--claims`` (comma-separated numbers of the campaign's claims)."""
+    """The claims of ``--claims`` (numbers of the campaign's claims, separated by commas)."""
     from ._campaign import CAMPAIGN_CLAIMS
 
     out, allowed = set(), [str(c) for c in sorted(CAMPAIGN_CLAIMS)]
-    for part in str(text).split(","):
-        check_choice("claim", part.strip(), allowed)
+    for part in _parts(text) or [""]:
+        check_choice("claim", part, allowed)
         out.add(int(part))
     return frozenset(out)
 
