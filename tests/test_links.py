@@ -13,7 +13,7 @@ from _synthetic import synthetic_tables
 from bench import kit as R
 from bench.core import expand
 from bench.kit import evaluate_claims, seed_span
-from bench.studies.paper.coordinates import PAPER_BUDGET_MODELS, fig_links
+from bench.studies.paper.coordinates import PAPER_BUDGET_MODELS, claim_4, fig_links
 from bench.studies.paper.report import _links as L
 
 
@@ -157,3 +157,95 @@ def test_the_figure_draws_error_against_k(fig5, tmp_path):
     other.mkdir()
     runs[runs["k"] == 2].to_parquet(other / "runs.parquet", index=False)
     assert fig_links(other) == []
+
+
+def _chain_at(runs, k, node_so, hnn_so):
+    """``runs`` with the chain's NODE+SO and HNN+SO at ``k`` set to these multiples of the
+    constant-velocity predictor's error (rollout error and MSE, per seed)."""
+    out = runs.copy()
+    chain = (out["system"] == "chain_pendulum") & (out["k"] == k)
+    cv = out[chain & (out["model"] == "constant_velocity")].groupby("seed")[["rollout_error", "mse"]]
+    cv = cv.first()
+    for model, factor in (("node_so", node_so), ("hnn_so", hnn_so)):
+        rows = chain & (out["model"] == model)
+        for col, power in (("rollout_error", 1), ("mse", 2)):
+            out.loc[rows, col] = out.loc[rows, "seed"].map(cv[col]).to_numpy() * factor**power
+    return out
+
+
+def _chain_part(runs, curves, key="4 (geometric-mean error, spring from paper)"):
+    """Claim 4's chain part over every k of ``runs``, on seeds 0-4."""
+    (v,) = [v for v in claim_4(runs[runs["seed"] < 5], curves) if v.key == key]
+    return next(p for p in v.parts if p.name.startswith("chain edge"))
+
+
+def test_a_k_where_the_models_did_not_learn_is_left_out_of_the_pool(fig5):
+    """Pooled over k, claim 4's chain edge reads only the k where NODE+SO and HNN+SO both
+    learned: at k = 4 they barely beat constant velocity (under the 2x gate) and NODE+SO is
+    ahead, yet the pooled edge is the one of k = 1-3 alone, and the part says so."""
+    runs, curves = fig5
+    k4 = _chain_at(runs, 4, node_so=0.8, hnn_so=0.9)
+    part = _chain_part(k4, curves)
+    assert part.n == 5
+    is_k4 = (runs["system"] == "chain_pendulum") & (runs["k"] == 4)
+    without = runs[~(is_k4 & runs["model"].isin(["node_so", "hnn_so"]))]
+    alone = _chain_part(without, curves)
+    assert part.status == alone.status == "holds"
+    assert part.point == pytest.approx(alone.point) and part.lo == pytest.approx(alone.lo)
+    assert "pooled over k = 1-3" in part.note and "at k = 4 did not learn" in part.note
+    assert "left out" not in alone.note
+    # where the models learn at no k, the part is not tested, whatever its edge
+    none = k4
+    for k in (1, 2, 3):
+        none = _chain_at(none, k, node_so=0.8, hnn_so=0.9)
+    gone = _chain_part(none, curves)
+    assert gone.status == "not tested" and "did not learn" in gone.note
+
+
+def test_learning_gates_over_every_k():
+    """kit.learned_at_each_k: one k gives each model's own gate; several k keep the k where
+    every gated model learned, and one gate, closed where none is kept."""
+    rows = []
+    for k, factor in ((1, 0.01), (2, 0.9)):  # the model learns at k = 1 only
+        for s in range(5):
+            rows += [
+                {"k": k, "seed": s, "model": "constant_velocity", "rollout_error": 1.0},
+                {"k": k, "seed": s, "model": "node_so", "rollout_error": factor},
+            ]
+    rows = pd.DataFrame(rows).assign(status="ok")
+    cells = lambda r: [(r, {"model": "node_so"}, "node_so")]  # noqa: E731
+    one = R.learned_at_each_k(cells(rows[rows["k"] == 1]))
+    assert one.kept == (1.0,) and [g.open for g in one.gates] == [True] and not one.note
+    bad = R.learned_at_each_k(cells(rows[rows["k"] == 2]))
+    assert bad.kept == () and [g.open for g in bad.gates] == [False]
+    both = R.learned_at_each_k(cells(rows))
+    assert both.kept == (1.0,) and [g.open for g in both.gates] == [True]
+    assert "pooled over k = 1" in both.note and "node_so at k = 2 did not learn" in both.note
+    worse = rows.assign(rollout_error=lambda d: d["rollout_error"].where(d["k"] == 2, 0.9))
+    (gate,) = R.learned_at_each_k(cells(worse)).gates
+    assert gate.open is False and "at k = 1 did not learn" in gate.text
+
+
+def test_claim_1_fits_only_the_k_where_every_fig2_model_learned():
+    """Claim 1 (a) and (d) over every k: a k where a gated model (HNN+SO, gated by both) did
+    not learn on one system is left out of the fit, named in the note, and the fit equals
+    the one without that k."""
+    from bench.studies.paper.energy import claim_1
+
+    runs, curves = synthetic_tables("paper", experiments=("energy",))
+    assert set(runs["k"]) == {1, 2, 3, 4}
+    at = (runs["system"] == "chain_pendulum") & (runs["k"] == 4)
+    cv = runs[at & (runs["model"] == "constant_velocity")].set_index("seed")["rollout_error"]
+    bad = runs.copy()
+    hnn = at & (bad["model"] == "hnn_so")
+    bad.loc[hnn, "rollout_error"] = bad.loc[hnn, "seed"].map(cv).to_numpy()
+    fig2 = ["node", "node_so", "hnn_so"]
+    without = runs[~((runs["k"] == 4) & runs["model"].isin(fig2))]
+    got, want = claim_1(bad, curves), claim_1(without, curves)
+    for name in ("(a)", "(d)"):
+        a = next(p for p in got.parts if p.name.startswith(name))
+        b = next(p for p in want.parts if p.name.startswith(name))
+        assert a.status == b.status != "not tested", (a.status, a.note)
+        assert a.point == pytest.approx(b.point), name
+        assert "pooled over k = 1-3" in a.note and "left out" not in b.note
+        assert "HNN+SO on chain_pendulum at k = 4 did not learn" in a.note

@@ -67,7 +67,9 @@ from ._claims import (
 from ._discrimination import (
     TRIVIAL_FACTOR,
     Discrimination,
+    LinkGates,
     discrimination,
+    learned_at_each_k,
     learned_cell,
     non_trivial,
     per_system_discrimination,
@@ -177,6 +179,8 @@ __all__ = [
     "condition",
     "gated",
     "learned",
+    "LinkGates",
+    "learned_at_each_k",
     "learned_cell",
     "similar_fit",
     # per-seed values

@@ -17,12 +17,14 @@ from ..core import parse_pairs
 from . import policy
 from ._gates import Gate, learned
 from ._models import MODEL_LABELS, TRIVIAL_MODELS
-from ._seeds import bad_rows, log_per_seed, scored
+from ._seeds import bad_rows, log_per_seed, scored, seed_span
 
 __all__ = [
     "TRIVIAL_FACTOR",
     "Discrimination",
     "discrimination",
+    "LinkGates",
+    "learned_at_each_k",
     "learned_cell",
     "non_trivial",
     "per_system_discrimination",
@@ -130,6 +132,63 @@ def learned_cell(
     t = trivial_log(rows if trivial is None else trivial, metric)
     name = label or MODEL_LABELS.get(str(cell.get("model")), str(cell.get("model")))
     return learned(name, log_per_seed(rows, cell, metric), t if len(t) else None, squared=squared)
+
+
+@dataclass(frozen=True)
+class LinkGates:
+    """The learning gates of a part read over one or several numbers of links: ``kept``, the
+    k it pools (empty where none passed); ``gates``, the gates to put on it
+    (:func:`bench.kit.gated`); ``note``: the k left out and why, where any was."""
+
+    kept: tuple
+    gates: tuple
+    note: str = ""
+
+
+def learned_at_each_k(cells) -> LinkGates:
+    """The learning gates of a part whose models must have learned (principle b), over every
+    k its rows hold. ``cells``: ``(rows, cell, label)`` triples, one per gated model: the
+    rows of its comparison group (trivial rows included, the same test set), its cell and
+    its name (:func:`learned_cell`).
+
+    One k (or none stored): each model's gate, as :func:`learned_cell` gives it. Several k: a
+    k is a cell of its own, so each gate is judged at each k, and the part pools only the k
+    at which every gate is open (or unknown): a k where a gated model did not learn says
+    nothing about the comparison and is left out, named in ``note``. The one gate returned is
+    closed where no k is kept."""
+    cells = list(cells)
+    ks = sorted({float(k) for rows, cell, _ in cells for k in _links_of(rows, cell)})
+    if len(ks) <= 1:
+        gates = tuple(learned_cell(rows, cell, label) for rows, cell, label in cells)
+        kept = tuple(ks) if all(g.open is not False for g in gates) else ()
+        return LinkGates(kept, gates)
+    at = {
+        k: [learned_cell(r[r["k"] == k], c, f"{name} at k = {k:g}") for r, c, name in cells]
+        for k in ks
+    }
+    kept = tuple(k for k in ks if all(g.open is not False for g in at[k]))
+    closed = "; ".join(g.text for k in ks if k not in kept for g in at[k] if g.open is False)
+    span = seed_span([int(k) for k in kept])
+    if not kept:
+        return LinkGates((), (Gate("learned at some k", False, closed),))
+    unknown = "; ".join(g.text for k in kept for g in at[k] if g.open is None)
+    gate = Gate(
+        "learned at each k pooled",
+        None if unknown else True,
+        unknown or f"every gated model learned at k = {span}",
+    )
+    note = f"pooled over k = {span}, where every gated model learned; left out: {closed}"
+    return LinkGates(kept, (gate,), note if closed else "")
+
+
+def _links_of(rows: pd.DataFrame, cell: Mapping) -> np.ndarray:
+    """The k of the rows of ``cell`` (its model's, not its trivial predictors')."""
+    if "k" not in rows or not len(rows):
+        return np.array([])
+    mask = np.ones(len(rows), dtype=bool)
+    for col, value in cell.items():
+        mask &= (rows[col] == value).to_numpy() if col in rows else False
+    return rows["k"][mask].dropna().unique()
 
 
 def discrimination(

@@ -182,8 +182,9 @@ def footnote_part(runs: pd.DataFrame, fig2: pd.DataFrame, hnns: tuple[str, ...],
     systems, a *greater* part at the energy margin ("considerably larger"). ``runs``: the
     Fig. 2 runs with ``_ev`` (the scored energy violation: failed runs at the worst);
     ``fig2``: the same cells with the trivial predictors, for the learning gates (the HNN
-    learned on every system); ``nodes``: models whose ratio the note reports, not judged."""
-    from ....kit import MODEL_LABELS, gated, greater, learned_cell, policy, undecided
+    learned on every system; over several k, the k where it did: ``learned_at_each_k``);
+    ``nodes``: models whose ratio the note reports, not judged."""
+    from ....kit import MODEL_LABELS, gated, greater, learned_at_each_k, policy, undecided
 
     name = "(d) HNN+SO energy violation over the solver's own drift on the true system, log"
     hnn_rows = runs[runs["model"].isin(hnns)]
@@ -199,7 +200,18 @@ def footnote_part(runs: pd.DataFrame, fig2: pd.DataFrame, hnns: tuple[str, ...],
     is_hnn = own["model"].isin(hnns)
     if not (ok & is_hnn).any():
         return undecided(name, "no solver drift could be computed for the HNN's cells")
+    # the HNN learned on every system; over several k, only the k where it did
+    lg = learned_at_each_k(
+        [
+            (g, {"model": m}, f"{MODEL_LABELS.get(m, m)} on {system}")
+            for system, g in fig2.groupby("system")
+            for m in hnns
+            if (g["model"] == m).any()
+        ]
+    )
     h = own[ok & is_hnn]
+    if lg.kept:
+        h = h[h["k"].isin(lg.kept)]
     per = ratio[h.index].groupby([h["seed"], h["system"]]).mean().unstack("system")
     per = per.dropna()  # the seeds that have every system
     notes = []
@@ -217,11 +229,7 @@ def footnote_part(runs: pd.DataFrame, fig2: pd.DataFrame, hnns: tuple[str, ...],
         f"{name} (weaker system)",
         per.min(axis=1).to_numpy(),
         policy.margin("energy"),
-        "; ".join(notes) + ("; the NODEs' ratios reported, not judged" if nodes else ""),
+        "; ".join([*notes, *([lg.note] if lg.note else [])])
+        + ("; the NODEs' ratios reported, not judged" if nodes else ""),
     )
-    for system, g in fig2.groupby("system"):
-        for m in hnns:
-            if (g["model"] == m).any():
-                label = f"{MODEL_LABELS.get(m, m)} on {system}"
-                gated(part, learned_cell(g, {"model": m}, label))
-    return part
+    return gated(part, *lg.gates)
