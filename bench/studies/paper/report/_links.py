@@ -164,6 +164,24 @@ def disagreements(got: list[LinkReading], keys) -> list[str]:
     return out
 
 
+def left_out(got: list[LinkReading], keys) -> list[str]:
+    """One line per part of a judged pooled reading that leaves a k out
+    (:func:`bench.kit.learned_at_each_k`): its claim, its name and why."""
+    out = []
+    for r in got:
+        if len(r.links) < 2 or r.judgement is None:
+            continue
+        for key, claim in keys:
+            n, m = r.counts.get(claim, (0, 0))
+            if not m or n < m or not any(v.key == key for v in r.judgement.final):
+                continue
+            for p in r.judgement.reading(key).parts:
+                i = p.note.find("pooled over k =")
+                if i >= 0:
+                    out.append(f"- claim {key}, {p.name}: {p.note[i:]}")
+    return out
+
+
 def links_section(ctx) -> list[str]:
     """The claims of Figs. 2-5 per number of links and pooled over them (module docstring)."""
     got = readings(ctx.runs, ctx.curves)
@@ -187,7 +205,8 @@ def links_section(ctx) -> list[str]:
         "(paper-core). Here the same engine judges each k alone (seeds 0-4, then 5-9, pooled "
         "where they agree) and, for the claims whose rule pools k as the paper does (claim 4: "
         "each seed's edge averaged over k; claim 1: one line through every run), every k "
-        "together. Claims 2 and 3 are read per k only. Each cell: the verdict, its headline "
+        "together, each part over the k where every model it gates learned. Claims 2 and 3 "
+        "are read per k only. Each cell: the verdict, its headline "
         "effect with the 90% interval, and the seeds it rests on; *pending* until every cell "
         "of the reading is stored on seeds 0-4 (`make paper-k` runs them).",
         "",
@@ -196,6 +215,14 @@ def links_section(ctx) -> list[str]:
     ]
     for key, claim in keys:
         out.append(f"| {key} | " + " | ".join(_cell(r, key, claim) for r in got) + " |")
+    left = left_out(got, keys)
+    if left:
+        out += [
+            "",
+            "The k a pooled part leaves out (a gated model did not learn there):",
+            "",
+            *left,
+        ]
     differ = disagreements(got, keys)
     if differ:
         out += [
