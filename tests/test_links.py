@@ -164,8 +164,8 @@ def _chain_at(runs, k, node_so, hnn_so):
     constant-velocity predictor's error (rollout error and MSE, per seed)."""
     out = runs.copy()
     chain = (out["system"] == "chain_pendulum") & (out["k"] == k)
-    cv = out[chain & (out["model"] == "constant_velocity")].groupby("seed")[["rollout_error", "mse"]]
-    cv = cv.first()
+    trivial = out[chain & (out["model"] == "constant_velocity")]
+    cv = trivial.groupby("seed")[["rollout_error", "mse"]].first()
     for model, factor in (("node_so", node_so), ("hnn_so", hnn_so)):
         rows = chain & (out["model"] == model)
         for col, power in (("rollout_error", 1), ("mse", 2)):
