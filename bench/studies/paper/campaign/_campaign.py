@@ -214,8 +214,9 @@ def plan(
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
-        done = done_hashes(Path(results_dir))
-        rows = [r for r in read_rows(Path(results_dir)) if r["config_hash"] in cfgs]
+        every = read_rows(Path(results_dir))  # read once: the rows are the costly part
+        done = {r["config_hash"] for r in every}
+        rows = [r for r in every if r["config_hash"] in cfgs]
         stored = pd.DataFrame(rows)
     else:
         done = set()

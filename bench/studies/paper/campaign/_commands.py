@@ -44,12 +44,12 @@ def _estimate(args) -> int:
     check_choice("profile", args.profile, list(PROFILES))
     if args.workers < 1:
         raise ValueError(f"workers must be an integer >= 1; got {args.workers}")
-    first = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
-    own = plan(args.profile, args.results, workers=args.workers, order=first)
     print(f"results: {args.results}")
     seeds = replication_seeds(args.profile)
     if args.claims is not None:
         return _estimate_in_order(args, _claim_order(args.claims), seeds)
+    first = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
+    own = plan(args.profile, args.results, workers=args.workers, order=first)
     if not (args.profile in SELECTIONS and seeds):
         print(format_plan(own, args.profile, args.workers))
         return 0
