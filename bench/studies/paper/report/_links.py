@@ -165,9 +165,10 @@ def disagreements(got: list[LinkReading], keys) -> list[str]:
 
 
 def left_out(got: list[LinkReading], keys) -> list[str]:
-    """One line per part of a judged pooled reading that leaves a k out
-    (:func:`bench.kit.learned_at_each_k`): its claim, its name and why."""
-    out = []
+    """One line per part of the judged pooled readings that leaves a k out
+    (:func:`bench.kit.learned_at_each_k`): why, then the readings whose part it is (one line
+    for the readings that leave out the same k for the same reason)."""
+    by_note: dict[tuple[str, str], list[str]] = {}
     for r in got:
         if len(r.links) < 2 or r.judgement is None:
             continue
@@ -178,8 +179,8 @@ def left_out(got: list[LinkReading], keys) -> list[str]:
             for p in r.judgement.reading(key).parts:
                 i = p.note.find("pooled over k =")
                 if i >= 0:
-                    out.append(f"- claim {key}, {p.name}: {p.note[i:]}")
-    return out
+                    by_note.setdefault((p.name, p.note[i:]), []).append(f"claim {key}")
+    return [f"- {name}, {'; '.join(ks)}: {note}" for (name, note), ks in by_note.items()]
 
 
 def links_section(ctx) -> list[str]:
