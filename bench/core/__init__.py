@@ -94,7 +94,7 @@ _MODULES = {
     "_store": (
         "DAMAGED DamagedRowWarning OWN_DIR REFERENCE_DIRS REFERENCE_ROOT ROWS check_results_dir "
         "compare_folders done_hashes holds_runs load_checkpoints load_curves load_runs read_rows "
-        "rebuild_tables reference_dir rows_frame runs_of stale_tables unread_rows"
+        "rebuild_tables reference_dir rows_digest rows_frame runs_of stale_tables unread_rows"
     ),
     # the registry of studies, their command-line verbs and report sections
     "_studies": (

@@ -16,13 +16,13 @@ import systems
 
 from ....core import (
     available,
-    done_hashes,
     expand,
     get,
     holds_runs,
     is_supplementary,
     read_rows,
     replication_seeds,
+    rows_digest,
 )
 from ._budget import data_seconds, run_seconds, total_seconds
 
@@ -38,6 +38,25 @@ TRAIN_EVAL_COLUMNS = (
 
 # The order in which a campaign settles the claims (docs/studies/campaign.md).
 CAMPAIGN_CLAIMS = (6, 4, 1, 3, 10, 2, 5, 9, 7, 8, 11, 12, 13, 14, 15, 16)
+
+# the last rows parsed, by folder and content (_stored_rows)
+_PARSED: dict[tuple[str, str], list[dict]] = {}
+
+
+def _stored_rows(results_dir) -> list[dict]:
+    """The rows stored in ``results_dir``, parsed once per content (:func:`rows_digest`, the
+    row files' names and bytes): a status plans several phases over the same rows, and
+    parsing them is its costly part. The rows are shared: read them, never change them."""
+    key = (str(Path(results_dir).resolve()), rows_digest(results_dir))
+    if key not in _PARSED:
+        _PARSED.clear()
+        _PARSED[key] = read_rows(Path(results_dir))
+    return _PARSED[key]
+
+
+def _done(results_dir) -> set[str]:
+    """The config hashes of the rows stored in ``results_dir`` (:func:`_stored_rows`)."""
+    return {r["config_hash"] for r in _stored_rows(results_dir)}
 
 
 def campaign_experiments(
@@ -148,7 +167,7 @@ def replicable(results_dir, profile: str, names) -> object:
     run before its replication seeds."""
     import dataclasses
 
-    done = done_hashes(Path(results_dir)) if holds_runs(Path(results_dir)) else set()
+    done = _done(results_dir) if holds_runs(Path(results_dir)) else set()
     stored: dict[str, bool] = {}
     for n in names:
         for c in expand(n, profile):
@@ -214,7 +233,7 @@ def plan(
     cfgs = {c.config_hash: c for _, c in runs}
     stored = pd.DataFrame()
     if results_dir is not None and Path(results_dir).exists():
-        every = read_rows(Path(results_dir))  # read once: the rows are the costly part
+        every = _stored_rows(results_dir)
         done = {r["config_hash"] for r in every}
         rows = [r for r in every if r["config_hash"] in cfgs]
         stored = pd.DataFrame(rows)
@@ -399,7 +418,7 @@ def saved_trainings(profile: str = "paper-core", results_dir=None, cache_root=No
     from ....core import RECORD, RESUME, params_dir, saved_by_this_code
 
     cache_root = Path(cache_root or systems.cache_root())
-    done = done_hashes(Path(results_dir)) if results_dir and Path(results_dir).exists() else set()
+    done = _done(results_dir) if results_dir and Path(results_dir).exists() else set()
     lines, seen = [], set()
     for seeds in (None, replication_seeds(profile)):
         for name, c in campaign_runs(profile, seeds):
