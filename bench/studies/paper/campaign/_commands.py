@@ -79,9 +79,10 @@ def _estimate(args) -> int:
 def _estimate_in_order(args, order: tuple, seeds) -> int:
     """The plan of ``make paper-k``: the claims of ``order`` one at a time, each on the
     profile's seeds and then on its replication seeds."""
+    from ....kit import seed_span
     from ._campaign import format_plan, plan
 
-    then = f", then on its replication seeds {_span(seeds)}" if seeds else ""
+    then = f", then on its replication seeds {seed_span(seeds)}" if seeds else ""
     print(f"order: claims {_claims_in(order)}, one at a time, each on the profile's seeds{then}")
     claims = frozenset(order)
     own = plan(args.profile, args.results, workers=args.workers, order=order, claims=claims)
@@ -91,11 +92,6 @@ def _estimate_in_order(args, order: tuple, seeds) -> int:
         print()
         print(format_plan(rep, args.profile, args.workers, seeds=seeds, order="the order above"))
     return 0
-
-
-def _span(seeds) -> str:
-    s = sorted(seeds)
-    return f"{s[0]}-{s[-1]}" if s == list(range(s[0], s[-1] + 1)) else ", ".join(map(str, s))
 
 
 def _claim_order(text: str) -> tuple:
