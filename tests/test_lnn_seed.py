@@ -393,8 +393,8 @@ def test_the_section_sets_the_two_protocols_side_by_side(tmp_path):
         "inconclusive (seeds 0-4), untested: pure LNN did not learn",
     )
     assert rows["learned"] == (
-        "pure LNN yes, NODE+SO (baseline) yes",
-        "pure LNN no, NODE+SO (baseline) yes",
+        "pure LNN yes, NODE+SO (baseline) (the foil, not gated) yes",
+        "pure LNN no, NODE+SO (baseline) (the foil, not gated) yes",
     )
     assert rows["loss"] == ("squared error", "L1")
 

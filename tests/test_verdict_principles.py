@@ -115,3 +115,18 @@ def test_a_closed_gate_or_condition_never_contradicts():
         v = verdict(99, "synthetic", parts, parts[0], 5, "edge")
         assert [p.status for p in parts[:2]] == ["not tested", "not tested"]
         assert v.verdict == R.INCONCLUSIVE
+
+
+def test_a_foil_is_shown_and_never_gates():
+    """A foil's learning status (the model whose failure is the claim's content) is shown with
+    the part's gates but never closes it: the same part reads as without it, for and against."""
+    from bench.kit import Gate, foil, gated, learned_text
+
+    failed = foil(Gate("MLP", False, "MLP did not learn"))
+    for d in SAMPLES:
+        plain = verdict(99, "s", [greater("(a)", d, ERR)], None, 5, "edge")
+        part = gated(greater("(a)", d, ERR), Gate("HNN", True, "HNN learned"), failed)
+        v = verdict(99, "s", [part], part, 5, "edge")
+        assert v.parts[0].status == plain.parts[0].status != "not tested"
+        assert v.verdict == plain.verdict
+        assert learned_text(v) == "HNN yes, MLP (the foil, not gated) no"

@@ -78,7 +78,7 @@ from ._discrimination import (
     trivial_log,
 )
 from ._figure import new_figure, save_figure, subplots
-from ._gates import Gate, apply_gates, condition, gated, learned, similar_fit
+from ._gates import Gate, apply_gates, condition, foil, gated, learned, similar_fit
 from ._headlines import fig_headlines, headline_rows, write_headlines
 from ._holm import holm, margin_ranges
 from ._models import MODEL_LABELS, TRIVIAL_MODELS, in_form, row_options
@@ -177,6 +177,7 @@ __all__ = [
     "Gate",
     "apply_gates",
     "condition",
+    "foil",
     "gated",
     "learned",
     "LinkGates",

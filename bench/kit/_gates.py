@@ -14,18 +14,27 @@ import pandas as pd
 from . import policy
 from ._stats import Part
 
-__all__ = ["Gate", "apply_gates", "condition", "gated", "learned", "similar_fit"]
+__all__ = ["Gate", "apply_gates", "condition", "foil", "gated", "learned", "similar_fit"]
 
 
 @dataclass(frozen=True)
 class Gate:
     """A precondition of a comparison: ``open`` True (met), False (not met: the part it gates
     reads *not tested*) or None (unknown: no trivial-predictor runs; the part is judged,
-    flagged). ``text`` says what was measured against what."""
+    flagged). ``text`` says what was measured against what. ``binding`` False: a foil's
+    status (:func:`foil`), shown beside the gates and never closing the part."""
 
     label: str
     open: bool | None
     text: str
+    binding: bool = True
+
+
+def foil(gate: Gate) -> Gate:
+    """The learning status of a claim's foil: a model whose failure is the claim's content
+    (the baseline whose energy drifts, hence whose rollout drifts), shown with the part's gates
+    and never closing it."""
+    return Gate(f"{gate.label} (the foil, not gated)", gate.open, gate.text, binding=False)
 
 
 def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared=False) -> Gate:
@@ -86,10 +95,11 @@ def gated(part: Part, *gates: Gate) -> Part:
 def apply_gates(parts: list[Part]) -> None:
     """A part with a closed gate reads *not tested*, its reasons in the note."""
     for p in parts:
-        closed = [g for g in p.gates if g.open is False]
+        binding = [g for g in p.gates if g.binding]
+        closed = [g for g in binding if g.open is False]
         if closed:
             p.status = "not tested"
             p.note = "; ".join([*(g.text for g in closed), *([p.note] if p.note else [])])
-        elif any(g.open is None for g in p.gates):
-            unknown = "; ".join(g.text for g in p.gates if g.open is None)
+        elif any(g.open is None for g in binding):
+            unknown = "; ".join(g.text for g in binding if g.open is None)
             p.note = f"{p.note}; gate unknown: {unknown}" if p.note else f"gate unknown: {unknown}"

@@ -120,7 +120,7 @@ def seed_set_text(s: SeedSet) -> str:
         return f"not run ({where})"
     text = f"{v.verdict} ({where})"
     if v.verdict.startswith("inconclusive") and v.parts and v.parts[0].status == "not tested":
-        gates = [g for g in v.parts[0].gates if g.open is False]
+        gates = [g for g in v.parts[0].gates if g.open is False and g.binding]
         stuck = [g.label for g in gates if not g.text.startswith("condition")]
         if stuck:
             text += f", untested: {' and '.join(stuck)} did not learn"
