@@ -199,3 +199,28 @@ def test_an_euler_fitted_field_spirals_in_under_rk4_and_its_hamiltonian_part_doe
     for _ in range(100):
         z = _rk4(lambda x: hamiltonian @ x, z)
     assert abs(np.linalg.norm(z) - 1) < 1e-4  # RK4: (sin a)^6 / 144 per frame
+
+
+def test_a_diagnosis_keeps_its_earlier_rows_and_trains_only_what_its_file_lacks(
+    tmp_path, monkeypatch
+):
+    """Called again, the diagnosis trains nothing it wrote before; called on one seed, it keeps
+    the other seeds' rows; a new variant's runs are the only ones trained."""
+    trained = []
+
+    def fake_run(c, aux_weight):
+        trained.append((c.model, c.seed, aux_weight))
+        return {k: 0.5 for k in D.COLUMNS}
+
+    monkeypatch.setattr(D, "_run", fake_run)
+    first = D.diagnose(D.VIN, "quick", tmp_path, seeds=[0, 1], progress=False)
+    n = len(trained)
+    assert n == len(first) == 6 and set(first["source"]) == {"trained here"}
+    again = D.diagnose(D.VIN, "quick", tmp_path, seeds=[1], progress=False)
+    assert len(trained) == n and len(again) == 6  # seed 0's rows kept
+    assert sorted(again["seed"].tolist()) == sorted(first["seed"].tolist())
+    more = dataclasses.replace(
+        D.VIN, variants=(*D.VIN.variants, D.Variant("half aux", aux_weight=0.5, models=("vin",)))
+    )
+    D.diagnose(more, "quick", tmp_path, seeds=[0, 1], progress=False)
+    assert trained[n:] == [("vin", 0, 0.5), ("vin", 1, 0.5)]

@@ -172,7 +172,8 @@ def diagnose(
     runs_from=(),
     progress: bool = True,
 ) -> pd.DataFrame:
-    """One row per (model, seed, variant) of ``ablation``, written to ``results_dir / file``.
+    """One row per (model, seed, variant) of ``ablation``, written to ``results_dir / file``;
+    a row that file holds already is kept, not trained again (delete the file to retrain).
     ValueError (one line) for a profile outside :data:`PROFILES` or a ``runs_from`` folder that
     does not exist."""
     if profile not in PROFILES:
@@ -186,12 +187,17 @@ def diagnose(
     if not configs:
         raise ValueError(f"{ablation.command}: {ablation.experiment} has no runs at {profile!r}")
     stored = _stored([results_dir, *runs_from])
+    before = _own_rows(ablation, results_dir)
     rows = []
     for base in configs:
         for v in ablation.variants:
             if not v.applies(base):
                 continue
             c = v.config(base)
+            key = (c.config_hash, v.name, float(v.aux_weight))
+            if key in before:  # this diagnosis's own row, from an earlier call: kept as it was
+                rows.append(before.pop(key))
+                continue
             if v.aux_weight == CC_LOSS and c.config_hash in stored:
                 r, source = stored[c.config_hash]
                 values = {k: r.get(k) for k in COLUMNS}
@@ -211,10 +217,26 @@ def diagnose(
                     **{k: _num(values.get(k)) for k in COLUMNS},
                 }
             )
-    df = pd.DataFrame(rows)
+    df = pd.DataFrame([*rows, *before.values()])  # other seeds' and profiles' rows stay
     results_dir.mkdir(parents=True, exist_ok=True)
     df.to_csv(results_dir / ablation.file, index=False)
     return df
+
+
+def _own_rows(ablation: Ablation, results_dir) -> dict:
+    """The rows ``ablation`` wrote to ``results_dir`` before, by (config hash, variant, aux
+    weight), each as written; a failed run's row counts (it is the run's result), a row of a
+    variant no longer declared stays in the file."""
+    path = Path(results_dir) / ablation.file
+    if not path.exists():
+        return {}
+    d = pd.read_csv(path)
+    if not {"config_hash", "variant", "aux_weight"} <= set(d.columns):
+        return {}
+    return {
+        (r["config_hash"], r["variant"], float(r["aux_weight"])): r
+        for r in d.to_dict("records")
+    }
 
 
 def _num(x) -> float:
