@@ -234,8 +234,7 @@ def _own_rows(ablation: Ablation, results_dir) -> dict:
     if not {"config_hash", "variant", "aux_weight"} <= set(d.columns):
         return {}
     return {
-        (r["config_hash"], r["variant"], float(r["aux_weight"])): r
-        for r in d.to_dict("records")
+        (r["config_hash"], r["variant"], float(r["aux_weight"])): r for r in d.to_dict("records")
     }
 
 
