@@ -164,3 +164,44 @@ def test_readers_of_the_training_script():
     assert T._function(tree, "pixelhnn_loss").name == "pixelhnn_loss"
     with pytest.raises(SystemExit, match="no missing"):
         T._function(tree, "missing")
+
+
+def test_the_seeds_summary_reads_each_seeds_last_step_against_the_committed_rows(tmp_path):
+    """The over-seeds summary (bench.sidebyside.hnn_seed_seeds): the seed curve's last evaluated
+    step per seed and model, set beside the committed rows on the seeds both have; the gains,
+    their geometric means, the count at the gate and the energy ratio MLP / HNN per side."""
+    import pandas as pd
+
+    from bench.sidebyside import hnn_seed_seeds as H
+
+    for s, gain in ((0, 8.0), (1, 2.0)):
+        rows = []
+        for model, g, e in (("hnn", gain, 1e-3), ("node", 2.0, 4e-2)):
+            for step, pm in ((5000, 0.5), (10000, 1.0 / g)):
+                rows.append({"model": model, "curve": "seed", "step": step, "pixel_mse": pm,
+                             "pixel_mse_static": 1.0, "seed_energy_mse": e})  # fmt: skip
+            rows.append({"model": model, "curve": "ours", "step": 10000, "pixel_mse": 9.0,
+                         "pixel_mse_static": 1.0, "seed_energy_mse": 1.0})  # fmt: skip
+        (tmp_path / f"seed{s}").mkdir()
+        pd.DataFrame(rows).to_csv(tmp_path / f"seed{s}" / "curves.csv", index=False)
+    (tmp_path / "seedx").mkdir()  # not a seed folder: ignored
+    code = H.seed_code_rows(tmp_path)
+    assert len(code) == 4 and set(code["step"]) == {10000}
+    ours = pd.DataFrame(
+        [{"seed": s, "model": m, "pixel_mse": 0.25, "pixel_mse_static": 1.0,
+          "seed_energy_mse": 1e-3 if m == "hnn" else 1e-2}
+         for s in (0, 1, 2) for m in ("hnn", "node")]
+    )  # fmt: skip
+    t = H.table(code, ours)
+    assert sorted(t["seed"].unique()) == [0, 1]  # seed 2 has no seed-code run
+    hnn = t[t["model"] == "hnn"].set_index("seed")
+    assert hnn["gain_code"].tolist() == pytest.approx([8.0, 2.0])
+    assert hnn["gain_ours"].tolist() == pytest.approx([4.0, 4.0])
+    lines = H.markdown(t, 4.0)
+    row = {(x.split(" | ")[0][2:], x.split(" | ")[1]): x for x in lines if x.startswith("| ")}
+    assert row["HNN", "seed's code"].endswith("| 4.00 | 1 of 2 |")
+    assert row["HNN", "committed row"].endswith("| 4.00 | 2 of 2 |")
+    assert lines[-1] == (
+        "Energy MSE (the seed's metric) MLP / HNN: seed's code 40x, committed row 10x."
+    )
+    assert H.main(["--root", str(tmp_path / "none")]) == 2
