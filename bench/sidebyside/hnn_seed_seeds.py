@@ -22,11 +22,9 @@ as markdown. A root without runs, or rows without the experiment: one line, exit
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 EXPERIMENT = "pixel_pendulum_hnn_seed"
@@ -80,15 +78,11 @@ def table(seed_code: pd.DataFrame, ours: pd.DataFrame) -> pd.DataFrame:
     return m.sort_values(["model", "seed"]).reset_index(drop=True)
 
 
-def _gmean(x) -> float:
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x) & (x > 0)]
-    return float(np.exp(np.log(x).mean())) if len(x) else math.nan
-
-
 def markdown(t: pd.DataFrame, gate: float) -> list[str]:
     """Per model: each seed's gain on both sides, their geometric means and how many seeds
     pass ``gate``; then the energy ratio MLP / HNN (claim 11 (a)) on both sides."""
+    from bench.kit import gmean
+
     seeds = sorted(t["seed"].unique())
     head = "| model | side | " + " | ".join(f"seed {s}" for s in seeds)
     lines = [head + f" | geometric mean | seeds at {gate:g}x |"]
@@ -99,13 +93,12 @@ def markdown(t: pd.DataFrame, gate: float) -> list[str]:
             v = g[f"gain_{side}"].reindex(seeds)
             cells = " | ".join(f"{x:.2f}" for x in v)
             n = int((v >= gate).sum())
-            lines.append(f"| {label} | {name} | {cells} | {_gmean(v):.2f} | {n} of {len(seeds)} |")
-    w = t.pivot_table(index="seed", columns="model", values=list(t.columns[2:]))
+            lines.append(f"| {label} | {name} | {cells} | {gmean(v):.2f} | {n} of {len(seeds)} |")
     ratios = []
     for side, name in (("code", "seed's code"), ("ours", "committed row")):
-        e = w[f"seed_energy_mse_{side}"]
+        e = t.pivot(index="seed", columns="model", values=f"seed_energy_mse_{side}")
         if set(MODELS) <= set(e.columns):
-            ratios.append(f"{name} {_gmean(e['node'] / e['hnn']):.3g}x")
+            ratios.append(f"{name} {gmean(e['node'] / e['hnn']):.3g}x")
     if ratios:
         lines += ["", "Energy MSE (the seed's metric) MLP / HNN: " + ", ".join(ratios) + "."]
     return lines

@@ -227,11 +227,8 @@ def _own_rows(ablation: Ablation, results_dir) -> dict:
     """The rows ``ablation`` wrote to ``results_dir`` before, by (config hash, variant, aux
     weight), each as written; a failed run's row counts (it is the run's result), a row of a
     variant no longer declared stays in the file."""
-    path = Path(results_dir) / ablation.file
-    if not path.exists():
-        return {}
-    d = pd.read_csv(path)
-    if not {"config_hash", "variant", "aux_weight"} <= set(d.columns):
+    d = read(ablation, results_dir)
+    if d is None or not {"config_hash", "variant", "aux_weight"} <= set(d.columns):
         return {}
     return {
         (r["config_hash"], r["variant"], float(r["aux_weight"])): r for r in d.to_dict("records")
