@@ -19,6 +19,7 @@ from bench.kit._replication import (
     CHANGES_WITHOUT_A_SEED,
     DOES_NOT_REPLICATE,
     disagreement,
+    estimates_differ,
     judge,
     pooled_moves,
     reversed_parts,
@@ -287,29 +288,62 @@ def test_a_part_left_undecided_on_the_other_set_adds_evidence(
     assert said[:3] == (R.REPRODUCED, R.INCONCLUSIVE, j.pooled["3"].verdict), said
 
 
-def test_estimates_that_differ_beyond_chance_do_not_replicate(
+def _gains_on_both(runs, primary, replication):
+    """The chain's NODE+SO gain set per seed on both seed sets."""
+    runs = _replication_gains(runs, dict(zip(PRIMARY, primary, strict=True)))
+    return _replication_gains(runs, dict(zip(REPLICATION, replication, strict=True)))
+
+
+CHAIN_SO = "chain_pendulum: (a) log(NODE / NODE+SO)"
+
+
+def _status(v, name=CHAIN_SO):
+    return {q.name: q.status for q in v.parts}[name]
+
+
+def test_estimates_that_differ_beyond_chance_where_both_sets_sign_alike_replicate(
     reproduce_primary, reproduce_replication
 ):
-    """Both sets sign SO's gain on the chain, but one at 30x and the other at 3x on every seed:
-    no part reverses, yet the two estimates differ far beyond their spread (Welch's test), so
-    the sets cannot be pooled: *does not replicate*, with the reason named."""
+    """Both sets sign SO's gain on the chain, one at 30x and the other at 3x on every seed: the
+    two estimates differ far beyond their spread (Welch's test), but each set reaches the same
+    finding on its own. The sets add up (the pooled ten seeds are the final reading), and the
+    report names the part whose size does not replicate, with both estimates."""
     runs, curves = _join(reproduce_primary, reproduce_replication)
     jitter = (1.0, 1.05, 0.95, 1.1, 0.9)
-    runs = _replication_gains(runs, {s: 30.0 * j for s, j in zip(PRIMARY, jitter, strict=True)})
-    runs = _replication_gains(runs, {s: 3.0 * j for s, j in zip(REPLICATION, jitter, strict=True)})
+    runs = _gains_on_both(runs, [30.0 * x for x in jitter], [3.0 * x for x in jitter])
     j = judge(runs, curves, PROFILE, loso=False)
-    name = "chain_pendulum: (a) log(NODE / NODE+SO)"
-    statuses = [
-        {q.name: q.status for q in v.parts}[name] for v in (j.primary["3"], j.replication["3"])
-    ]
-    assert statuses == ["holds", "holds"]
+    assert [_status(v) for v in (j.primary["3"], j.replication["3"])] == ["holds", "holds"]
+    assert disagreement(j.primary["3"], j.replication["3"]) == []
+    assert j.replicates("3") is True and why_not_replicated(j, "3") is None
+    assert _final(j)["3"] is j.pooled["3"] and _status(j.pooled["3"]) == "holds"
+    said = estimates_differ(j, "3")
+    assert said.startswith(f"{CHAIN_SO}: holds on both, ") and "Welch p = " in said, said
+    assert said.count("Welch p") == 1  # the one part whose sizes differ
+    assert estimates_differ(j, "5") is None
+
+
+def test_estimates_that_differ_beyond_chance_where_a_set_leaves_it_undecided_do_not_replicate(
+    reproduce_primary, reproduce_replication
+):
+    """One set signs SO's gain at 30x, the other leaves it undecided around 0.9x, and the two
+    estimates differ beyond chance: pooling sets that differ so would let one set decide for
+    the other, so they do not replicate, with the reason named; no part reverses."""
+    runs, curves = _join(reproduce_primary, reproduce_replication)
+    first = (30.0, 31.5, 28.5, 33.0, 27.0)
+    runs = _gains_on_both(runs, first, (0.5, 2.0, 0.7, 1.2, 0.6))
+    j = judge(runs, curves, PROFILE, loso=False)
+    statuses = [_status(v) for v in (j.primary["3"], j.replication["3"])]
+    assert statuses == ["holds", "undecided"]
     final = _final(j)["3"]
     assert final.verdict == DOES_NOT_REPLICATE and j.replicates("3") is False
-    reasons = disagreement(j.primary["3"], j.replication["3"])  # the estimates differ
-    assert len(reasons) == 1 and reasons[0].startswith(f"{name}: ") and reasons[0] in final.detail
+    reasons = disagreement(j.primary["3"], j.replication["3"])
+    assert (
+        len(reasons) == 1 and reasons[0].startswith(f"{CHAIN_SO}: ") and reasons[0] in final.detail
+    )
     assert reversed_parts(j.primary["3"], j.replication["3"]) == []
     why = why_not_replicated(j, "3")
     assert not re.match(r"\*\*\d+ parts? reverse", why) and reasons[0] in why, why
+    assert estimates_differ(j, "3") is None
 
 
 @pytest.mark.parametrize("stronger", [1.0, 2.0, 4.0])

@@ -6,11 +6,12 @@ seed set, pooled where the two agree, and without each seed.
 - *Replication*: the replication seeds (5-9). Replication adds evidence: the final reading is
   the *pooled* ten seeds, unless the sets disagree (:func:`disagreement`): a part reverses
   (holds on one set, contradicted on the other) or its two estimates differ beyond chance
-  (Welch's test, Holm's step-down across the claim's parts). Then the claim is *inconclusive
-  (does not replicate)*, both readings shown. One set signing a part that the other leaves
-  undecided is no disagreement: more seeds that agree can never weaken a verdict. Each set's
-  own reading stays in the report. A claim whose replication runs are partly stored (a
-  campaign under way) reads *pending* and keeps its primary reading.
+  (Welch's test, Holm's step-down across the claim's parts) and the sets do not sign it alike.
+  Then the claim is *inconclusive (does not replicate)*, both readings shown. One set signing a
+  part that the other leaves undecided is no disagreement, nor are two sets that sign a part
+  alike at different sizes (the report names those): more seeds that agree can never weaken a
+  verdict. Each set's own reading stays in the report. A claim whose replication runs are
+  partly stored (a campaign under way) reads *pending* and keeps its primary reading.
 - *Leave one seed out*: the final reading's seeds without each one in turn (one seed fewer
   required). It flags an influential seed, and demotes the verdict to *inconclusive (changes
   without a seed)* only where dropping that seed reverses a part (holds <-> contradicts); a
@@ -119,17 +120,15 @@ def heterogeneity_p(a, b) -> float:
     return float(res.pvalue)
 
 
-def disagreement(a: Verdict, b: Verdict, alpha: float = ALPHA) -> list[str]:
-    """Why two seed sets' readings of a claim cannot be pooled, one line per reason (empty: they
-    add up). A part *reverses* (holds on one set, contradicted on the other), or its estimates
-    differ beyond chance: Welch's test (:func:`heterogeneity_p`) with Holm's step-down across
-    the claim's parts tested on both sets, at ``alpha``. A part that one set signs and the
-    other leaves undecided is no disagreement: the pooled seeds decide it."""
-    out = [f"{name} reverses" for name in reversed_parts(a, b)]
+def _differing(a: Verdict, b: Verdict, alpha: float) -> list[tuple[float, str, bool]]:
+    """The parts whose two estimates differ beyond chance: Welch's test
+    (:func:`heterogeneity_p`) with Holm's step-down across the claim's parts tested on both
+    sets, at ``alpha``; each as ``(p, name, alike)``, ``alike`` where both sets sign the part
+    the same way (both hold, or both contradict)."""
     theirs = {q.name: q for q in b.parts}
     tested = ("holds", "contradicts", "undecided")
     ps = sorted(
-        (pv, q.name)
+        (pv, q.name, q.status == o.status and q.status in ("holds", "contradicts"))
         for q in a.parts
         if q.role == "part"
         and (o := theirs.get(q.name)) is not None
@@ -137,12 +136,46 @@ def disagreement(a: Verdict, b: Verdict, alpha: float = ALPHA) -> list[str]:
         and o.status in tested
         and math.isfinite(pv := heterogeneity_p(q, o))
     )
-    for i, (pv, name) in enumerate(ps):  # Holm's step-down
-        if pv > alpha / (len(ps) - i):
+    out = []
+    for i, found in enumerate(ps):  # Holm's step-down
+        if found[0] > alpha / (len(ps) - i):
             break
-        if f"{name} reverses" not in out:
+        out.append(found)
+    return out
+
+
+def disagreement(a: Verdict, b: Verdict, alpha: float = ALPHA) -> list[str]:
+    """Why two seed sets' readings of a claim cannot be pooled, one line per reason (empty: they
+    add up). A part *reverses* (holds on one set, contradicted on the other), or its estimates
+    differ beyond chance (:func:`_differing`) where the sets do not sign it alike. A part that
+    one set signs and the other leaves undecided is no disagreement by itself: the pooled seeds
+    decide it. Nor is a part both sets sign alike, however far apart its two estimates: each
+    set reaches the same finding on its own, which is what replication asks
+    (:func:`estimates_differ` names it)."""
+    out = [f"{name} reverses" for name in reversed_parts(a, b)]
+    for pv, name, alike in _differing(a, b, alpha):
+        if not alike and f"{name} reverses" not in out:
             out.append(f"{name}: the seed sets' estimates differ (Welch p = {pv:.2g})")
     return out
+
+
+def estimates_differ(j: Judgement, key: str, alpha: float = ALPHA) -> str | None:
+    """Where the seed sets add up although a part's two estimates differ beyond chance, both
+    sets signing it alike: the parts, each with its effect and 90% interval on both sets (the
+    finding replicates; its size does not, and the pooled interval understates the spread
+    between the sets). None elsewhere."""
+    p, r = j.primary.get(key), j.replication.get(key)
+    if p is None or r is None or key not in j.pooled:
+        return None
+    ps, rs = seed_span(j.primary_seeds), seed_span(j.replication_seeds)
+    mine, theirs = ({q.name: q for q in v.parts} for v in (p, r))
+    lines = [
+        f"{name}: {mine[name].status} on both, {_effect(mine[name])} on seeds {ps}, "
+        f"{_effect(theirs[name])} on seeds {rs} (Welch p = {pv:.2g})"
+        for pv, name, alike in _differing(p, r, alpha)
+        if alike
+    ]
+    return "; ".join(lines) or None
 
 
 def stored_counts(

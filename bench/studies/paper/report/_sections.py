@@ -88,10 +88,10 @@ def _claims_table(j) -> list[str]:
 
 
 def _why_not_replicated(j) -> list[str]:
-    """One line per claim whose seed sets read different verdicts (the parts that moved), and
-    per claim whose pooled reading differs from the one both sets read (the parts pooling
-    resolved)."""
-    from ....kit import pooled_moves, why_not_replicated
+    """One line per claim whose seed sets read different verdicts (the parts that moved), per
+    claim whose pooled reading differs from the one both sets read (the parts pooling
+    resolved), and per claim whose sets sign a part alike at sizes that differ beyond chance."""
+    from ....kit import estimates_differ, pooled_moves, why_not_replicated
 
     lines = [
         f"- claim {md_escape(v.key)}: {md_escape(why)}"
@@ -103,12 +103,17 @@ def _why_not_replicated(j) -> list[str]:
         for v in j.final
         if (why := pooled_moves(j, v.key))
     ]
+    sized = [
+        f"- claim {md_escape(v.key)}: {md_escape(why)}"
+        for v in j.final
+        if (why := estimates_differ(j, v.key))
+    ]
     out = []
     if lines:
         out += [
             "Why a claim does not replicate (effect [90% CI] on each seed set): a part reverses, "
             "or its two estimates differ beyond chance (Welch's test, Holm's step-down across "
-            "the claim's parts):",
+            "the claim's parts) and the sets do not sign it alike:",
             "",
             *lines,
             "",
@@ -119,6 +124,15 @@ def _why_not_replicated(j) -> list[str]:
             "otherwise than a set alone (ten seeds resolve a part that five leave undecided):",
             "",
             *pooled,
+            "",
+        ]
+    if sized:
+        out += [
+            "Where both seed sets sign a part alike but its two estimates differ beyond chance "
+            "(the finding replicates, its size does not; the pooled interval understates the "
+            "spread between the sets):",
+            "",
+            *sized,
             "",
         ]
     return out
@@ -284,9 +298,10 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "Replication adds evidence: every claim is judged on the profile's seeds, again on a "
         "disjoint set, and on both pooled, which is the final reading unless the sets disagree: "
         "a part holds on one set and is contradicted on the other, or its two estimates differ "
-        "beyond chance (Welch's test, Holm's step-down across the claim's parts). Then the "
-        "claim is *inconclusive (does not replicate)*. One set signing what the other leaves "
-        "undecided is no disagreement. *Leave one seed out* judges "
+        "beyond chance (Welch's test, Holm's step-down across the claim's parts) and the sets "
+        "do not sign it alike. Then the claim is *inconclusive (does not replicate)*. One set "
+        "signing what the other leaves undecided is no disagreement, nor are two sets that sign "
+        "a part alike at different sizes. *Leave one seed out* judges "
         "the final reading's seeds without each one in turn; it demotes a verdict to "
         "*inconclusive (changes without a seed)* only where dropping a seed reverses a part "
         "(holds <-> contradicts).",
