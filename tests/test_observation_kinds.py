@@ -51,7 +51,7 @@ RUNS = {
     ),
 }
 # A value away from the default of each kind-only field, valid on its own kind.
-AWAY = {"train_box": (-1.0, 1.0, -2.0, 2.0), "standardise": True}
+AWAY = {"train_box": (-1.0, 1.0, -2.0, 2.0), "standardise": True, "aux_weight": 0.0}
 STEPS = ("check", "check_model", "build", "train", "evaluate")
 
 
@@ -128,7 +128,7 @@ def test_a_kind_only_field_is_taken_by_its_kind_and_refused_by_the_others(name, 
         msg = str(e.value)
         assert "\n" not in msg
         assert msg == (
-            f"{field} applies to {name} runs only (observation {name!r}); "
+            f"{field} applies to {observation_kinds()[name].runs} only (observation {name!r}); "
             f"got observation {other!r}; allowed: {default!r}"
         )
 

@@ -120,6 +120,9 @@ class RunConfig:
     # controlled runs only: the networks' inputs and rate outputs standardised with the training
     # windows' statistics (models.Standardisation; the paper's MuJoCo code), or raw
     standardise: bool = _hashed_unless_default(False)
+    # pixel runs only: the weight of the HNN seed's auxiliary latent loss in the pixel objective
+    # (bench.core._pixels.seed_loss): 1, the seed's; 0 leaves it out
+    aux_weight: float = _hashed_unless_default(1.0)
 
     def __post_init__(self):
         self._canonicalize()
@@ -145,6 +148,7 @@ class RunConfig:
         object.__setattr__(
             self, "eval_checkpoints", _as_int(self.eval_checkpoints, "eval_checkpoints")
         )
+        object.__setattr__(self, "aux_weight", _as_float(self.aux_weight, "aux_weight"))
         if self.weight_decay is not None:
             object.__setattr__(self, "weight_decay", _as_float(self.weight_decay, "weight_decay"))
         box = self.train_box

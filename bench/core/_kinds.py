@@ -132,9 +132,21 @@ class AbstractPixels(Observation):
 @final
 class Pixels(AbstractPixels):
     """Two stacked frames per observation, an autoencoder and latent dynamics (the HNN seed's
-    task; :mod:`bench.core._pixels`, evaluated by :mod:`bench.core._pixel_eval`)."""
+    task; :mod:`bench.core._pixels`, evaluated by :mod:`bench.core._pixel_eval`).
+    ``aux_weight`` (the weight of the seed's auxiliary latent loss) applies to pixel runs
+    only."""
 
     name = "pixels"
+    options = (("aux_weight", 1.0),)
+
+    def check(self, config) -> None:
+        super().check(config)
+        w = config.aux_weight
+        if not (math.isfinite(w) and w >= 0):
+            raise ValueError(
+                f"aux_weight must be a finite number >= 0 (1: the HNN seed's; 0: no auxiliary "
+                f"loss); got {w}"
+            )
 
     def check_model(self, config) -> None:
         from ._pixels import check_pixel_model

@@ -88,7 +88,8 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     ``pixel_mse``: mean over t >= 1, pixels and trajectories of (x_hat - x)^2
     (``pixel_mse_late`` over the last third of the horizon; ``pixel_mse_static`` the same for
     holding the first observation, the trivial predictor); ``recon_mse``: the autoencoder
-    alone on the test observations; ``pixel_loss_train`` / ``pixel_loss_test``: the seed's
+    alone on the test observations (``frame_mse_mean``: the mean training observation against
+    them, the trivial autoencoder); ``pixel_loss_train`` / ``pixel_loss_test``: the seed's
     loss on training / test windows; ``latent_energy_drift``: the learned conserved scalar
     along the latent rollouts, mean over trajectories of max_t E - min_t E over the spread
     (std) of E over the test starts (NaN for models without one). From the angle read off each
@@ -130,6 +131,8 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
     x_all = jnp.asarray(obs, dtype)
     recon = jax.vmap(jax.vmap(lambda x: model.decode(model.encode(x))))(x_all)
     recon_mse = float(np.mean((np.asarray(recon, np.float64) - obs) ** 2))
+    mean_obs = np.asarray(data.observations(data.frames_train)).mean(axis=(0, 1), dtype=np.float64)
+    frame_mse_mean = float(np.mean((obs - mean_obs) ** 2))
     static = float(np.mean((obs[:, :1] - obs[:, 1:]) ** 2))
 
     # the learned conserved scalar along the latent rollouts
@@ -175,6 +178,7 @@ def evaluate_pixels(c: RunConfig, system, data, model) -> tuple[dict, dict]:
         "pixel_mse_late": float(pixel_t[-max(1, n_t // 3) :].mean()) if finite else float("nan"),
         "pixel_mse_static": static,
         "recon_mse": recon_mse,
+        "frame_mse_mean": frame_mse_mean,
         "pixel_loss_train": _loss_on(model, data.frames_train, c.chunk, train_integ, c.seed),
         "pixel_loss_test": _loss_on(model, data.frames_test, c.chunk, train_integ, c.seed),
         "latent_energy_drift": drift,

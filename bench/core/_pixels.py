@@ -32,6 +32,7 @@ PIXEL_METRICS = (
     "decoded_energy_mse",
     "seed_energy_mse",
     "seed_energy_mse_floor",
+    "frame_mse_mean",
 )
 
 
@@ -181,19 +182,20 @@ def train_config(c: RunConfig):
 
 
 def fit_pixels(
-    c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS, resume=None
+    c: RunConfig, model, data, progress: bool = False, aux_weight: float | None = None, resume=None
 ):
     """Train ``model`` on ``data``'s frames by the one training loop (``bench.train``) with
-    :class:`PixelObjective` (``resume``: ``bench.train``'s); returns its
-    :class:`bench.TrainResult`."""
+    :class:`PixelObjective`, its auxiliary weight ``aux_weight`` (None: the run's,
+    ``c.aux_weight``; ``resume``: ``bench.train``'s); returns its :class:`bench.TrainResult`."""
     from ._train import train
 
-    objective = PixelObjective(chunk=c.chunk, aux_weight=aux_weight)
+    weight = c.aux_weight if aux_weight is None else aux_weight
+    objective = PixelObjective(chunk=c.chunk, aux_weight=weight)
     return train(model, data, train_config(c), progress, objective=objective, resume=resume)
 
 
 def train_pixels(
-    c: RunConfig, model, data, progress: bool = False, aux_weight: float = CC_LOSS
+    c: RunConfig, model, data, progress: bool = False, aux_weight: float | None = None
 ) -> tuple:
     """:func:`fit_pixels` as ``(model, meta)``, meta the row's training fields
     (:func:`bench.core._params.result_meta`), nothing cached."""

@@ -109,6 +109,11 @@ _CONFIG = {
         "controlled runs: networks' inputs and rate outputs standardised with the training "
         "windows' statistics (the paper's MuJoCo code); empty before the field: False",
     ),
+    "aux_weight": (
+        "-",
+        "pixel runs: the weight of the HNN seed's auxiliary latent loss (1, the seed's; 0 "
+        "leaves it out); empty before the field: 1",
+    ),
 }
 
 _RUN = {
@@ -246,7 +251,8 @@ _RUN = {
     # frames runs (observation "frames", bench.core._frames); empty for the others
     "frame_mse_mean": (
         "1 (intensity^2)",
-        "frames: the mean training frame against the test frames (the trivial autoencoder)",
+        "frames and pixels: the mean training frame (observation) against the test ones (the "
+        "trivial autoencoder)",
     ),
     "embedding_trust": (
         "1",

@@ -30,6 +30,7 @@ from ._experiments import (
     LABELS,
     PIXEL_HNN,
     PIXEL_HNN_SEED,
+    PIXEL_HNN_SEED_NO_AUX,
     PIXEL_VIN,
     SEED_ENERGY_MSE,
     SEED_PROTOCOL,
@@ -101,7 +102,7 @@ def figure(results_dir) -> list[Path]:
 STUDY_HNN = register_study(
     Study(
         name="pixel_pendulum_hnn",
-        experiments=(PIXEL_HNN, PIXEL_HNN_SEED),
+        experiments=(PIXEL_HNN, PIXEL_HNN_SEED, PIXEL_HNN_SEED_NO_AUX),
         claim=11,
         title=CLAIM_TITLES[11],
         rule=claim_11,
@@ -128,6 +129,7 @@ __all__ = [
     "EXPERIMENTS",
     "PIXEL_HNN",
     "PIXEL_HNN_SEED",
+    "PIXEL_HNN_SEED_NO_AUX",
     "PIXEL_VIN",
     "SEED_ENERGY_MSE",
     "SEED_PROTOCOL",
