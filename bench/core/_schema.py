@@ -248,7 +248,8 @@ _RUN = {
         "pixels: pixel_mse of holding the first observation (frames: the second frame)",
     ),
     "recon_mse": ("1 (intensity^2)", "pixels: autoencoder reconstruction error, test frames"),
-    # frames runs (observation "frames", bench.core._frames); empty for the others
+    # frames runs (observation "frames", bench.core._frames), frame_mse_mean pixel runs too;
+    # empty for the others
     "frame_mse_mean": (
         "1 (intensity^2)",
         "frames and pixels: the mean training frame (observation) against the test ones (the "
