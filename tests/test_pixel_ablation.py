@@ -208,8 +208,8 @@ def test_a_diagnosis_keeps_its_earlier_rows_and_trains_only_what_its_file_lacks(
     the other seeds' rows; a new variant's runs are the only ones trained."""
     trained = []
 
-    def fake_run(c, aux_weight):
-        trained.append((c.model, c.seed, aux_weight))
+    def fake_run(c):
+        trained.append((c.model, c.seed, c.aux_weight))
         return {k: 0.5 for k in D.COLUMNS}
 
     monkeypatch.setattr(D, "_run", fake_run)
@@ -220,7 +220,11 @@ def test_a_diagnosis_keeps_its_earlier_rows_and_trains_only_what_its_file_lacks(
     assert len(trained) == n and len(again) == 6  # seed 0's rows kept
     assert sorted(again["seed"].tolist()) == sorted(first["seed"].tolist())
     more = dataclasses.replace(
-        D.VIN, variants=(*D.VIN.variants, D.Variant("half aux", aux_weight=0.5, models=("vin",)))
+        D.VIN,
+        variants=(
+            *D.VIN.variants,
+            D.Variant("half aux", changes=(("aux_weight", 0.5),), models=("vin",)),
+        ),
     )
     D.diagnose(more, "quick", tmp_path, seeds=[0, 1], progress=False)
     assert trained[n:] == [("vin", 0, 0.5), ("vin", 1, 0.5)]

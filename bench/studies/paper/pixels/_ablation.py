@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ....core import CC_LOSS, build_pixels, evaluate_pixels, expand, read_rows, train_pixels
+from ....core import build_pixels, evaluate_pixels, expand, read_rows, train_pixels
 from ....kit import bad_rows, policy
 from ....kit import gmean as _gm
 
@@ -71,13 +71,12 @@ PROTOCOL = "protocol"
 
 @dataclasses.dataclass(frozen=True)
 class Variant:
-    """One element of the protocol changed: ``changes`` (RunConfig fields) and the auxiliary
-    weight, for ``models`` (None: every model of the experiment) on ``seeds`` (None: the
-    profile's)."""
+    """One element of the protocol changed: ``changes`` (RunConfig fields, e.g. ``aux_weight``
+    0: no auxiliary loss), for ``models`` (None: every model of the experiment) on ``seeds``
+    (None: the profile's)."""
 
     name: str
     changes: tuple[tuple[str, object], ...] = ()
-    aux_weight: float = CC_LOSS
     models: tuple[str, ...] | None = None
     seeds: tuple[int, ...] | None = None
 
@@ -107,7 +106,10 @@ VIN = Ablation(
     command="diagnose-vin",
     experiment="pixel_pendulum_vin",
     file="vin_diagnosis.csv",
-    variants=(Variant(PROTOCOL), Variant("no auxiliary loss", aux_weight=0.0, models=("vin",))),
+    variants=(
+        Variant(PROTOCOL),
+        Variant("no auxiliary loss", changes=(("aux_weight", 0.0),), models=("vin",)),
+    ),
     lead="VIN diagnosis (`python -m bench diagnose-vin`): the HNN seed's auxiliary latent loss "
     "ties the VIN's velocity to a forward difference its Verlet step contradicts; the VIN "
     "trained again without it (aux weight 0), beside the protocol's VIN and ResNet",
@@ -139,11 +141,11 @@ HNN_SEED = Ablation(
 ABLATIONS = (VIN, HNN_SEED)
 
 
-def _run(c, aux_weight: float) -> dict:
-    """Train and evaluate one pixel run with the auxiliary weight ``aux_weight``."""
+def _run(c) -> dict:
+    """Train and evaluate one pixel run."""
     system, data, model = build_pixels(c)
     t0 = time.perf_counter()
-    model, meta = train_pixels(c, model, data, aux_weight=aux_weight)
+    model, meta = train_pixels(c, model, data)
     seconds = time.perf_counter() - t0
     metrics, _ = evaluate_pixels(c, system, data, model)
     return {**metrics, "final_loss": meta["final_loss"], "train_seconds": seconds}
@@ -191,24 +193,24 @@ def diagnose(
             if not v.applies(base):
                 continue
             c = v.config(base)
-            key = (c.config_hash, v.name, float(v.aux_weight))
+            key = (c.config_hash, v.name, c.aux_weight)
             if key in before:  # this diagnosis's own row, from an earlier call: kept as it was
                 rows.append(before.pop(key))
                 continue
-            if v.aux_weight == CC_LOSS and c.config_hash in stored:
+            if c.config_hash in stored:
                 r, source = stored[c.config_hash]
                 values = {k: r.get(k) for k in COLUMNS}
             else:
                 if progress:
                     print(f"{ablation.command}: {c.model} seed {c.seed}, {v.name}", flush=True)
-                values, source = _run(c, v.aux_weight), "trained here"
+                values, source = _run(c), "trained here"
             rows.append(
                 {
                     "profile": profile,
                     "model": c.model,
                     "seed": c.seed,
                     "variant": v.name,
-                    "aux_weight": v.aux_weight,
+                    "aux_weight": c.aux_weight,
                     "source": source,
                     "config_hash": c.config_hash,
                     **{k: _num(values.get(k)) for k in COLUMNS},
