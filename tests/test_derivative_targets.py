@@ -123,6 +123,7 @@ def test_the_new_field_leaves_existing_hashes_alone():
         "weight_decay",
         "train_box",
         "standardise",
+        "aux_weight",
     )
     old = _config._hash({a: b for a, b in c.to_dict().items() if a not in new})
     assert c.config_hash == old
