@@ -159,6 +159,22 @@ def test_the_figure_draws_error_against_k(fig5, tmp_path):
     assert fig_links(other) == []
 
 
+def test_the_figure_compares_the_models_at_each_k_on_the_seeds_they_share(fig5):
+    """Mid-campaign, seed 5 at k = 1 lacks HNN+SO on the spring: it waits (every k = 1 point
+    rests on seeds 0-4 and 6-9); at k = 2 every seed is complete and stays."""
+    from bench.studies.paper.coordinates._links import common_seeds, link_rows
+
+    runs, _ = fig5
+    drop = (runs["k"] == 1) & (runs["seed"] == 5) & (runs["model"] == "hnn_so")
+    drop &= runs["system"] == "spring_pendulum"
+    rows = link_rows(runs[~drop])
+    got = common_seeds(rows)
+    assert set(rows[rows["k"] == 1]["seed"]) == set(range(10))
+    assert set(got[got["k"] == 1]["seed"]) == set(range(10)) - {5}
+    assert set(got[got["k"] == 2]["seed"]) == set(rows[rows["k"] == 2]["seed"])
+    assert len(common_seeds(link_rows(runs))) == len(link_rows(runs))  # complete: all kept
+
+
 def _chain_at(runs, k, node_so, hnn_so):
     """``runs`` with the chain's NODE+SO and HNN+SO at ``k`` set to these multiples of the
     constant-velocity predictor's error (rollout error and MSE, per seed)."""

@@ -13,6 +13,23 @@ FIGURE_MODELS = ("node", "node_so", "node_so_pq", "hnn", "hnn_so")
 # the paper's form of NODE+SO, drawn dashed beside ours
 DASHED = ("node_so_pq",)
 FIGURE_METRICS = {"rollout_error": "rollout error", "mse": "test MSE"}
+# the models whose common seeds a k's points rest on (a campaign under way stores them in turn)
+COMPARED = ("node", "node_so", "hnn", "hnn_so")
+
+
+def common_seeds(rows: pd.DataFrame) -> pd.DataFrame:
+    """``rows`` at each k on the seeds where every model of :data:`COMPARED` stored there has
+    a row on every system, so that a k's points compare the models on one seed set (a seed
+    that only some have reached, mid-campaign, waits); a k where they share none keeps all."""
+    keep = []
+    for _, g in rows.groupby("k"):
+        have = g[g["model"].isin(COMPARED)]
+        cells = have.groupby("seed")[["model", "system"]].apply(
+            lambda x: len(set(zip(x["model"], x["system"], strict=True)))
+        )
+        full = cells[cells == len(set(zip(have["model"], have["system"], strict=True)))].index
+        keep.append(g[g["seed"].isin(full)] if len(full) else g)
+    return pd.concat(keep) if keep else rows
 
 
 def link_rows(runs: pd.DataFrame) -> pd.DataFrame:
@@ -36,9 +53,10 @@ def fig_links(results_dir) -> list:
     chain (angles) and the spring (Cartesian) side by side, the rollout error above and the
     test MSE (what the paper's plotting code draws) below; NODE+SO in the paper's form
     (``node_so_pq``) dashed beside ours. Geometric mean over the stored
-    seeds with its 90% t interval; failed and diverged runs enter at the worst error, as the
+    seeds with its 90% t interval, at each k on the seeds the compared models share
+    (:func:`common_seeds`); failed and diverged runs enter at the worst error, as the
     verdicts score them, and are marked (x, with their count); a point resting on fewer seeds
-    than its k's others says how many. Nothing where the folder holds
+    than its k's others (the paper's form) says how many. Nothing where the folder holds
     runs at one k only."""
     from pathlib import Path
 
@@ -61,6 +79,7 @@ def fig_links(results_dir) -> list:
     rows = link_rows(runs)
     if not len(rows) or rows["k"].dropna().nunique() < 2:
         return []
+    rows = common_seeds(rows)
     systems = ("chain_pendulum", "spring_pendulum")
     metrics = [m for m in FIGURE_METRICS if m in rows]
     seeds_at = {int(k): g["seed"].nunique() for k, g in rows.groupby("k")}
