@@ -45,10 +45,10 @@ def protocol_rows(r: pd.DataFrame) -> pd.DataFrame:
     return r[~_no_aux(r)]
 
 
-def _per_seed(rows: pd.DataFrame, metric: str = "recon_mse") -> pd.Series:
-    """Per-seed mean log ``metric`` of ``rows``; a failed run (non-finite) at the worst finite
-    value (at least 1)."""
-    x = pd.to_numeric(rows[metric], errors="coerce")
+def _per_seed(rows: pd.DataFrame) -> pd.Series:
+    """Per-seed mean log ``recon_mse`` of ``rows``; a failed run (non-finite) at the worst
+    finite value (at least 1)."""
+    x = pd.to_numeric(rows["recon_mse"], errors="coerce")
     good = np.isfinite(x) & (x > 0)
     worst = max(1.0, float(x[good].max())) if good.any() else 1.0
     return np.log(x.where(good, worst)).groupby(rows["seed"]).mean()
@@ -61,10 +61,11 @@ def autoencoder_learned(r: pd.DataFrame) -> Gate:
     hnn = protocol_rows(r[r["model"] == "hnn"]) if "model" in r else r.iloc[0:0]
     if not len(hnn) or "recon_mse" not in hnn:
         return Gate(label, None, f"{label} has no runs")
-    mean = pd.to_numeric(r.get("frame_mse_mean"), errors="coerce") if len(r) else None
-    if mean is None or not (np.isfinite(mean) & (mean > 0)).any():
+    mean = pd.to_numeric(r.get("frame_mse_mean", pd.Series(np.nan, index=r.index)), errors="coerce")
+    mean = mean[np.isfinite(mean) & (mean > 0)]
+    if not len(mean):
         return Gate(label, None, f"{label}: no row records the mean frame's MSE")
-    trivial = np.log(mean[mean > 0]).groupby(r["seed"]).mean()
+    trivial = np.log(mean).groupby(r.loc[mean.index, "seed"]).mean()
     return learned(label, _per_seed(hnn), trivial, squared=True)
 
 
