@@ -23,6 +23,7 @@ from bench import kit as R
 from bench.core import initial_state, option, params_of
 from bench.kit import policy
 from bench.studies.paper import relativistic as REL
+from bench.studies.paper.report._comparison import _disc_mark
 
 # claim number -> verdict rule, from the registry
 CLAIMS = {s.claim: s.rule for s in R.claim_studies()}
@@ -296,6 +297,7 @@ def test_without_trivial_runs_discrimination_is_unknown(tables):
         if v.detail.startswith("DISCRIMINATION UNKNOWN"):
             unknown += 1
             assert v.verdict == R.INCONCLUSIVE, (v.key, v.detail)
+            assert v.has_trivial and _disc_mark(v) == "unknown", v.key
         else:  # claim 7's parts (b)-(d) compare with the trivial predictor: only (a) is left
             assert v.verdict == R.REPRODUCED, (v.key, v.detail)
     assert unknown >= 6

@@ -30,6 +30,7 @@ from bench.core import (
 from bench.kit import policy
 from bench.studies.paper import pixels as P
 from bench.studies.paper import vin_blog as V
+from bench.studies.paper.report._comparison import _disc_mark
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32
@@ -337,6 +338,10 @@ def test_the_blog_reading_passes_fails_and_stays_undecided():
     v = V.claim_12(_tables())
     assert v.verdict == "reproduced", v.detail
     assert len(v.parts) == 5 and v.effect == pytest.approx(0.01, rel=0.05)
+    # an embedding has no trivial predictor: the report's discriminating column reads n/a,
+    # not unknown (which means trivial-predictor runs are missing)
+    assert v.discriminating is None and not v.has_trivial
+    assert _disc_mark(v) == "n/a"
     # the baselines' embeddings as consistent as the VIN's: (b) contradicted, not reproduced
     v = V.claim_12(_tables(baseline=0.01))
     assert v.verdict == "partly reproduced", v.detail

@@ -60,6 +60,10 @@ class Verdict:
     profile: str | None = None
     n_failed: int = 0
     discriminating: bool | None = None
+    # False where the claim's evidence has no trivial predictor to beat (an embedding's
+    # structure): each part is gated on its own model's learning instead, and the report's
+    # discriminating column reads n/a rather than unknown
+    has_trivial: bool = True
     parts: tuple = ()  # the tested parts (``Part``), for the report's parts table
     pending: tuple[int, int] | None = None
     primary: str | None = None
@@ -218,6 +222,7 @@ def verdict(
         variant=variant,
         n_failed=int(n_failed),
         discriminating=discriminating,
+        has_trivial=bool(discs) or not parts or n_seeds == 0,
         parts=tuple(parts),
         headline_status=h.status if h is not None and any(h is p for p in parts) else "",
         headline_name=h.name if h is not None else "",

@@ -40,8 +40,9 @@ PAPER_EXPERIMENTS: tuple[Experiment, ...] = (
 # STEP_COST, (ms per training step, seconds of everything else but the data) keyed (kind,
 # model, width, batch) for the runs WALL_S does not describe; DATA_MS_PER_S, the ground truth of
 # a derivative-target dataset in ms per simulated second, keyed (system, k), charged once per
-# dataset (:func:`data_seconds`); the measured seconds of what the estimator does not describe;
-# SWEEP_RATIO, a sweep's measured time over its estimate.
+# dataset (:func:`data_seconds`); DISSIPATION, the run time of a Hamiltonian model with its
+# learned Rayleigh term over the same model without; the measured seconds of what the
+# estimator does not describe; SWEEP_RATIO, a sweep's measured time over its estimate.
 COSTS = json.loads((Path(__file__).with_name("costs.json")).read_text())
 WALL_S: dict[tuple[str, str | None], tuple[float, float]] = {
     (model, system): (train, other) for model, system, train, other, *_ in COSTS["wall_s"]["rows"]
@@ -55,6 +56,7 @@ STEP_COST: dict[tuple[str, str, int, int], tuple[float, float]] = {
 DATA_MS_PER_S: dict[tuple[str, int | None], float] = {
     (system, k): ms for system, k, ms in COSTS["data_ms_per_s"]["rows"]
 }
+DISSIPATION: float = COSTS["dissipation"]["factor"]
 _MEASURED = {name: sum(parts) / workers for name, parts, workers, _ in COSTS["measured_s"]["rows"]}
 STABILITY_S = _MEASURED["stability"]
 TRADEOFF_S = _MEASURED["tradeoff"]
@@ -118,6 +120,7 @@ def run_seconds(c: RunConfig) -> float:
     if measured is not None:
         ms, other = measured
         return c.steps * ms / 1000 + other
+    rayleigh = DISSIPATION if _dof_scaled(c.model) and c.dissipation else 1.0
     train, other = _wall(c)
     # the dof at which WALL_S was measured: chain-2 / spring-2 (6), k = 1, the particle
     dof_quick = {"spring_pendulum": 6, "chain_pendulum": min(2, _dof(c))}.get(c.system, 1)
@@ -127,7 +130,7 @@ def run_seconds(c: RunConfig) -> float:
         else (_dof(c) / dof_quick) ** (math.log(60 / 35) / math.log(3))
     )
     s = (c.steps / 1000) * (c.batch / 100) * (c.width / 128) * g
-    return train * s + other
+    return (train * s + other) * rayleigh
 
 
 def data_seconds(c: RunConfig) -> float:

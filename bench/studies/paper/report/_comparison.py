@@ -58,6 +58,8 @@ STATES = ("judged", "no runs", "pending", "cells missing")
 
 
 def _disc_mark(v) -> str:
+    if v.discriminating is None and not v.has_trivial:
+        return "n/a"
     return {True: "yes", False: "**no**", None: "unknown"}[v.discriminating]
 
 

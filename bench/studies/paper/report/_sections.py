@@ -293,7 +293,9 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "are contradicted and none holds, *inconclusive* otherwise, with fewer than 5 seeds, or "
         "when the experiment is not discriminating (its best model does not beat the best "
         f"trivial predictor by {TRIVIAL_FACTOR:g}x on every seed). Failed and diverged runs "
-        "score the worst error, 1, and are counted.",
+        "score the worst error, 1, and are counted. *n/a* in the discriminating column: the "
+        "claim's evidence has no trivial predictor to beat (an embedding's structure), so each "
+        "part is gated on its own model's learning instead.",
         "",
         "Replication adds evidence: every claim is judged on the profile's seeds, again on a "
         "disjoint set, and on both pooled, which is the final reading unless the sets disagree: "
