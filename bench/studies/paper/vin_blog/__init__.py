@@ -9,6 +9,9 @@ the global structure (a)-(b) and/or are discontinuous with respect to the time d
 evidence is the structure of the embedding; forecasts in pixels are the secondary evidence
 (its first figure: a ResNet's forecasts of a 2-D latent going astray). The protocol, ours
 beside it, and what the suite cannot copy: docs/studies/vin_blog.md.
+
+This module holds the report's table and figure and registers the study; the experiment and
+the rule are in ``_experiments`` and ``_rule``.
 """
 
 from __future__ import annotations
@@ -21,7 +24,6 @@ import numpy as np
 import pandas as pd
 
 from ....core import (
-    Experiment,
     Study,
     experiment_rows,
     load_runs,
@@ -29,238 +31,35 @@ from ....core import (
     read_rows,
     register_study,
 )
-from ....kit import (
-    Gate,
-    Protocol,
-    at_most,
-    by_seed_set,
-    cell_rows,
-    decided_by,
-    foil,
-    gated,
-    greater,
-    learned,
-    paired,
-    policy,
-    protocol_table,
-    save_figure,
-    scored,
-    subplots,
-    verdict,
-)
+from ....kit import Protocol, by_seed_set, cell_rows, policy, protocol_table, save_figure, subplots
 from .. import pixels
 from .._common import CLAIM_TITLES
-
-# The seed's pendulum (its authors' config/pendulum.gin: m = l = 1, g = 9.82)
-SEED_PENDULUM = (("g", 9.82), ("length", 1.0), ("mass", 1.0))
-SEED_STEPS, SEED_LR = 8000, 3e-4  # config/pixels.gin: 8000 epochs (one full batch each), Adam
-# The blog's panels as (model, latent): a VIN on SO(2), the dynamic VAE (a ResNet on a planar
-# latent, the blog's residual baseline), the VAE (no dynamics, planar) and the Lie group VAE
-# (no dynamics, SO(2))
-CELLS = {
-    "vin_so2": ("vin", "so2"),
-    "resnet": ("resnet", "r2"),
-    "vae": ("at_rest", "r2"),
-    "lie_vae": ("at_rest", "so2"),
-}
-LABELS = {
-    "vin_so2": "VIN-SO(2)",
-    "resnet": "dynamic VAE (ResNet, planar)",
-    "vae": "VAE (planar, no dynamics)",
-    "lie_vae": "Lie group VAE (SO(2), no dynamics)",
-}
-SHORT = {"vin_so2": "VIN-SO(2)", "resnet": "ResNet", "vae": "VAE", "lie_vae": "Lie VAE"}
-BASELINES = ("vae", "resnet", "lie_vae")
-
-
-def _opts(latent: str) -> tuple:
-    return (("latent", latent),)
-
-
-def _cell(name: str) -> dict:
-    model, latent = CELLS[name]
-    return {"model": model, "opt:latent": latent}
-
-
-_FIXED = {
-    "system": "pendulum",
-    "system_params": SEED_PENDULUM,
-    "observation": "frames",
-    "dt": 0.1,  # the seed's
-    "chunk": 11,  # its windows: horizon 10, 11 frames
-    "duration": 5.0,  # 50 frames per training trajectory (run_pixels_exp.sh)
-    "n_generated": 3,
-    "n_train": 3,  # its largest training set: 3 trajectories
-    "n_test": 20,
-    "test_chunks": 9,  # 99 frames, its 10 s forecasts
-    "width": 1000,  # its hidden layers (encoder, decoder, potential and ResNet alike)
-    "depth": 1,  # one hidden layer in the dynamics
-    "batch": 200,  # >= the 120 windows: full batches
-    "lr": SEED_LR,
-    "optimizer": "adam_l2",
-    "weight_decay": 0.0,
-    "lr_schedule": "constant",
-    "steps": SEED_STEPS,
-    "eval_checkpoints": 0,
-    "dtype": "float32",
-}
-# quick: 3000 steps of 32 windows at width 128 (about 50 CPU seconds a run here, 20 runs),
-# lr x steps as the seed's; paper-core: the seed's steps and batches at width 256
-QUICK_STEPS = 3000
-_QUICK = {
-    "width": 128,
-    "batch": 32,
-    "steps": QUICK_STEPS,
-    "lr": float(f"{SEED_LR * SEED_STEPS / QUICK_STEPS:.3g}"),
-}
-_PAPER_CORE = {"width": 256}
-_SMOKE = {
-    "n_test": 2,
-    "test_chunks": 3,
-    "width": 8,
-    "batch": 4,
-    "steps": 4,
-    "seeds": (0,),
-}
-
-
-def _include(c) -> bool:
-    return (c.model, dict(c.model_options).get("latent")) in set(CELLS.values())
-
-
-VIN_BLOG = Experiment(
-    name="pixel_pendulum_vin_blog",
-    paper="vin",
-    title="VIN seed (blog): pixel pendulum, position latents; VIN-SO(2) vs its baselines",
-    axes={"model": ("vin", "resnet", "at_rest"), "model_options": (_opts("so2"), _opts("r2"))},
-    fixed=_FIXED,
-    profile_overrides={"smoke": _SMOKE, "quick": _QUICK, "paper-core": _PAPER_CORE},
-    include=_include,
-    claim=12,
+from ._experiments import (
+    CELLS,
+    EXPERIMENTS,
+    LABELS,
+    SEED_LR,
+    SEED_STEPS,
+    SHORT,
+    VIN_BLOG,
+    _cell,
 )
-EXPERIMENTS = (VIN_BLOG,)
+from ._rule import _blog_rows, claim_12, defect_per_seed, reading
 
-
-# ------------------------------------------------------------------------------ the rule
-def _blog_rows(runs: pd.DataFrame) -> pd.DataFrame:
-    if not len(runs) or "observation" not in runs:
-        return runs.iloc[0:0]
-    return runs[runs["observation"] == "frames"]
-
-
-def defect_per_seed(r: pd.DataFrame, name: str) -> pd.Series:
-    """A cell's per-seed embedding defect; a failed run, or one without a finite defect,
-    scores 1 (the worst)."""
-    g = cell_rows(r, _cell(name))
-    if not len(g):
-        return pd.Series(dtype=float)
-    x = pd.to_numeric(g.get("embedding_defect"), errors="coerce").astype(float)
-    ok = np.isfinite(x) & (g["status"] == "ok")
-    return x.where(ok, 1.0).groupby(g["seed"]).mean()
-
-
-def _log_per_seed(r: pd.DataFrame, name: str, metric: str) -> pd.Series | None:
-    g = cell_rows(r, _cell(name))
-    if not len(g):
-        return None
-    return np.log(scored(g, metric)).groupby(g["seed"]).mean()
-
-
-def _learned(r: pd.DataFrame, name: str, metric: str, trivial: str, what: str) -> Gate:
-    """The learning gate of a cell: its per-seed ``metric`` against the trivial predictor's
-    ``trivial`` (the same test set), at the learning margin squared (MSEs)."""
-    label = f"{SHORT[name]} ({what})"
-    triv = _log_per_seed(r, name, trivial)
-    return learned(label, _log_per_seed(r, name, metric), triv, squared=True)
-
-
-def _frames_learned(r: pd.DataFrame, name: str) -> Gate:
-    """The autoencoder learned the frames: its reconstructions against the mean frame."""
-    return _learned(r, name, "recon_mse", "frame_mse_mean", "frames")
-
-
-def _motion_learned(r: pd.DataFrame, name: str) -> Gate:
-    """The forecasts learned the motion: against holding the last frame given."""
-    return _learned(r, name, "pixel_mse", "pixel_mse_static", "forecasts")
-
-
-def reading(r: pd.DataFrame):
-    """Claim 12 on the VIN seed's protocol (``pixel_pendulum_vin_blog``), per seed:
-
-    (a) *at most*: the VIN-SO(2)'s embedding defect (:mod:`bench.core._embedding`: 1 -
-        trustworthiness against the true circle, or the share of time steps that jump) below
-        the embedding margin, "consistent with the ground truth";
-    (b) *greater*, one part per baseline (the VAE, the dynamic VAE, the Lie group VAE): its
-        defect above the same margin, "fail to capture the global structure and/or are
-        discontinuous with respect to the time dimension";
-    (c) *greater* on ``log(pixel MSE ResNet / VIN-SO(2))`` at the error margin squared: the
-        forecasts, the secondary evidence.
-
-    (a) and (b) are judged where the model's autoencoder learned the frames (reconstructions
-    against the mean frame), (c) where the VIN-SO(2)'s forecasts learned the motion (against
-    holding the last frame given; the ResNet's, the foil's, shown, never gated), each at the
-    learning margin squared. A failed run scores defect 1.
-    Headline (a). Every part can come out against the claim: a baseline with a consistent
-    embedding contradicts (b), a VIN-SO(2) with a defect above the margin contradicts (a)."""
-    if not len(r):
-        return verdict(12, CLAIM_TITLES[12], [], None, 0, "VIN-SO(2) embedding defect")
-    mg = policy.margin("embedding")
-    vin = defect_per_seed(r, "vin_so2")
-    parts = [
-        gated(
-            at_most("(a) VIN-SO(2) embedding defect", vin.to_numpy(), mg),
-            _frames_learned(r, "vin_so2"),
-        )
-    ]
-    for name in BASELINES:
-        d = defect_per_seed(r, name)
-        parts.append(
-            gated(
-                greater(f"(b) {SHORT[name]} embedding defect", d.to_numpy(), mg),
-                _frames_learned(r, name),
-            )
-        )
-    mse = paired(r, _cell("resnet"), _cell("vin_so2"), "pixel_mse")
-    parts.append(
-        gated(
-            greater(
-                "(c) log(pixel MSE ResNet / VIN-SO(2))",
-                mse.to_numpy(),
-                policy.margin("error", squared=True),
-            ),
-            _motion_learned(r, "vin_so2"),
-            foil(_motion_learned(r, "resnet")),
-        )
-    )
-    trust = pd.to_numeric(cell_rows(r, _cell("vin_so2")).get("embedding_trust"), errors="coerce")
-    extra = f"VIN-SO(2) trustworthiness {np.nanmean(trust):.3g}" if len(trust) else ""
-    return verdict(
-        12,
-        CLAIM_TITLES[12],
-        parts,
-        parts[0],
-        len(vin),
-        "VIN-SO(2) embedding defect",
-        extra,
-        n_failed=int((r["status"] != "ok").sum()),
-    )
-
-
-def claim_12(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
-    """Claim 12 (VIN seed, pixels) on both readings: the VIN seed's protocol (:func:`reading`)
-    and ours (``pixels.reading_ours``: the HNN seed's latent of two stacked frames, with its
-    auxiliary loss that contradicts the VIN's Verlet step, judged on pixel forecasts alone).
-    They differ in what the latent is (positions with the integrator carrying velocity, against
-    (q, qdot) tied by a forward difference), in the evidence (the embedding's structure first,
-    against forecasts only), and in data, loss and optimiser (docs/studies/vin_blog.md). The
-    verdict is the seed's protocol's where it has runs, ours otherwise; the other reading's
-    verdict is named in the detail."""
-    ours = pixels.reading_ours(runs)
-    blog = _blog_rows(runs)
-    if not len(blog):
-        return ours
-    name = "ours, the HNN seed's latent"
-    return decided_by(reading(blog), "the VIN seed's protocol", name, ours)
+__all__ = [
+    "CELLS",
+    "EXPERIMENTS",
+    "SEED_LR",
+    "SEED_STEPS",
+    "STUDY",
+    "STUDY_VIN",
+    "VIN_BLOG",
+    "claim_12",
+    "defect_per_seed",
+    "figure",
+    "reading",
+    "section",
+]
 
 
 # ------------------------------------------------------------------- table and figure
