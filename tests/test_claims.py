@@ -1173,6 +1173,27 @@ def test_claim_5_c_cost(tables, contradicting):
     assert _status(v, s, "(c) cost") == "undecided" and v.verdict == R.INCONCLUSIVE
 
 
+def test_claim_5_c_cost_reads_cpu_time_where_the_runs_record_it(tables):
+    """On a shared CPU the wall time measures when a run ran: NODE+SO's training wall time
+    inflated 100x by waiting for a core (its CPU time unchanged) leaves (c) holding; an
+    accelerator's rows, and a seed where one run lacks its CPU time, are read in wall time."""
+    runs, curves = tables
+    s = "chain_pendulum"
+    so = _damped(runs, s, "node_so")
+    wall = pd.to_numeric(runs["train_seconds"], errors="coerce")
+    cpu = runs.assign(cpu_seconds=wall, backend="cpu")
+    waited = _assign(cpu, so, 100.0 * wall[so].to_numpy(), "train_seconds")
+    c = _part(_claim_5(waited, curves), s, "(c) cost")
+    assert c.status == "holds" and c.n == 5, c
+    assert "CPU s" in c.name
+    # the same rows from an accelerator: the wall time decides (contradicted)
+    gpu = waited.assign(backend="gpu")
+    assert _part(_claim_5(gpu, curves), s, "(c) cost").status == "contradicts"
+    # CPU time recorded only for the mixture HNN: wall time for both, contradicted
+    half = _assign(waited, so, float("nan"), "cpu_seconds")
+    assert _part(_claim_5(half, curves), s, "(c) cost").status == "contradicts"
+
+
 def test_claim_5_c_cost_pairs_only_runs_of_one_machine(tables):
     """A time ratio across two machines measures the machines: a seed whose NODE+SO and mixture
     HNN trained on different machines is left out of (c) and named; rows that record no
