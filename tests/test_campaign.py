@@ -504,6 +504,19 @@ def test_the_rayleigh_hnn_costs_its_measured_factor_over_the_plain_one():
         assert ray == pytest.approx(plain * B.DISSIPATION) and B.DISSIPATION > 1.2
 
 
+def test_the_papers_mujoco_hnn_costs_a_fraction_of_ours():
+    """The paper's MuJoCo HNN (M = I, one Euler step per transition) measured 158-202 CPU s a
+    paper-core run, ours (a learned M(q), 8 steps) 2,600-4,000: without its own row the
+    estimate charged the paper's as ours."""
+    cost = {}
+    for c in E.expand("mujoco", "paper-core"):
+        if c.seed == 0 and c.lr == 0.005 and c.system == "HopperFull-v0":
+            cost[(c.model, c.optimizer)] = run_seconds(c)
+    paper = cost[("hnn_force_paper", "adamw")]
+    assert 150 < paper < 250 and cost[("hnn_force", "adamw")] > 10 * paper
+    assert cost[("hnn_force_paper", "adam_l2_clip")] == paper
+
+
 def test_the_measured_costs_are_read_from_their_data_file():
     from bench.studies.paper.campaign import _budget as B
 
