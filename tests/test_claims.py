@@ -1185,10 +1185,10 @@ def test_claim_5_c_cost_reads_cpu_time_where_the_runs_record_it(tables):
     waited = _assign(cpu, so, 100.0 * wall[so].to_numpy(), "train_seconds")
     c = _part(_claim_5(waited, curves), s, "(c) cost")
     assert c.status == "holds" and c.n == 5, c
-    assert "CPU s" in c.name
+    assert "5 of 5 seeds in CPU s" in c.note, c.note
     # the same rows from an accelerator: the wall time decides (contradicted)
-    gpu = waited.assign(backend="gpu")
-    assert _part(_claim_5(gpu, curves), s, "(c) cost").status == "contradicts"
+    gpu = _part(_claim_5(waited.assign(backend="gpu"), curves), s, "(c) cost")
+    assert gpu.status == "contradicts" and "0 of 5 seeds in CPU s" in gpu.note
     # CPU time recorded only for the mixture HNN: wall time for both, contradicted
     half = _assign(waited, so, float("nan"), "cpu_seconds")
     assert _part(_claim_5(half, curves), s, "(c) cost").status == "contradicts"

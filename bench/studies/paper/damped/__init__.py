@@ -125,17 +125,17 @@ def cost_seconds(rows: pd.DataFrame, cpu: pd.Series | None = None) -> pd.Series:
     return pd.to_numeric(rows["cpu_seconds"], errors="coerce").astype(float).where(cpu, wall)
 
 
-def _seed_costs(a: pd.DataFrame, b: pd.DataFrame) -> tuple[pd.Series, pd.Series]:
+def _seed_costs(a: pd.DataFrame, b: pd.DataFrame) -> tuple[pd.Series, pd.Series, int]:
     """Per seed, the log training cost (:func:`cost_seconds`) of ``a``'s and ``b``'s runs, in
     one unit per seed: CPU seconds where every run of the seed in both records them, the
-    training wall time where one does not."""
+    training wall time where one does not; and the number of seeds read in CPU seconds."""
     flags = [_on_cpu(r).groupby(r["seed"]).all() for r in (a, b)]
     both = flags[0].reindex(flags[1].index, fill_value=False) & flags[1]
     out = []
     for r in (a, b):
         use = r["seed"].map(both).fillna(False).astype(bool)
         out.append(np.log(cost_seconds(r, use)).groupby(r["seed"]).mean())
-    return out[0], out[1]
+    return out[0], out[1], int(both.sum())
 
 
 def _cost_part(
@@ -147,10 +147,10 @@ def _cost_part(
     contradicted also when NODE+SO's FLOPs per step (where recorded) are not smaller. A seed
     whose two runs trained on different machines is left out (:func:`_mixed_machines`)."""
     rs, rm = select(d, **so), select(d, **mix)  # finished runs only: cost of a failure is moot
-    name = f"{system}: (c) cost log(CPU s {label} / NODE+SO)"
+    name = f"{system}: (c) cost log(training cost {label} / NODE+SO)"
     if not len(rs) or not len(rm) or "train_seconds" not in d:
         return undecided(name, "no runs")
-    ts, tm = _seed_costs(rs, rm)
+    ts, tm, n_cpu = _seed_costs(rs, rm)
     mixed = _mixed_machines(rs, rm)  # a time ratio across two machines measures the machines
     dt = (tm - ts).dropna().drop(index=list(mixed), errors="ignore")
     flops = math.nan
@@ -164,6 +164,7 @@ def _cost_part(
         if np.isfinite(flops)
         else "no flops_per_step recorded"
     ) + f"; params {rs['n_params'].mean():.0f} vs {rm['n_params'].mean():.0f}"
+    note += f"; {n_cpu} of {len(set(ts.index) & set(tm.index))} seeds in CPU s, the rest in wall s"
     if mixed:
         seeds = ", ".join(str(x) for x in sorted(mixed))
         note += f"; seeds {seeds} left out: their two models trained on different machines"
