@@ -141,8 +141,9 @@ CAMPAIGN_LOG := .cache/paper-core.log
 CAMPAIGN_DRAIN := $(abspath .cache/paper-core.drain)
 CAMPAIGN_WORKERS ?= 2
 CAMPAIGN_PROFILE ?= paper-core
-# claims whose seeds 0-4 and then 5-9 run before the three phases (e.g. CAMPAIGN_FIRST=9: the
-# runs an open piece of work waits for, to a replicated verdict); empty: the phases alone
+# claims run before the three phases, reading by reading on both seed sets (campaign
+# --by-reading: own cells, then further readings cheapest run first; e.g. CAMPAIGN_FIRST=16:
+# the runs an open piece of work waits for, to a replicated verdict); empty: the phases alone
 CAMPAIGN_FIRST ?=
 campaign_pid = $$(cat $(CAMPAIGN_PID) 2>/dev/null)
 campaign_alive = test -f $(CAMPAIGN_PID) && kill -0 $(campaign_pid) 2>/dev/null
@@ -152,8 +153,7 @@ paper-core:
 	@if $(campaign_alive); then echo "paper-core: already running (process group $(campaign_pid))"; \
 	else $(MAKE) --no-print-directory $(STAMP) && rm -f $(CAMPAIGN_DRAIN); DECON_DRAIN=$(CAMPAIGN_DRAIN) FIRST="$(CAMPAIGN_FIRST)" \
 		setsid nohup sh -c 'echo 19 > /proc/self/autogroup 2>/dev/null; \
-		{ [ -z "$$FIRST" ] || { nice -n 19 "$$@" --claims "$$FIRST" && \
-			nice -n 19 "$$@" --replication --claims "$$FIRST"; }; } && \
+		{ [ -z "$$FIRST" ] || nice -n 19 "$$@" --claims "$$FIRST" --by-reading; } && \
 		nice -n 19 "$$@" --replication --signed && nice -n 19 "$$@" && \
 		exec nice -n 19 "$$@" --replication' sh \
 		$(PY) -m bench --results $(CAMPAIGN_DIR) campaign \

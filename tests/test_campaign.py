@@ -464,6 +464,58 @@ def test_campaign_claims_runs_only_those_claims(tmp_path, monkeypatch, capsys):
     assert "(signed verdicts: claims 12)" in capsys.readouterr().out
 
 
+def test_by_reading_runs_a_cheap_reading_on_both_seed_sets_before_a_costly_one(
+    tmp_path, monkeypatch, capsys
+):
+    """``campaign --claims 16 --by-reading``: the claim's own cells on seeds 0-4 then 5-9,
+    then its further readings cheapest run first, each cost on both sets: the paper's HNN
+    (about 3 CPU min a run) on seeds 5-9 before our HNN at 5e-3 (about 42) on seeds 0-4. A
+    replication run waits for its cell's own seeds: here none is stored, so every replication
+    step keeps nothing."""
+    from bench._cli import main
+    from bench.studies.paper.campaign import _commands
+
+    calls = []
+
+    def sweep(args, names, *, order, seeds, where):
+        cfgs = [c for n in names for c in E.expand(n, args.profile, seeds=seeds)]
+        calls.append((seeds, [c for c in cfgs if where(c)]))
+        return {}
+
+    monkeypatch.setattr(_commands, "sweep_from_args", sweep)
+    # every cell's own seeds stored: replication steps run what their tier keeps
+    monkeypatch.setattr(C, "replicable", lambda *a: lambda c: True)
+    argv = ["--results", str(tmp_path), "campaign", "--claims", "16", "--by-reading"]
+    assert main(argv) == 0
+    sets = [(tuple(s) if s else None) for s, _ in calls]
+    assert sets[0] is None and sets[1] == (5, 6, 7, 8, 9) and sets == sets[:2] * (len(sets) // 2)
+    own = {c.config_hash for _, cfgs in calls[:2] for c in cfgs}
+    assert own and not any(E.get("mujoco").supplementary(c) for _, cf in calls[:2] for c in cf)
+    step = {}  # the first step that runs each further run
+    for i, (_, cfgs) in enumerate(calls[2:], start=2):
+        for c in cfgs:
+            step.setdefault(c.config_hash, (i, c))
+    paper_hnn = [i for i, c in step.values() if c.model == "hnn_force_paper"]
+    ours = [i for i, c in step.values() if c.model == "hnn_force" and c.lr == 0.005]
+    assert paper_hnn and ours and max(paper_hnn) < min(ours)
+    assert len(step) + len(own) == len(
+        {
+            c.config_hash
+            for s in (None, range(5, 10))
+            for c in E.expand("mujoco", "paper-core", seeds=s)
+        }
+    )
+    assert "further readings up to" in capsys.readouterr().out
+    # the same with nothing stored: no replication run is kept
+    monkeypatch.undo()
+    monkeypatch.setattr(_commands, "sweep_from_args", sweep)
+    calls.clear()
+    assert main(argv) == 0
+    assert all(not cfgs for s, cfgs in calls if s)
+    assert main([*argv, "--replication"]) == 2
+    assert "drop --replication" in capsys.readouterr().err
+
+
 @pytest.mark.slow
 def test_paper_gpu_packs_every_stored_row_into_its_out_folder(tmp_path):
     # the device returns a few files, never a folder of rows: the target packs them as they

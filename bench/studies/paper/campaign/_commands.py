@@ -148,6 +148,13 @@ def _campaign_arguments(p):
         help="only these claims' cells (with --signed: those of them that are signed); "
         "make paper-core CAMPAIGN_FIRST=9 runs them before its phases",
     )
+    p.add_argument(
+        "--by-reading",
+        action="store_true",
+        help="both seed sets, reading by reading: the claims' own cells on the profile's seeds "
+        "and then its replication seeds, then their further readings cheapest run first, "
+        "each cost on both sets before a costlier one (make paper-core's CAMPAIGN_FIRST)",
+    )
 
 
 def _claim_list(text: str) -> frozenset:
@@ -176,6 +183,10 @@ def _campaign(args) -> int:
     check_sweep_args(args)
     if not campaign_experiments(args.profile):
         raise ValueError(f"profile {args.profile!r} has no claim experiments to run")
+    if args.by_reading:
+        if args.replication:
+            raise ValueError("--by-reading runs both seed sets: drop --replication")
+        return _by_reading(args)
     seeds, order, claims = None, CAMPAIGN_CLAIMS, None
     if args.replication:
         seeds = replication_seeds(args.profile) or None
@@ -207,6 +218,58 @@ def _campaign(args) -> int:
     res = sweep_from_args(args, names, order=key, seeds=seeds, where=where)
     for name, rows in res.items():
         print(f"{name}: {len(rows)} new runs", flush=True)
+    return 0
+
+
+def _by_reading(args) -> int:
+    """``campaign --by-reading``: a further reading joins a verdict on a seed set once all its
+    runs there are stored, so a cheap reading should not wait on both sets behind a costly
+    one's first set. The claims' own cells run on the profile's seeds, then on its replication
+    seeds; then the further cells in tiers of their estimated run cost, cheapest first, each
+    tier on the profile's seeds and then on the replication seeds (a replication run still
+    follows its cell's own seeds: :func:`replicable`)."""
+    from ....core import expand, get, is_supplementary, replication_seeds
+    from ._budget import run_seconds
+    from ._campaign import (
+        CAMPAIGN_CLAIMS,
+        campaign_experiments,
+        cheapest_first,
+        priority,
+        replicable,
+    )
+
+    if args.signed:
+        raise ValueError("--by-reading runs both seed sets: drop --signed")
+    usable_results(args)
+    claims = _claim_list(args.claims) if args.claims is not None else None
+    order = cheapest_first(CAMPAIGN_CLAIMS, args.results, args.profile)
+    names = campaign_experiments(args.profile, order, claims)
+    rep = replication_seeds(args.profile) or None
+    cost: dict[str, float] = {}  # the further runs (either seed set), by hash: their cost
+    placed: set[str] = set()
+    for seeds in (None, rep):
+        for n in names:
+            for c in expand(n, args.profile, seeds=seeds):
+                if c.config_hash not in placed:  # the first experiment that has it places it
+                    placed.add(c.config_hash)
+                    if is_supplementary(get(n), c):
+                        cost[c.config_hash] = round(run_seconds(c))
+    steps = [("own cells", lambda c: c.config_hash not in cost)]
+    steps += [
+        (f"further readings up to {t} s a run", lambda c, t=t: cost.get(c.config_hash, t + 1) <= t)
+        for t in sorted(set(cost.values()))
+    ]
+    for what, keep in steps:
+        for seeds in (None, rep) if rep else (None,):
+            where = keep
+            if seeds:  # read after the own seeds' sweep: what it stored is ready
+                ready = replicable(args.results, args.profile, names)
+                where = lambda c, keep=keep, ready=ready: keep(c) and ready(c)  # noqa: E731
+            which = f"seeds {', '.join(map(str, seeds))}" if seeds else "own seeds"
+            print(f"campaign {args.profile} by reading, {what}, {which}", flush=True)
+            key = priority(args.profile, seeds, order, claims)
+            res = sweep_from_args(args, names, order=key, seeds=seeds, where=where)
+            print(f"  {sum(len(r) for r in res.values())} new runs", flush=True)
     return 0
 
 
