@@ -140,6 +140,21 @@ def test_compare_warns_on_versions_and_on_what_is_not_recorded():
     ]
 
 
+def test_a_folder_filled_over_many_commits_lists_the_commonest_and_counts_the_rest():
+    prov = P.provenance()
+    commits = [f"{i:02d}" * 20 for i in range(P.MAX_LISTED + 4)]
+    df = pd.DataFrame(
+        [_row(str(i), "paper", **dict(prov, git_commit=c)) for i, c in enumerate(commits)]
+        + [_row("x", "paper", **dict(prov, git_commit=commits[0]))]
+    )
+    cell = _fields(P.provenance_markdown(df))["git_commit"]["profile `paper`"]
+    assert cell.startswith("0000000000 (2)") and cell.endswith("4 more (4)")
+    one = pd.DataFrame([_row("1", **dict(prov, git_commit=commits[0]))])
+    (w,) = [w for w in P.compare_provenance(df, one) if w.startswith("git_commit")]
+    assert f"{len(commits)} values (0000000000, 0101010101, 0202020202, ...) (a)" in w
+    assert w.endswith("vs 0000000000 (b)")
+
+
 def _warning(w):
     """A provenance warning read back: ("differs", field, value, folder, value, folder) or
     ("not recorded", field, runs, folder, other folder, its value)."""

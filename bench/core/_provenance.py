@@ -204,11 +204,19 @@ def _label(v) -> str:
     return str(v)
 
 
+# the most distinct values a cell or a warning lists (a folder filled over many commits has
+# a hundred git_commit values); the rest are counted
+MAX_LISTED = 8
+
+
 def _cell(values: list[tuple[str, int]], missing: int, total: int, short: bool = False) -> str:
     parts = []
-    for v, n in values:
+    for v, n in values[:MAX_LISTED]:
         text = v[:10] if short and v != UNKNOWN else v
         parts.append(text if n == total else f"{text} ({n})")
+    rest = values[MAX_LISTED:]
+    if rest:
+        parts.append(f"{len(rest)} more ({sum(n for _, n in rest)})")
     if missing:
         parts.append("not recorded" if missing == total else f"not recorded ({missing})")
     return ", ".join(parts).replace("|", "\\|") or "-"
@@ -233,6 +241,15 @@ def provenance_markdown(runs, by: str = "profile") -> str:
     return "\n".join(lines)
 
 
+def _listed(values, column: str) -> str:
+    """A set of recorded values in words: all of them up to :data:`MAX_LISTED` (commits
+    shortened), else how many and the first few."""
+    vals = sorted(v[:10] if column == "git_commit" else v for v in values)
+    if len(vals) > MAX_LISTED:
+        return f"{len(vals)} values ({', '.join(vals[:3])}, ...)"
+    return ", ".join(vals)
+
+
 def compare_provenance(df_a, df_b, names: Sequence[str] = ("a", "b")) -> list[str]:
     """Warnings (one line each) where two runs tables differ in provenance.
 
@@ -251,12 +268,12 @@ def compare_provenance(df_a, df_b, names: Sequence[str] = ("a", "b")) -> list[st
         ua = ma + sum(n for v, n in va if v == UNKNOWN)
         ub = mb + sum(n for v, n in vb if v == UNKNOWN)
         if sa and sb and sa != sb:
-            show = ", ".join(sorted(sa)), ", ".join(sorted(sb))
+            show = _listed(sa, column), _listed(sb, column)
             warnings.append(f"{column} differs: {show[0]} ({a_name}) vs {show[1]} ({b_name})")
         elif ua or ub:
             unk = " and ".join(f"{n} runs of {s}" for n, s in ((ua, a_name), (ub, b_name)) if n)
             known = "; ".join(
-                f"{s}: {', '.join(sorted(v))}" for v, s in ((sa, a_name), (sb, b_name)) if v
+                f"{s}: {_listed(v, column)}" for v, s in ((sa, a_name), (sb, b_name)) if v
             )
             warnings.append(f"{column} not recorded for {unk}" + (f" ({known})" if known else ""))
     return warnings

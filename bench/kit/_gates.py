@@ -52,11 +52,17 @@ def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared
         return Gate(label, None, f"{label}: no paired trivial-predictor runs")
     ratio = math.exp(float(d.mean()))
     ok = bool(float(d.mean()) >= mg.test)
+    # a model worse than the trivial predictor says so, not "0.1x below" it
+    where = (
+        f"{ratio:.3g}x below the best trivial predictor"
+        if ratio >= 1
+        else f"{1 / ratio:.3g}x above the best trivial predictor"
+    )
     return Gate(
         label,
         ok,
-        f"{label} {'learned' if ok else 'did not learn'}: {ratio:.3g}x below the best trivial "
-        f"predictor (geometric mean over {len(d)} seeds; the gate is {mg.label()})",
+        f"{label} {'learned' if ok else 'did not learn'}: {where} (geometric mean over "
+        f"{len(d)} seeds; the gate is {mg.label()})",
     )
 
 

@@ -84,10 +84,14 @@ class Verdict:
     def label(self) -> str:
         """The verdict with the headline's status beside it where the verdict alone would hide
         it (*partly reproduced*: which half is the paper's central sentence?), e.g.
-        "partly reproduced: headline contradicted"."""
+        "partly reproduced: headline contradicted"; an inconclusive verdict whose headline was
+        not tested (a model it gates on did not learn, or its condition failed) says so:
+        "inconclusive: headline untested"."""
         if self.verdict == PARTLY and self.headline_status:
             said = {"contradicts": "contradicted"}.get(self.headline_status, self.headline_status)
             return f"{self.verdict}: headline {said}"
+        if self.verdict == INCONCLUSIVE and self.headline_status == "not tested":
+            return f"{self.verdict}: headline untested"
         return self.verdict
 
     @property

@@ -269,6 +269,16 @@ def _judged(ctx: ReportContext):
 POWER_SIMULATIONS = 1000
 
 
+def _gap_lines(j, ctx: ReportContext) -> list[str]:
+    """What more training would decide (:mod:`..campaign._untested`), where the profile is
+    known (imported here: the campaign's estimator imports the claims' studies)."""
+    from ..campaign._untested import training_gap, training_gap_lines
+
+    if ctx.profile is None:
+        return []
+    return training_gap_lines(training_gap(j.final, ctx.runs, ctx.profile), ctx.profile)
+
+
 def claims_section(ctx: ReportContext) -> list[str]:
     """How a claim is judged, the claims table, the claims not run here, and every part."""
     j = _judged(ctx)[0]
@@ -317,6 +327,7 @@ def claims_section(ctx: ReportContext) -> list[str]:
         *_parts_table(j),
         "",
         *power_lines(power_table(j.final, sims=POWER_SIMULATIONS)),
+        *_gap_lines(j, ctx),
         f"Failed or diverged runs scored as error 1 in the verdicts: {n_failed}.",
         "",
     ]
