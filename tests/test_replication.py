@@ -536,6 +536,33 @@ def test_a_further_reading_joins_its_claim_whole_and_never_holds_it_pending():
     assert pending(None, short, "paper-core", j.final)[0].pending == (48, 50)  # two systems
 
 
+def test_each_named_further_reading_joins_on_its_own():
+    """Claim 16 names its further readings (``Experiment.supplementary`` returns the name): the
+    paper's HNN, stored on both seed sets, joins while our HNN at the code's lr, stored on no
+    seed, waits; the report names which reading waits for which runs."""
+    from bench.core import get, reading_of
+    from bench.studies.paper.report._comparison import supplements_waiting
+
+    study, exp = get_study(16), get("mujoco")
+    seeds = (*PRIMARY, *REPLICATION_SEEDS["paper"])
+    cells = expand(exp, "paper-core", seeds=seeds)
+    by = {}
+    for c in cells:
+        by.setdefault(reading_of(exp, c), []).append(c.config_hash)
+    assert {"the paper's HNN", "our HNN at the code's lr", None} <= set(by)
+    stored = [*by[None], *by["the paper's HNN"]]
+    rows = pd.DataFrame({"config_hash": stored})
+    drop = R.incomplete_supplements(rows, study, "paper-core")
+    assert drop >= set(by["our HNN at the code's lr"]) and not drop & set(by["the paper's HNN"])
+    said = supplements_waiting(rows, "paper-core")[16]
+    n = len([c for c in cells if reading_of(exp, c) == "our HNN at the code's lr" and c.seed < 5])
+    assert f"our HNN at the code's lr: 0 of {n} on seeds 0-4" in said
+    assert "the paper's HNN:" not in said
+    # one seed of the paper's HNN missing: that reading waits too, on its seed set only
+    rows = pd.DataFrame({"config_hash": stored[:-1]})
+    assert set(by["the paper's HNN"]) & R.incomplete_supplements(rows, study, "paper-core")
+
+
 def _configs(rows):
     from bench.core import RunConfig, field_names
 

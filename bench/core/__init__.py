@@ -40,7 +40,7 @@ _MODULES = {
     # experiments as data, their profiles, papers and selections
     "_experiments": (
         "Experiment PAPERS PROFILES REPLICATION_SEEDS SELECTIONS available expand get "
-        "is_supplementary profile_defaults register replication_seeds"
+        "is_supplementary profile_defaults reading_of register replication_seeds"
     ),
     # the train step of a state run, through the parameter cache
     "_fit": "checkpoint_steps objective train_cached train_config",

@@ -120,8 +120,9 @@ class Experiment:
     claim: int | None = None
     # The cells of a further reading of the claim (another form of its models, another system):
     # its claim is never pending on them, and they join its verdict on a seed set only once
-    # every one of them the profile declares there is stored (:func:`is_supplementary`).
-    supplementary: Callable[[RunConfig], bool] | None = None
+    # every one of them the profile declares there is stored (:func:`is_supplementary`). A
+    # string names the cell's reading: each named reading joins on its own (:func:`reading_of`).
+    supplementary: Callable[[RunConfig], bool | str] | None = None
     # The profiles it runs at (None: every profile); elsewhere it expands to no runs.
     profiles: tuple[str, ...] | None = None
     # The paper it reproduces (one of PAPERS): `bench --papers` runs a paper's experiments.
@@ -209,6 +210,17 @@ def get(name: str) -> Experiment:
 def is_supplementary(exp: Experiment, cfg: RunConfig) -> bool:
     """Whether ``cfg`` is a cell of ``exp``'s further reading (``Experiment.supplementary``)."""
     return exp.supplementary is not None and bool(exp.supplementary(cfg))
+
+
+def reading_of(exp: Experiment, cfg: RunConfig) -> str | None:
+    """The further reading ``cfg`` is a cell of: its name where ``exp.supplementary`` names one,
+    "" for the experiment's unnamed one, None for one of its own cells."""
+    if exp.supplementary is None:
+        return None
+    said = exp.supplementary(cfg)
+    if not said:
+        return None
+    return said if isinstance(said, str) else ""
 
 
 def profile_defaults(profile: str) -> tuple[dict, tuple[int, ...]]:

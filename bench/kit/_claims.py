@@ -11,7 +11,7 @@ from collections.abc import Iterable, Mapping
 
 import pandas as pd
 
-from ..core import expand, experiment_rows, is_supplementary, labelled, studies
+from ..core import expand, experiment_rows, labelled, reading_of, studies
 from ._seeds import seed_sets
 from ._verdict import INCONCLUSIVE, Verdict
 
@@ -19,6 +19,7 @@ __all__ = [
     "claim_studies",
     "claims_not_run",
     "evaluate_claims",
+    "further_cells",
     "incomplete_supplements",
     "restrict",
     "restrict_all",
@@ -46,24 +47,34 @@ def restrict(runs: pd.DataFrame, study, profile: str | None, keep=None) -> pd.Da
     return rows[~rows["config_hash"].isin(drop)].reset_index(drop=True) if drop else rows
 
 
+def further_cells(experiments, profile: str, seeds=None, keep=None) -> dict[str, set]:
+    """``{reading: config hashes}`` of the further readings (``Experiment.supplementary``) of
+    ``experiments`` at ``profile`` (on ``seeds`` instead of its own; only the cells ``keep``
+    accepts): each named reading apart, the unnamed ones under ""."""
+    out: dict[str, set] = {}
+    for e in experiments:
+        if e.supplementary is None:
+            continue
+        for c in expand(e, profile, seeds=None if seeds is None else list(seeds)):
+            name = reading_of(e, c)
+            if name is not None and (keep is None or keep(c)):
+                out.setdefault(name, set()).add(c.config_hash)
+    return out
+
+
 def incomplete_supplements(rows: pd.DataFrame, study, profile: str, keep=None) -> set:
-    """The config hashes of ``study``'s further reading (``Experiment.supplementary``) on each
-    seed set of ``profile`` (its own seeds, its replication seeds) where ``rows`` lack some of
-    them: a reading joins the verdict whole, never with the seeds that happen to be done."""
-    sups = [e for e in study.experiments if e.supplementary is not None]
-    if not sups:
+    """The config hashes of each of ``study``'s further readings (``Experiment.supplementary``,
+    :func:`further_cells`) on each seed set of ``profile`` (its own seeds, its replication
+    seeds) where ``rows`` lack some of them: a reading joins the verdict whole, never with the
+    seeds that happen to be done, and a named reading without waiting for another."""
+    if not any(e.supplementary is not None for e in study.experiments):
         return set()
     done = set(rows["config_hash"]) if len(rows) else set()
     drop: set = set()
     for seeds in (s for s in seed_sets(profile) if s):
-        want = {
-            c.config_hash
-            for e in sups
-            for c in expand(e, profile, seeds=list(seeds))
-            if is_supplementary(e, c) and (keep is None or keep(c))
-        }
-        if not want <= done:
-            drop |= want
+        for want in further_cells(study.experiments, profile, seeds, keep).values():
+            if not want <= done:
+                drop |= want
     return drop
 
 
