@@ -92,6 +92,7 @@ def further_reading(c: RunConfig) -> str | None:
         return "our HNN at the code's lr"
     return None
 
+
 # App. C and the reference's mujoco.py: 2 x 128 tanh MLPs, Adam (here AdamW) with weight decay
 # 1e-4, batch 200, cosine from 2e-4 (the lr axis: LR; NODE and NODE+SO also at the code's
 # CODE_LR) to 1e-6, 3-step windows, 8 integrator steps per transition,
