@@ -91,7 +91,12 @@ def _verdict(row: dict[str, str] | None) -> str:
     if row is None:
         return "not run"
     text = row["verdict"]
-    return text + (" (not discriminating)" if row.get("discriminating") == "**no**" else "")
+    return text + (" (not discriminating)" if _undiscriminating(row) else "")
+
+
+def _undiscriminating(row: dict[str, str]) -> bool:
+    """The claims table's discriminating cell reads no (on every system, or on some)."""
+    return row.get("discriminating", "").startswith("**no**")
 
 
 def _replicated(row: dict[str, str] | None) -> str:
@@ -236,7 +241,7 @@ def _claim_of(label: str) -> int:
 def _reading(row: dict[str, str]) -> str:
     """A claims-table row's verdict in a few words (the headline's status kept)."""
     text = re.sub(r" \(([^)]*)\)", r", \1", row["verdict"].strip("*"))
-    if row.get("discriminating") == "**no**":
+    if _undiscriminating(row):
         # a signed verdict stands on the systems that discriminate (the others' parts void)
         signed = text.startswith(("reproduced", "partly", "not reproduced"))
         text += ", a system not discriminating" if signed else ", not discriminating"

@@ -56,12 +56,19 @@ def test_an_undiscriminating_system_voids_only_its_own_parts(chain, expected):
     assert v.discriminating is False
     lead = v.detail.split(";")[0]  # the detail leads with the group that voids its parts
     assert discs[1].group in lead and discs[0].group not in lead
+    # the report names the system whose parts went untested, where the verdict stands on others
+    from bench.studies.paper.report._comparison import _cell_text, _disc_mark
+
+    assert v.undiscriminating == (discs[1].group,)
+    assert _disc_mark(v) == f"**no** on {discs[1].group}"
+    assert _cell_text(v).endswith(f"(not discriminating on {discs[1].group})")
 
 
 def test_a_part_pooling_an_undiscriminating_system_leaves_the_claim_inconclusive():
     discs = [_disc("chain_pendulum", "yes"), _disc("rotor", "no")]
     v = _claim(CLEAR, CLEAR, discs, pooled=True)
     assert v.verdict == R.INCONCLUSIVE and v.discriminating is False, v.detail
+    assert v.undiscriminating == ()  # nothing stands on the rest: plainly not discriminating
     assert {p.status for p in v.parts if p.role == "part"} == {"holds"}  # none voids alone
     assert "rotor" in v.detail.split(";")[0]  # the detail leads with why
 
@@ -69,7 +76,7 @@ def test_a_part_pooling_an_undiscriminating_system_leaves_the_claim_inconclusive
 def test_no_system_discriminating_is_inconclusive():
     discs = [_disc("chain_pendulum", "no"), _disc("spring_pendulum", "no")]
     v = _claim(CLEAR, CLEAR, discs)
-    assert v.verdict == R.INCONCLUSIVE
+    assert v.verdict == R.INCONCLUSIVE and v.undiscriminating == ()
     assert {p.status for p in v.parts} == {"not tested"}
 
 

@@ -64,6 +64,10 @@ class Verdict:
     # structure): each part is gated on its own model's learning instead, and the report's
     # discriminating column reads n/a rather than unknown
     has_trivial: bool = True
+    # the systems or cells whose test set does not discriminate where others do: only their
+    # parts went untested, and the verdict stands on the rest (empty where none, or where no
+    # part could be read: then the claim is inconclusive)
+    undiscriminating: tuple[str, ...] = ()
     parts: tuple = ()  # the tested parts (``Part``), for the report's parts table
     pending: tuple[int, int] | None = None
     primary: str | None = None
@@ -226,6 +230,11 @@ def verdict(
         variant=variant,
         n_failed=int(n_failed),
         discriminating=discriminating,
+        undiscriminating=(
+            tuple(d.group for d in not_disc)
+            if not void_all and any(d.status == "yes" for d in discs)
+            else ()
+        ),
         has_trivial=bool(discs) or not parts or n_seeds == 0,
         parts=tuple(parts),
         headline_status=h.status if h is not None and any(h is p for p in parts) else "",

@@ -67,8 +67,12 @@ STATES = ("judged", "no runs", "pending", "cells missing")
 
 
 def _disc_mark(v) -> str:
+    """yes, **no**, unknown or n/a; **no** names the systems where the others discriminate
+    (only their parts went untested)."""
     if v.discriminating is None and not v.has_trivial:
         return "n/a"
+    if v.discriminating is False and v.undiscriminating:
+        return f"**no** on {', '.join(v.undiscriminating)}"
     return {True: "yes", False: "**no**", None: "unknown"}[v.discriminating]
 
 
@@ -110,6 +114,8 @@ def _cell_text(v) -> str:
         return "no runs"
     if state == "cells missing":
         return f"**{v.verdict}** (cells missing)"
+    if v.discriminating is False and v.undiscriminating:
+        return f"**{v.verdict}** (not discriminating on {', '.join(v.undiscriminating)})"
     return f"**{v.verdict}**" + (" (not discriminating)" if v.discriminating is False else "")
 
 

@@ -302,7 +302,10 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "reproduced* when some hold and others are contradicted, *not reproduced* when parts "
         "are contradicted and none holds, *inconclusive* otherwise, with fewer than 5 seeds, or "
         "when the experiment is not discriminating (its best model does not beat the best "
-        f"trivial predictor by {TRIVIAL_FACTOR:g}x on every seed). Failed and diverged runs "
+        f"trivial predictor by {TRIVIAL_FACTOR:g}x on every seed), judged per system or cell: "
+        "where some discriminate and others do not, only the others' parts go untested, the "
+        "verdict stands on the rest, and the discriminating column names those systems. "
+        "Failed and diverged runs "
         "score the worst error, 1, and are counted. *n/a* in the discriminating column: the "
         "claim's evidence has no trivial predictor to beat (an embedding's structure), so each "
         "part is gated on its own model's learning instead.",
