@@ -317,11 +317,14 @@ def findings(root: Path = ROOT) -> str:
         "measured at paper-core (90% CI) |",
         "| --- | --- | --- | --- | --- |",
     ]
+    said = None  # a claim's further readings follow it: its statement once
     for label in [*core, *(label for label in quick if label not in core)]:
         row = core.get(label) or quick[label]
         why = _why(core[label]) if label in core else "-"
+        statement = "as above" if row["statement"] == said else row["statement"]
+        said = row["statement"]
         lines.append(
-            f"| {label} | {row['statement']} | {_verdict(quick.get(label))} | "
+            f"| {label} | {statement} | {_verdict(quick.get(label))} | "
             f"{_replicated(core.get(label))} | {why} |"
         )
     dependent = "; ".join(f"at {b}, claims {margin_dependent(r)}" for b, r in reports.items())

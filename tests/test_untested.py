@@ -23,7 +23,12 @@ def _verdict(claim: int, *gates: Gate) -> Verdict:
     return Verdict(claim, "t", "inconclusive", 0.0, -1.0, 1.0, 10, "", parts=(part,))
 
 
-STUCK = Gate("pure LNN", False, "pure LNN did not learn: 1.09x below the best trivial predictor")
+STUCK = Gate(
+    "pure LNN",
+    False,
+    "pure LNN did not learn: 1.09x below the best trivial predictor (geometric mean over 10 "
+    "seeds; the gate is 2x)",
+)
 
 
 def test_only_closed_binding_learning_gates_count():
@@ -41,6 +46,7 @@ def test_a_claim_the_longer_profile_trains_longer_is_costed():
     assert math.isnan(r["calibration"])  # nothing stored here: the estimate alone
     (row,) = [x for x in training_gap_lines(t, "paper-core") if x.startswith("| 9 |")]
     assert "600,000" in row and "estimated; no run here records CPU time" in row
+    assert "| pure LNN (1.09x below the trivial predictor; gate 2x) |" in row
 
 
 def test_a_claim_trained_at_its_papers_budget_says_more_training_is_not_the_gap():

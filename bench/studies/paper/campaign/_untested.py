@@ -16,6 +16,7 @@ training is not what the claim lacks.
 from __future__ import annotations
 
 import math
+import re
 
 import pandas as pd
 
@@ -39,6 +40,18 @@ def closed_learning_gates(v) -> list:
                     seen.add(g.label)
                     out.append(g)
     return out
+
+
+_GATE = re.compile(
+    r"did not learn: (\S+x (?:below|above)) the best trivial predictor \(geometric mean over "
+    r"\d+ seeds; the gate is ([^)]+)\)"
+)
+
+
+def _short(gate) -> str:
+    """``pure LNN (1.09x below the trivial predictor; gate 2x)``, or the gate's whole text."""
+    m = _GATE.search(gate.text)
+    return f"{gate.label} ({m[1]} the trivial predictor; gate {m[2]})" if m else gate.text
 
 
 def _experiments(claim: int) -> list[str]:
@@ -93,7 +106,7 @@ def training_gap(verdicts, runs: pd.DataFrame, profile: str, longer: str = LONGE
         rows.append(
             {
                 "claim": v.key,
-                "models": "; ".join(g.text for g in gates),
+                "models": "; ".join(_short(g) for g in gates),
                 "steps_here": s_here,
                 "steps_longer": s_there,
                 "runs_longer": len(there),
