@@ -15,16 +15,16 @@ training loop. The load average is recorded beside each measurement because the 
 shared.
 
 ``python -m bench perf --ensemble`` (:func:`ensemble_table`) writes
-``results/perf_ensemble.csv``: training runs per minute, M runs as one ensemble
+``results/own/perf_ensemble.csv``: training runs per minute, M runs as one ensemble
 (``bench.core.train_ensemble``) vs the same M runs one at a time, for M in 1, 5, 10, 20 and the
 paper models.
 
 ``python -m bench.studies.perf --cells EXPERIMENTS [--profile P] [--k K]`` times the training
 step of experiments' own cells instead (:mod:`._cells`: their data, model and batch; one core
-under ``taskset``) and writes ``results/perf_cells.csv``.
+under ``taskset``) and writes ``results/own/perf_cells.csv``.
 
 ``python -m bench.studies.perf [--models node,hnn_so] [--repeats 5] [--quick] [--seeds] [--flags]``
-writes ``results/perf.csv`` (and ``results/perf_seeds.csv``, ``results/perf_flags.csv``).
+writes ``results/own/perf.csv`` (and ``perf_seeds.csv``, ``perf_flags.csv`` beside it).
 ``compile_s`` comes from JAX's persistent compilation cache when ``bench`` turned it on (the
 ``compile_cache`` column); ``DECON_JAX_CACHE=0`` measures cold compiles.
 """

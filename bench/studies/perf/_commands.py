@@ -9,7 +9,7 @@ def _arguments(p):
     p.add_argument(
         "--ensemble",
         action="store_true",
-        help="runs per minute, ensembles vs one at a time (results/perf_ensemble.csv)",
+        help="runs per minute, ensembles vs one at a time (perf_ensemble.csv in --results)",
     )
 
 

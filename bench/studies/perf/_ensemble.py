@@ -10,7 +10,7 @@ from pathlib import Path
 
 import jax
 
-from ...core import TrainConfig, cpu_count
+from ...core import OWN_DIR, TrainConfig, cpu_count
 from ._timing import (
     BATCH,
     DEPTH,
@@ -124,7 +124,7 @@ def _ensemble_main(a, say) -> int:
     if not a.no_write and rows:
         import pandas as pd
 
-        out = Path(a.out or "results/perf_ensemble.csv")
+        out = Path(a.out or OWN_DIR / "perf_ensemble.csv")
         out.parent.mkdir(parents=True, exist_ok=True)
         pd.DataFrame(rows).to_csv(out, index=False)
         say(f"wrote {out}")

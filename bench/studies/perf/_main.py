@@ -13,7 +13,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from ...core import TrainConfig, cpu_count
+from ...core import OWN_DIR, TrainConfig, cpu_count
 from ._ensemble import (
     ENSEMBLE_MODELS,
     ENSEMBLE_SIZES,
@@ -48,7 +48,7 @@ def _cells_main(a) -> int:
     if not a.no_write:
         import pandas as pd
 
-        out = Path(a.out or "results/perf_cells.csv")
+        out = Path(a.out or OWN_DIR / "perf_cells.csv")
         out.parent.mkdir(parents=True, exist_ok=True)
         pd.DataFrame(rows).to_csv(out, index=False)
         print(f"wrote {out}")
@@ -84,14 +84,14 @@ def main(argv=None) -> int:
         "--steps", type=int, default=None, help="training steps per run (--ensemble)"
     )
     parser.add_argument(
-        "--out", default=None, help="default results/perf.csv (--ensemble: perf_ensemble.csv)"
+        "--out", default=None, help="default results/own/perf.csv (--ensemble: perf_ensemble.csv)"
     )
     parser.add_argument(
         "--cells",
         metavar="EXPERIMENTS",
         default=None,
         help="time the training step of the own cells of EXPERIMENTS (comma-separated) under "
-        "--profile instead, in blocks of the run's own size (results/perf_cells.csv; run under "
+        "--profile instead, in blocks of the run's own size (results/own/perf_cells.csv; run under "
         "`taskset -c 1` to time one core, as a campaign worker runs)",
     )
     parser.add_argument("--profile", default="paper-core", help="the cells' profile (--cells)")
@@ -107,7 +107,7 @@ def main(argv=None) -> int:
         return _ensemble_main(a, (lambda *x: print(*x, file=sys.stderr)) if a.json else print)
     if a.cells:
         return _cells_main(a)
-    a.out = a.out or "results/perf.csv"
+    a.out = a.out or str(OWN_DIR / "perf.csv")
     a.models = a.models or ",".join(
         n
         for n in models.available()  # trainable, on the (q, qdot) scene timed here
