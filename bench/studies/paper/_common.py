@@ -59,6 +59,9 @@ PAPER_FORM = {
 # a paper-form cell's options, by model (the include filters of the experiments that run them)
 PAPER_FORM_OPTIONS = {"node": PAPER_INIT, "hnn": PAPER_HNN}
 SYSTEMS = ("chain_pendulum", "spring_pendulum")
+# the numbers of links of the paper's Figs. 2-5, and the profile that declares their cells
+LINKS = (1, 2, 3, 4)
+LINKS_PROFILE = "paper"
 # Fig. 3's grid: log-spaced from 1e-6 to 1e3 (the paper's code), 0 = the unregularised model.
 SYMREG_WEIGHTS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
 # paper-core: five points spanning the paper's grid at the paper budget; quick: three of them,

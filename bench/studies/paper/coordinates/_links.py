@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..report import LINKS, PROFILE
+from .._common import LINKS
+from .._common import LINKS_PROFILE as PROFILE
 
 FIGURE_MODELS = ("node", "node_so", "node_so_pq", "hnn", "hnn_so")
 # the paper's form of NODE+SO, drawn dashed beside ours

@@ -31,13 +31,13 @@ import pandas as pd
 
 from ....core import expand, get
 from ....kit import Judgement, claim_studies, judge, seed_sets, seed_span, stored_counts
+from .._common import LINKS
+from .._common import LINKS_PROFILE as PROFILE
 
-LINKS = (1, 2, 3, 4)
 # the claims judged per k, and those whose rule pools k (module docstring)
 LINK_CLAIMS = (1, 2, 3, 4)
 POOLED_CLAIMS = (1, 4)
-# the profile whose cells these are, and its selections whose cells the campaigns run
-PROFILE = "paper"
+# the profile whose cells these are (PROFILE), and its selections whose cells the campaigns run
 CAMPAIGN_SELECTIONS = ("paper-core", "paper-k")
 
 

@@ -17,6 +17,7 @@ from ....kit import (
     power_table,
     write_headlines,
 )
+from ..campaign._untested import training_gap, training_gap_lines
 from ._comparison import _disc_mark, comparison_section, load_other, pending
 from ._links import links_section
 
@@ -271,9 +272,7 @@ POWER_SIMULATIONS = 1000
 
 def _gap_lines(j, ctx: ReportContext) -> list[str]:
     """What more training would decide (:mod:`..campaign._untested`), where the profile is
-    known (imported here: the campaign's estimator imports the claims' studies)."""
-    from ..campaign._untested import training_gap, training_gap_lines
-
+    known."""
     if ctx.profile is None:
         return []
     return training_gap_lines(training_gap(j.final, ctx.runs, ctx.profile), ctx.profile)
