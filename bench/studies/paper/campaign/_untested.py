@@ -21,8 +21,7 @@ import re
 import pandas as pd
 
 from ....core import available, expand, get
-from ....kit import TRIVIAL_MODELS
-from ....kit._seeds import seed_sets
+from ....kit import TRIVIAL_MODELS, seed_sets
 from ._budget import run_seconds, total_seconds
 
 LONGER = "paper"
