@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from bench.core import expand
-from bench.kit import Gate, Part, Verdict, foil, learned
+from bench.kit import Gate, Part, Verdict, foil, learned, waiting
 from bench.studies.paper.campaign._budget import run_seconds
 from bench.studies.paper.campaign._untested import (
     closed_learning_gates,
@@ -32,10 +32,12 @@ STUCK = Gate(
 
 
 def test_only_closed_binding_learning_gates_count():
-    cond = Gate("(b) fit edge", False, "condition (b) fit edge: contradicts")
-    v = _verdict(9, Gate("baseline", True, "baseline learned"), cond, foil(STUCK), STUCK)
+    cond = Gate("(b) fit edge", False, "condition (b) fit edge: contradicts", kind="condition")
+    wait = waiting("HNN", "no runs at lr 0.005 here yet")
+    v = _verdict(9, Gate("baseline", True, "baseline learned"), cond, wait, foil(STUCK), STUCK)
     assert [g.label for g in closed_learning_gates(v)] == ["pure LNN"]
-    assert training_gap([_verdict(9, cond, foil(STUCK))], pd.DataFrame(), "paper-core").empty
+    alone = [_verdict(9, cond, wait, foil(STUCK))]
+    assert training_gap(alone, pd.DataFrame(), "paper-core").empty
 
 
 def test_a_claim_the_longer_profile_trains_longer_is_costed():

@@ -79,7 +79,7 @@ from ._discrimination import (
     trivial_log,
 )
 from ._figure import new_figure, save_figure, subplots
-from ._gates import Gate, apply_gates, condition, foil, gated, learned, similar_fit
+from ._gates import Gate, apply_gates, condition, foil, gated, learned, similar_fit, waiting
 from ._headlines import fig_headlines, headline_rows, write_headlines
 from ._holm import holm, margin_ranges
 from ._models import MODEL_LABELS, TRIVIAL_MODELS, in_form, row_options
@@ -186,6 +186,7 @@ __all__ = [
     "learned_at_each_k",
     "learned_cell",
     "similar_fit",
+    "waiting",
     # per-seed values
     "BOUNDED_SLOPE",
     "LINEAR_SLOPE",

@@ -14,7 +14,16 @@ import pandas as pd
 from . import policy
 from ._stats import Part
 
-__all__ = ["Gate", "apply_gates", "condition", "foil", "gated", "learned", "similar_fit"]
+__all__ = [
+    "Gate",
+    "apply_gates",
+    "condition",
+    "foil",
+    "gated",
+    "learned",
+    "similar_fit",
+    "waiting",
+]
 
 
 @dataclass(frozen=True)
@@ -22,19 +31,32 @@ class Gate:
     """A precondition of a comparison: ``open`` True (met), False (not met: the part it gates
     reads *not tested*) or None (unknown: no trivial-predictor runs; the part is judged,
     flagged). ``text`` says what was measured against what. ``binding`` False: a foil's
-    status (:func:`foil`), shown beside the gates and never closing the part."""
+    status (:func:`foil`), shown beside the gates and never closing the part. ``kind``:
+    "learning" (a model beat the trivial predictor), "condition" (a stated condition of the
+    claim, :func:`condition`) or "waiting" (the runs a part compares are not stored yet,
+    :func:`waiting`)."""
 
     label: str
     open: bool | None
     text: str
     binding: bool = True
+    kind: str = "learning"
 
 
 def foil(gate: Gate) -> Gate:
     """The learning status of a claim's foil: a model whose failure is the claim's content
     (the baseline whose energy drifts, hence whose rollout drifts), shown with the part's gates
     and never closing it."""
-    return Gate(f"{gate.label} (the foil, not gated)", gate.open, gate.text, binding=False)
+    return Gate(
+        f"{gate.label} (the foil, not gated)", gate.open, gate.text, binding=False, kind=gate.kind
+    )
+
+
+def waiting(label: str, why: str) -> Gate:
+    """A closed gate on the parts that compare a model whose runs are not stored yet (a
+    further reading still running): those parts read *not tested*, the rest of the claim is
+    judged, and nothing says the model did not learn."""
+    return Gate(label, False, f"{label} waits: {why}", kind="waiting")
 
 
 def learned(label: str, model_log: pd.Series, trivial_log: pd.Series, *, squared=False) -> Gate:
@@ -70,7 +92,9 @@ def condition(part: Part) -> Gate:
     """A stated condition of other parts ("at similar loss"): open when ``part`` holds. The
     part becomes a *condition*: shown, never a finding of its own."""
     part.role = "condition"
-    return Gate(part.name, part.status == "holds", f"condition {part.name}: {part.status}")
+    return Gate(
+        part.name, part.status == "holds", f"condition {part.name}: {part.status}", kind="condition"
+    )
 
 
 def similar_fit(name: str, fit_edge, mg) -> tuple[Part, Gate]:
@@ -89,7 +113,7 @@ def similar_fit(name: str, fit_edge, mg) -> tuple[Part, Gate]:
     text = f"condition {part.name}: {part.status}" + (
         " (the favoured model fits better beyond the margin)" if shut else ""
     )
-    return part, Gate(part.name, not shut, text)
+    return part, Gate(part.name, not shut, text, kind="condition")
 
 
 def gated(part: Part, *gates: Gate) -> Part:

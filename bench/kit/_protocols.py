@@ -100,7 +100,7 @@ def learned_text(v: Verdict | None) -> str:
     """Each model's learning gate on the headline part: ``HNN yes, MLP no`` (``?`` unknown)."""
     if v is None or not v.parts:
         return "-"
-    gates = [g for g in v.parts[0].gates if not g.text.startswith("condition")]
+    gates = [g for g in v.parts[0].gates if g.kind == "learning"]
     if not gates:
         return "-"
     mark = {True: "yes", False: "no", None: "?"}
@@ -121,7 +121,7 @@ def seed_set_text(s: SeedSet) -> str:
     text = f"{v.verdict} ({where})"
     if v.verdict.startswith("inconclusive") and v.parts and v.parts[0].status == "not tested":
         gates = [g for g in v.parts[0].gates if g.open is False and g.binding]
-        stuck = [g.label for g in gates if not g.text.startswith("condition")]
+        stuck = [g.label for g in gates if g.kind == "learning"]
         if stuck:
             text += f", untested: {' and '.join(stuck)} did not learn"
         elif gates:  # "condition (b) ...: undecided" (or contradicts)

@@ -30,11 +30,11 @@ LONGER = "paper"
 def closed_learning_gates(v) -> list:
     """The binding learning gates of ``v``'s parts that are closed (a model that did not
     learn), one per model label, in the order the parts state them; a stated condition ("at
-    similar loss") is not a learning gate."""
+    similar loss") or a model whose runs are not stored yet is not a learning gate."""
     out, seen = [], set()
     for p in v.parts:
         for g in p.gates:
-            if g.binding and g.open is False and not g.text.startswith("condition"):
+            if g.binding and g.open is False and g.kind == "learning":
                 if g.label not in seen:
                     seen.add(g.label)
                     out.append(g)
