@@ -369,6 +369,7 @@ def test_without_our_hnn_at_the_code_lr_its_parts_wait_and_a_is_judged_there():
     (a,) = R.code_lr_parts(both)
     assert a.status == "contradicts" and a.n == len(SEEDS)
     assert not R.code_lr_parts(runs)
+    assert (R.verdict_lr(both), R.verdict_lr(runs)) == (R.CODE_LR, R.LR)
 
 
 def _at_code_lr(runs, values, models=("node", "node_so", "hnn_force")):

@@ -59,6 +59,7 @@ __all__ = [
     "disagreements",
     "judge",
     "scored_rows",
+    "verdict_lr",
 ]
 
 CLAIM = 16
@@ -233,6 +234,12 @@ def at_code_lr(rows: pd.DataFrame, hnn: str = HNN["model"]) -> bool:
     return bool(len(code)) and bool((code["model"] == hnn).any())
 
 
+def verdict_lr(rows: pd.DataFrame) -> float:
+    """The learning rate the verdict reads on ``rows`` (:func:`claim_16`): the code's, Fig.
+    7's, where NODE and NODE+SO ran there, else App. C's."""
+    return CODE_LR if all(at_code_lr(rows, m["model"]) for m in (NODE, NODE_SO)) else LR
+
+
 def judge(rows: pd.DataFrame, variant: str = "", hnn_waits: str = ""):
     """Claim 16 on ``rows`` of one data kind, per task present (Fig. 7's order), each part a
     *greater* part on per-seed log ratios, judged where the model it says is better learned
@@ -344,8 +351,7 @@ def claim_16(runs: pd.DataFrame, curves: pd.DataFrame | None = None):
     kind = data_kind(r) if len(r) else pd.Series(dtype=object)
     every_lr, stand = r[kind == "file"], at_lr(r[kind == "stand-in"], LR)
     files = at_lr(every_lr, LR)
-    nodes = all(at_code_lr(every_lr, m["model"]) for m in (NODE, NODE_SO))
-    if len(files) and nodes:
+    if len(files) and verdict_lr(every_lr) == CODE_LR:
         # our HNN's cells at the code's lr are a further reading: until they are stored (or
         # where a profile does not declare them) its parts wait and (a) is judged alone
         waits = "" if at_code_lr(every_lr) else f"no runs at lr {CODE_LR:g} here yet"
