@@ -417,6 +417,23 @@ def test_the_verdict_is_judged_at_fig_7_s_lr_once_every_model_ran_there():
     }
 
 
+def test_the_figure_shows_the_verdicts_learning_rate_with_both_hnns():
+    """Fig. 7's figure at the rate the verdict reads: at the code's once NODE and NODE+SO ran
+    there, the paper's HNN beside them (ours not yet there), constant velocity from App. C's
+    rows; App. C's rows otherwise."""
+    from bench.studies.paper.mujoco._section import figure_rows
+
+    runs = _tables()
+    data, kind, lr = figure_rows(runs)
+    assert (kind, lr) == ("file", R.LR) and set(data["lr"]) == {R.LR}
+    paper = _at_code_lr(runs, CONTRADICT, models=("node", "node_so", R.PAPER_HNN))
+    data, kind, lr = figure_rows(paper)
+    assert (kind, lr) == ("file", R.CODE_LR)
+    by_model = dict(zip(data["model"], data["lr"], strict=False))
+    assert set(by_model) == {"node", "node_so", R.PAPER_HNN, "constant_velocity"}
+    assert {by_model[m] for m in ("node", "node_so", R.PAPER_HNN)} == {R.CODE_LR}
+
+
 def _under_paper_rule(runs, values):
     """``runs`` with the paper's three models at the code's lr under the reference's update
     rule, ``values``' test and train MSE (the paper's HNN takes ``hnn_force``'s)."""

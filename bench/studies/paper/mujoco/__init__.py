@@ -35,7 +35,7 @@ from ._rule import (
     claim_16,
     claim_16_readings,
 )
-from ._section import TITLE, rows_of, section, shown, summary
+from ._section import TITLE, figure_rows, rows_of, section, summary
 
 __all__ = [
     "CELLS",
@@ -235,15 +235,16 @@ def figure(results_dir) -> list[Path]:
     constant-velocity predictor's geometric mean as a dashed line; log scale; bars the mean
     over seeds, error bars the standard error over seeds (std with ddof 1 over sqrt n; the
     paper's caption says standard error, its plotting code draws the standard deviation). The
-    task files' runs where there are any, else the stand-in's, so titled."""
+    task files' runs where there are any, else the stand-in's, so titled; at the learning rate
+    the verdict reads, with the paper's HNN beside ours where it ran (:func:`figure_rows`)."""
     from matplotlib.ticker import NullFormatter
 
     rows, _ = rows_of(results_dir)
-    data, kind = shown(rows)
+    data, kind, lr = figure_rows(rows)
     if not len(data):
         return []
     tasks = [t for t in TASKS if (data["system"] == t).any()]
-    trained = [m for m in MODELS[:3] if (data["model"] == m).any()]
+    trained = [m for m in (*MODELS[:3], PAPER_HNN) if (data["model"] == m).any()]
     trivial = data[data["model"] == "constant_velocity"]
     fig, axes = subplots(1, 2, figsize=(4.0 + 1.6 * len(tasks), 3.4))
     for ax, metric, ylabel in (
@@ -261,7 +262,9 @@ def figure(results_dir) -> list[Path]:
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
     fig.subplots_adjust(wspace=0.45, bottom=0.22)
     what = "task files" if kind == "file" else "RANDOM-CONTROL STAND-IN (pipeline check)"
-    fig.suptitle(f"MuJoCo transitions (Fig. 7): {what}; mean ± s.e. over seeds", fontsize=9)
+    fig.suptitle(
+        f"MuJoCo transitions (Fig. 7): {what}, lr {lr:g}; mean ± s.e. over seeds", fontsize=9
+    )
     return save_figure(fig, Path(results_dir) / "figures", STEM)
 
 

@@ -32,7 +32,7 @@ from ._rule import (
     verdict_lr,
 )
 
-__all__ = ["DIFFERENCES", "TITLE", "rows_of", "section", "shown", "summary"]
+__all__ = ["DIFFERENCES", "TITLE", "figure_rows", "rows_of", "section", "shown", "summary"]
 
 TITLE = "MuJoCo transitions under controls (claim 16)"
 
@@ -79,6 +79,20 @@ def shown(rows: pd.DataFrame) -> tuple[pd.DataFrame, str]:
         return rows, "file"
     kind = data_kind(rows)
     return (rows[kind == "file"], "file") if (kind == "file").any() else (rows, "stand-in")
+
+
+def figure_rows(rows: pd.DataFrame) -> tuple[pd.DataFrame, str, float]:
+    """The rows Fig. 7's figure shows, their data and learning rate: at the rate the verdict
+    reads (:func:`verdict_lr`), every model trained there (our HNN and the paper's where they
+    ran) with the constant-velocity predictor (it does not train); else :func:`shown`'s."""
+    data, kind = shown(rows)
+    files = rows[data_kind(rows) == "file"] if len(rows) and kind == "file" else rows.iloc[0:0]
+    if not len(files) or verdict_lr(files) != CODE_LR:
+        return data, kind, LR
+    code = at_lr(files, CODE_LR)
+    code = code[code["model"].isin([*MODELS[:3], PAPER_HNN])]
+    trivial = data[data["model"] == TRIVIAL["model"]]
+    return pd.concat([code, trivial], ignore_index=True), kind, CODE_LR
 
 
 def summary(rows: pd.DataFrame, metric: str) -> pd.DataFrame:
