@@ -183,6 +183,13 @@ def test_estimate_of_a_campaign_prints_its_three_phases(capsys, tmp_path):
     assert titles[0].endswith("signed verdicts (none): no runs")
     assert all(str(s) in titles[2] for s in seeds) and "replication" not in titles[1]
     assert sum(x.split()[:1] == ["total"] for x in lines) == 2
+    # then the further readings that wait, each named where its experiment names it
+    head = lines.index(
+        "further readings still waiting (each joins its claim once stored on a seed set):"
+    )
+    waiting = {x.split(":")[0].strip(): x for x in lines[head + 1 :]}
+    assert "the paper's HNN: 0 of 15 on seeds 0-4" in waiting["claim 16"]
+    assert "claim 5" in waiting and "seeds 5-9" not in waiting["claim 5"]  # none of it stored
 
 
 def test_bench_papers_selects_the_declared_experiments():

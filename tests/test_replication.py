@@ -541,7 +541,7 @@ def test_each_named_further_reading_joins_on_its_own():
     paper's HNN, stored on both seed sets, joins while our HNN at the code's lr, stored on no
     seed, waits; the report names which reading waits for which runs."""
     from bench.core import get, reading_of
-    from bench.studies.paper.report._comparison import supplements_waiting
+    from bench.kit import supplements_waiting
 
     study, exp = get_study(16), get("mujoco")
     seeds = (*PRIMARY, *REPLICATION_SEEDS["paper"])

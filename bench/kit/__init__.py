@@ -64,6 +64,7 @@ from ._claims import (
     restrict,
     restrict_all,
     runs_at,
+    supplements_waiting,
 )
 from ._discrimination import (
     TRIVIAL_FACTOR,
@@ -244,6 +245,7 @@ __all__ = [
     "restrict_all",
     "further_cells",
     "incomplete_supplements",
+    "supplements_waiting",
     "runs_at",
     "CHANGES_WITHOUT_A_SEED",
     "DOES_NOT_REPLICATE",

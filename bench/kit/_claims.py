@@ -12,7 +12,7 @@ from collections.abc import Iterable, Mapping
 import pandas as pd
 
 from ..core import expand, experiment_rows, labelled, reading_of, studies
-from ._seeds import seed_sets
+from ._seeds import seed_sets, seed_span
 from ._verdict import INCONCLUSIVE, Verdict
 
 __all__ = [
@@ -21,6 +21,7 @@ __all__ = [
     "evaluate_claims",
     "further_cells",
     "incomplete_supplements",
+    "supplements_waiting",
     "restrict",
     "restrict_all",
     "runs_at",
@@ -165,3 +166,26 @@ def evaluate_claims(
             ]
         out += [dataclasses.replace(v, profile=profile) for v in got]
     return out
+
+
+def supplements_waiting(runs: pd.DataFrame, profile: str) -> dict[int, str]:
+    """``{claim: "its further reading waits for runs: n of m on seeds 0-4, ..."}`` for each
+    claim whose further reading (``Experiment.supplementary``) is not stored whole on a seed set
+    of ``profile`` (it joins the verdict there only then): its own seeds, and the replication
+    seeds where some of it is stored."""
+    judged = {s.claim for s in claim_studies()}
+    experiments: dict[int, list] = {}
+    for study in studies():  # a claim's experiments may be declared by several studies
+        if study.claim in judged:
+            experiments.setdefault(study.claim, []).extend(study.experiments)
+    done = set(runs["config_hash"]) if len(runs) and "config_hash" in runs else set()
+    parts: dict[int, list[str]] = {}
+    for i, seeds in enumerate(s for s in seed_sets(profile) if s):
+        for claim, exps in sorted(experiments.items()):
+            for name, want in further_cells(exps, profile, seeds).items():
+                n, m = len(want & done), len(want)
+                if n < m and (n or not i):
+                    said = f"{name}: " if name else ""
+                    where = f"{said}{n} of {m} on seeds {seed_span(seeds)}"
+                    parts.setdefault(claim, []).append(where)
+    return {c: "its further reading waits for runs: " + ", ".join(p) for c, p in parts.items()}

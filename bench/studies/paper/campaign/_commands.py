@@ -4,6 +4,8 @@ register their own verbs, in their folders."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from ....core import (
     PROFILES,
     Command,
@@ -73,7 +75,25 @@ def _estimate(args) -> int:
     if saved:
         print("\ntrainings saved mid-way (the next start resumes them):")
         print("\n".join(f"  {line}" for line in saved))
+    _waiting(args)
     return 0
+
+
+def _waiting(args) -> None:
+    """The further readings not yet stored whole on a seed set (each joins its claim's verdict
+    there only then), by name where the experiment names them."""
+    import pandas as pd
+
+    from ....kit import supplements_waiting
+    from ._campaign import _stored_rows
+
+    if not Path(args.results).exists():
+        return
+    rows = pd.DataFrame({"config_hash": [r["config_hash"] for r in _stored_rows(args.results)]})
+    waiting = supplements_waiting(rows, args.profile)
+    if waiting:
+        print("\nfurther readings still waiting (each joins its claim once stored on a seed set):")
+        print("\n".join(f"  claim {c}: {said}" for c, said in sorted(waiting.items())))
 
 
 def _estimate_in_order(args, order: tuple, seeds) -> int:

@@ -9,16 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from ....core import SELECTIONS, load_tables
-from ....kit import (
-    claim_studies,
-    folder_label,
-    further_cells,
-    judge,
-    md_escape,
-    seed_sets,
-    seed_span,
-    stored_counts,
-)
+from ....kit import folder_label, judge, md_escape, stored_counts, supplements_waiting
 
 __all__ = [
     "Cause",
@@ -278,31 +269,6 @@ def pending(d: Path, runs: pd.DataFrame, profile: str | None, verdicts) -> list:
             v = dataclasses.replace(v, detail=f"{v.detail}; {waiting[v.claim]}")
         out.append(v)
     return out
-
-
-def supplements_waiting(runs: pd.DataFrame, profile: str) -> dict[int, str]:
-    """``{claim: "its further reading waits for runs: n of m on seeds 0-4, ..."}`` for each
-    claim whose further reading (``Experiment.supplementary``) is not stored whole on a seed set
-    of ``profile`` (it joins the verdict there only then): its own seeds, and the replication
-    seeds where some of it is stored."""
-    from ....core import studies
-
-    judged = {s.claim for s in claim_studies()}
-    experiments: dict[int, list] = {}
-    for study in studies():  # a claim's experiments may be declared by several studies
-        if study.claim in judged:
-            experiments.setdefault(study.claim, []).extend(study.experiments)
-    done = set(runs["config_hash"]) if len(runs) and "config_hash" in runs else set()
-    parts: dict[int, list[str]] = {}
-    for i, seeds in enumerate(s for s in seed_sets(profile) if s):
-        for claim, exps in sorted(experiments.items()):
-            for name, want in further_cells(exps, profile, seeds).items():
-                n, m = len(want & done), len(want)
-                if n < m and (n or not i):
-                    said = f"{name}: " if name else ""
-                    where = f"{said}{n} of {m} on seeds {seed_span(seeds)}"
-                    parts.setdefault(claim, []).append(where)
-    return {c: "its further reading waits for runs: " + ", ".join(p) for c, p in parts.items()}
 
 
 def load_other(d: Path):
