@@ -435,3 +435,15 @@ def test_figures_are_drawn_without_pyplot():
         )
     ]
     assert not offenders, offenders
+
+
+def test_every_built_in_model_has_a_colour():
+    """A model drawn without one takes matplotlib's next colour, which another model of the
+    same figure may have (the paper's MuJoCo HNN was drawn in NODE's blue)."""
+    import models
+    from bench.kit import TRIVIAL_MODELS
+    from bench.kit._plot import COLORS
+    from models import _registry
+
+    built = [n for n in models.available() if n not in _registry._MODULES]
+    assert [n for n in built if n not in TRIVIAL_MODELS and n not in COLORS] == []

@@ -33,11 +33,13 @@ COLORS = {
     "node_so_pq": "#98df8a",  # NODE+SO as the Deconstructing paper's code builds it
     "hnn": "#d62728",
     "hnn_force": "#d62728",  # the HNN of the MuJoCo tasks (Fig. 7)
+    "hnn_force_paper": "#ff9896",  # that HNN as the Deconstructing paper's code builds it
     "hnn_so": "#ff7f0e",
     "hnn_so_diss": "#9467bd",
     "node_symreg": "#17becf",
     "lnn": "#8c564b",
     "vin": "#e377c2",
+    "vin_implicit": "#f7b6d2",
     "resnet": "#7f7f7f",
     "mixture_hnn": "#bcbd22",
     "node_so_symreg": "#17becf",
