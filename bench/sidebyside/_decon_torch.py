@@ -38,7 +38,7 @@ import numpy as np
 CLASSES = {"node_so": "MechanicsNN", "hnn": "NonseparableHNN", "hnn_so": "HNN"}
 
 
-def _shims() -> None:
+def shims() -> None:
     import torch
 
     for name in ("Iterable", "Mapping", "MutableMapping", "Sequence", "Callable"):
@@ -72,7 +72,7 @@ def _shims() -> None:
 
 
 def load_paper(root: Path) -> types.SimpleNamespace:
-    _shims()
+    shims()
     sys.path.insert(0, str(root))
     import src.models as models
     from oil.utils.utils import cosLr

@@ -26,19 +26,21 @@ class SeedCodeError(ValueError):
     """--seed-code does not point at a usable checkout of the seed's code."""
 
 
-def check_checkout(path, repo: str, expected, whose: str = "the seed's") -> Path:
+def check_checkout(
+    path, repo: str, expected, whose: str = "the seed's", option: str = "--seed-code"
+) -> Path:
     """``path`` as a Path when it holds every file of ``expected`` (a checkout of ``repo``);
-    else SeedCodeError with a one-line message naming what is missing."""
+    else SeedCodeError with a one-line message naming the ``option`` and what is missing."""
     root = Path(path).expanduser()
     if not root.is_dir():
         raise SeedCodeError(
-            f"--seed-code {path}: not a directory; clone {whose} code first: "
+            f"{option} {path}: not a directory; clone {whose} code first: "
             f"git clone https://github.com/{repo}"
         )
     missing = [f for f in expected if not (root / f).is_file()]
     if missing:
         raise SeedCodeError(
-            f"--seed-code {path}: not a checkout of {repo} (missing {', '.join(missing)})"
+            f"{option} {path}: not a checkout of {repo} (missing {', '.join(missing)})"
         )
     return root
 
