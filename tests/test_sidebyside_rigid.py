@@ -95,3 +95,11 @@ def test_stored_ratio_scores_failed_runs_as_error_one(tmp_path, monkeypatch):
     assert ratio == pytest.approx(np.exp(np.mean(np.log([4.0, 2.0, 0.4]))))
     assert R.learns(ratio).endswith("(does not learn)") and R.learns(2.0).endswith("(learns)")
     assert np.isnan(R.stored_ratio(tmp_path, "gyroscope", "node", 0.005)[0])
+
+
+def test_a_failed_prediction_scores_error_one():
+    true = np.zeros((2, 5, 4)) + 0.5
+    cv = {"error": 0.3, "paper_gerr": 0.2}
+    row = R.checkpoint("paper", 7, np.full_like(true, np.nan), true, (), cv)
+    assert row["step"] == 7 and row["error"] == 1.0 and row["paper_gerr"] == 1.0
+    assert row["cv_ratio"] == pytest.approx(0.3)

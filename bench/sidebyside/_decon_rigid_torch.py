@@ -145,27 +145,35 @@ def main(argv=None) -> int:
 
     g = torch.Generator().manual_seed(seed)
     losses, checkpoints, preds, seconds, s = [], [0], [predict()], 0.0, 0
-    while s < steps:
+    diverged = 0  # the step whose update failed or made the loss non-finite; 0: none
+    while s < steps and not diverged:
         perm = torch.randperm(n_train, generator=g)
         for b in range(per_epoch):
             idx = perm[b * batch : (b + 1) * batch]
             t1 = time.perf_counter()
-            loss = trainer.step(((z_train[idx, 0], ts_train[idx]), z_train[idx]))
+            try:  # the paper's HNN raises "NaNs in dH" where its Hamiltonian's gradient fails
+                loss = float(trainer.step(((z_train[idx, 0], ts_train[idx]), z_train[idx])))
+            except RuntimeError as e:
+                print(f"paper step {s + 1}: {e}", flush=True)
+                loss = float("nan")
             for sched in trainer.lr_schedulers:
                 sched.step(s / per_epoch)
             seconds += time.perf_counter() - t1
-            losses.append(float(loss.detach()))
+            losses.append(loss)
             s += 1
-            if s % log_every == 0 or s == steps:
+            if not np.isfinite(loss):
+                diverged = s
+            if s % log_every == 0 or s == steps or diverged:
                 checkpoints.append(s)
-                preds.append(predict())
+                preds.append(np.full_like(preds[0], np.nan) if diverged else predict())
                 print(f"paper step {s}: loss {np.mean(losses[-log_every:]):.4g}", flush=True)
-            if s == steps:
+            if s == steps or diverged:
                 break
     out.update(
         losses=np.asarray(losses, float),
         checkpoints=np.asarray(checkpoints, int),
         preds=np.stack(preds),
+        diverged=diverged,
         train_seconds=seconds,
     )
     np.savez(out_path, **out)

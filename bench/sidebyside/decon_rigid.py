@@ -23,7 +23,8 @@ seed ``--seed``), checks with one-line verdicts:
   10 time units, one chunk of 5 per trajectory, angles read off the frames and unwrapped), its
   model and trainer for ``--steps`` steps; every ``--log-every`` steps its held-out rollout
   error against constant velocity's on the same windows, in the suite's metric (angles wrapped,
-  from t = 1) and in the paper's (angles as stored, t = 0 included);
+  from t = 1) and in the paper's (angles as stored, t = 0 included); a step that fails (its HNN
+  raises on a non-finite dH/dz) or makes the loss non-finite ends the curve, scored as error 1;
 - (2) our model and step (the cell's) trained on the paper's arrays and batches of the same size,
   scored alike;
 - (3) our stored runs of the cell (``--results``): the geometric mean over seeds of constant
@@ -134,6 +135,13 @@ def run_paper(python, root, meshes, inp, out, log) -> dict:
     return dict(np.load(out))
 
 
+def checkpoint(curve: str, step, pred, true, angular, cv: dict) -> dict:
+    """One row of ``curves.csv``: both metrics and constant velocity's error over the model's
+    (a failed prediction scores error 1)."""
+    s = scores(pred, true, angular)
+    return {"curve": curve, "step": int(step), **s, "cv_ratio": cv["error"] / s["error"]}
+
+
 def learns(ratio: float) -> str:
     return f"{ratio:.3g}x {'(learns)' if ratio >= LEARN else '(does not learn)'}"
 
@@ -198,44 +206,37 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
     z_test = paper["z_test"].reshape(*paper["z_test"].shape[:2], -1)
     ts_train, ts_test = paper["ts_train"], paper["ts_test"]
     cv = scores(constant_velocity(z_test, ts_test), z_test, angular)
-    curves = []
-    for step, pred in zip(paper["checkpoints"], paper["preds"], strict=True):
-        s = scores(pred.reshape(z_test.shape), z_test, angular)
-        curves.append(
-            {"curve": "paper", "step": int(step), **s, "cv_ratio": cv["error"] / s["error"]}
-        )
+    curves = [
+        checkpoint("paper", step, pred.reshape(z_test.shape), z_test, angular, cv)
+        for step, pred in zip(paper["checkpoints"], paper["preds"], strict=True)
+    ]
     dataset = SimpleNamespace(
         z_train=z_train, ts_train=ts_train - ts_train[0], args_train=np.zeros((len(z_train), 0))
     )
     ours = Ours(suite_model, tcfg, prepare(suite_model, dataset, tcfg))
     batches = Batches(len(z_train), tcfg.batch, tcfg.seed).take(max(steps, 1))
     done = 0
-    for step in paper["checkpoints"]:
+    for step in sorted({0, steps, *range(a.log_every, steps + 1, a.log_every)}):
         if step > done:
             ours.train(batches[done:step])
-            done = int(step)
-        s = scores(ours.predict(z_test[:, 0], ts_test - ts_test[0]), z_test, angular)
-        curves.append(
-            {"curve": "ours", "step": int(step), **s, "cv_ratio": cv["error"] / s["error"]}
-        )
+            done = step
+        pred = ours.predict(z_test[:, 0], ts_test - ts_test[0])
+        curves.append(checkpoint("ours", step, pred, z_test, angular, cv))
     write_table(out / "curves.csv", curves)
-    final = {c["curve"]: c for c in curves if c["step"] == steps}
+    final = {c["curve"]: c for c in curves}  # the last checkpoint of each curve
+    diverged = {"paper": int(paper["diverged"]), "ours": 0}
     stored, n_seeds = stored_ratio(Path(a.results), a.system, name, tcfg.lr)
     for key, text in (
         ("paper", "the paper's code on its own data"),
         ("ours", "our model and step on the paper's data"),
     ):
-        rows.append(
-            {
-                "check": "1" if key == "paper" else "2",
-                "quantity": text,
-                "value": final[key]["cv_ratio"],
-            }
-        )
+        f = final[key]
+        rows.append({"check": "12"[key == "ours"], "quantity": text, "value": f["cv_ratio"]})
+        when = f"diverged at step {f['step']}" if diverged[key] else f"step {f['step']}"
         lines.append(
-            f"({rows[-1]['check']}) {text}, step {steps}: rollout error {final[key]['error']:.4g} "
-            f"(constant velocity {cv['error']:.4g}; paper's metric {final[key]['paper_gerr']:.4g} "
-            f"against {cv['paper_gerr']:.4g}): {learns(final[key]['cv_ratio'])}"
+            f"({rows[-1]['check']}) {text}, {when}: rollout error {f['error']:.4g} "
+            f"(constant velocity {cv['error']:.4g}; paper's metric {f['paper_gerr']:.4g} "
+            f"against {cv['paper_gerr']:.4g}): {learns(f['cv_ratio'])}"
         )
     rows.append({"check": "3", "quantity": f"our stored runs ({n_seeds} seeds)", "value": stored})
     lines.append(f"(3) our stored runs on our data ({n_seeds} seeds): {learns(stored)}")
