@@ -64,13 +64,19 @@ def load(root: Path, meshes: Path) -> types.SimpleNamespace:
     )
 
 
-def body_points(paper, system: str, z0: np.ndarray, ts: np.ndarray) -> np.ndarray:
+def make_body(paper, system: str, mass_arg: float | None):
+    """The paper's system: its class's defaults, or with ``mass_arg`` passed first, as
+    ``toy_systems.py`` passes its ``num_bodies`` (the mass of these three classes)."""
+    cls = getattr(paper.systems, SYSTEMS[system])
+    return cls() if mass_arg is None else cls(mass_arg)
+
+
+def body_points(paper, body, z0: np.ndarray, ts: np.ndarray) -> np.ndarray:
     """The paper's ground truth from Cartesian starts z0 (N, 2, n, 3), its body points and their
     velocities: the constrained Cartesian body points (N, T, 2, n, 3) of ``integrate`` (dopri5,
     rtol 1e-7), in float32 as it made its data (its potentials cast the mass matrix to float32)."""
     import torch
 
-    body = getattr(paper.systems, SYSTEMS[system])()
     x0 = torch.tensor(z0, dtype=torch.float32)
     return body.integrate(x0, torch.tensor(ts, dtype=torch.float32)).double().numpy()
 
@@ -92,15 +98,17 @@ def main(argv=None) -> int:
     seed, width, lr = int(inp["seed"]), int(inp["width"]), float(inp["lr"])
     n_systems, tau, chunk = int(inp["n_systems"]), float(inp["tau"]), int(inp["chunk"])
     batch, steps, log_every = int(inp["batch"]), int(inp["steps"]), int(inp["log_every"])
+    mass_arg = float(inp["mass_arg"]) if "mass_arg" in inp.files and inp["mass_arg"] else None
     out: dict = {}
 
     # (0) the ground truth from the suite's starts
     if inp["check_z0"].size:
-        out["check_points"] = body_points(paper, system, inp["check_z0"], inp["check_ts"])
+        body = make_body(paper, system, mass_arg)
+        out["check_points"] = body_points(paper, body, inp["check_z0"], inp["check_ts"])
 
     # (1) the paper's data, as make_trainer makes it (train: one chunk of C per trajectory;
     # test: one chunk of 100 of a fifth as many trajectories, mode "val", the same seed)
-    body = getattr(paper.systems, SYSTEMS[system])()
+    body = make_body(paper, system, mass_arg)
     body.integration_time = tau
     root = tempfile.mkdtemp(prefix="decon_rigid_")
     t0 = time.perf_counter()

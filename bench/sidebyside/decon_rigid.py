@@ -30,6 +30,12 @@ seed ``--seed``), checks with one-line verdicts:
 - (3) our stored runs of the cell (``--results``): the geometric mean over seeds of constant
   velocity's rollout error over the model's.
 
+With ``--toy-defaults`` both sides take the paper's command-line defaults instead of the widths
+its text reports: ``toy_systems.py`` without options builds width-128 networks and calls the
+system's class with its ``num_bodies`` (2) as the first argument, which these three classes
+read as the mass (the magnet pendulum's 3 becomes 2; the free rotor and the gyroscope move
+alike at any mass). Our stored runs stay at the cell's width.
+
 A model *learns* where it beats constant velocity by the claim's learning margin (2x). The
 verdict: the paper's code and ours read alike (both learn, or neither does) or they differ.
 Writes ``checks.csv``, ``curves.csv`` and ``verdicts.txt`` under ``--out``/system/model;
@@ -39,6 +45,7 @@ docs/sidebyside.md has the measured numbers.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import subprocess
 import sys
@@ -55,6 +62,7 @@ MESHES = ("rotor.obj", "gyro.obj")
 LEARN = 2.0  # the claim's learning margin over the best trivial predictor
 TOL_TRUTH = 1e-4  # (0) max |x_paper - x_ours| / max |x| over the windows (paper: float32)
 PAPER_DATA = {"n_systems": 1000, "tau": 10.0, "chunk": 5}  # toy_systems.py's defaults
+TOY_DEFAULTS = {"width": 128, "mass_arg": 2.0}  # its hidden_size and num_bodies without options
 TORCH_SCRIPT = Path(__file__).with_name("_decon_rigid_torch.py")
 
 
@@ -156,6 +164,9 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
     from ._decon_ours import Ours
 
     config = run_config(a.system, name, a.seed)
+    cell_width = config.width
+    if a.toy_defaults:
+        config = dataclasses.replace(config, width=TOY_DEFAULTS["width"])
     system, data, _, suite_model = build_run(config, cache_root())
     tcfg = train_config(config)
     angular = tuple(system.angular)
@@ -179,9 +190,15 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
         log_every=a.log_every,
         check_z0=cartesian_starts(system, z_check[:, 0]) if a.n_check else np.zeros(0),
         check_ts=ts_check,
+        mass_arg=TOY_DEFAULTS["mass_arg"] if a.toy_defaults else 0.0,
         **PAPER_DATA,
     )
-    print(f"{name} on {a.system} ({config.config_hash}): {steps} steps, lr {tcfg.lr:g}", flush=True)
+    toy = ", toy_systems.py's defaults" if a.toy_defaults else ""
+    print(
+        f"{name} on {a.system} ({config.config_hash}): {steps} steps, lr {tcfg.lr:g}, width "
+        f"{config.width}{toy}",
+        flush=True,
+    )
     paper = run_paper(
         a.torch_python, root, meshes, inp, out / "paper_out.npz", out / "paper_log.txt"
     )
@@ -239,7 +256,9 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
             f"against {cv['paper_gerr']:.4g}): {learns(f['cv_ratio'])}"
         )
     rows.append({"check": "3", "quantity": f"our stored runs ({n_seeds} seeds)", "value": stored})
-    lines.append(f"(3) our stored runs on our data ({n_seeds} seeds): {learns(stored)}")
+    lines.append(
+        f"(3) our stored runs on our data ({n_seeds} seeds, width {cell_width}): {learns(stored)}"
+    )
     alike = {r >= LEARN for r in (final["paper"]["cv_ratio"], final["ours"]["cv_ratio"], stored)}
     lines.append(
         f"verdict: {'agree' if len(alike) == 1 else 'DIFFER'}: the paper's code and ours "
@@ -269,6 +288,11 @@ def parse(argv):
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--n-check", type=int, default=20, help="windows for the ground-truth check")
     p.add_argument("--results", default="results/reference/paper", help="our stored runs")
+    p.add_argument(
+        "--toy-defaults",
+        action="store_true",
+        help="toy_systems.py's defaults without options: width 128, num_bodies 2 as the mass",
+    )
     p.add_argument("--torch-python", default=os.environ.get("DECON_TORCH_PYTHON", "python3"))
     p.add_argument("--out", default="results/own/sidebyside/decon_rigid")
     return p.parse_args(argv)
@@ -321,7 +345,8 @@ def main(argv=None) -> int:
 
     setup_process(n=1)
     for name in a.models:
-        print("\n".join(side_by_side(name, a, root, meshes, Path(a.out) / a.system / name)))
+        folder = Path(a.out) / a.system / (name + ("_toy_defaults" if a.toy_defaults else ""))
+        print("\n".join(side_by_side(name, a, root, meshes, folder)))
     print(f"wrote {a.out}/{a.system}/<model>/checks.csv, curves.csv, verdicts.txt")
     return 0
 
