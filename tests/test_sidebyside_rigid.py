@@ -103,3 +103,10 @@ def test_a_failed_prediction_scores_error_one():
     row = R.checkpoint("paper", 7, np.full_like(true, np.nan), true, (), cv)
     assert row["step"] == 7 and row["error"] == 1.0 and row["paper_gerr"] == 1.0
     assert row["cv_ratio"] == pytest.approx(0.3)
+
+
+def test_the_verdict_reads_the_papers_code_against_our_stored_runs():
+    assert R.verdict("node", "rotor", 0.7, 0.8).startswith("verdict: agree: node does not learn")
+    assert R.verdict("node", "gyroscope", 3.0, 2.5).startswith("verdict: agree: node learns")
+    assert "the paper's code learns it, ours does not" in R.verdict("hnn_so", "rotor", 3.0, 0.4)
+    assert "ours learns it" in R.verdict("hnn_so", "rotor", 0.4, 3.0)
