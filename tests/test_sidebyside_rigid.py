@@ -110,3 +110,12 @@ def test_the_verdict_reads_the_papers_code_against_our_stored_runs():
     assert R.verdict("node", "gyroscope", 3.0, 2.5).startswith("verdict: agree: node learns")
     assert "the paper's code learns it, ours does not" in R.verdict("hnn_so", "rotor", 3.0, 0.4)
     assert "ours learns it" in R.verdict("hnn_so", "rotor", 0.4, 3.0)
+
+
+def test_rates_read_the_velocity_half():
+    z = np.zeros((10, 20, 4))  # 400 rates
+    z[..., 2:] = -1.0
+    z[1, 2, 3] = -40.0  # one fast window
+    z[..., :2] = 1e3  # positions are not rates
+    p99, top = R.rates(z)
+    assert top == 40.0 and p99 == pytest.approx(1.0)

@@ -27,6 +27,8 @@ seed ``--seed``), checks with one-line verdicts:
   raises on a non-finite dH/dz) or makes the loss non-finite ends the curve, scored as error 1;
 - (2) our model and step (the cell's) trained on the paper's arrays and batches of the same size,
   scored alike;
+- (d) the training windows' rates, the paper's and ours: where Euler angles pass near their
+  pole, a few windows' rates dominate an L2 loss;
 - (3) our stored runs of the cell (``--results``): the geometric mean over seeds of constant
   velocity's rollout error over the model's.
 
@@ -145,6 +147,14 @@ def run_paper(python, root, meshes, inp, out, log) -> dict:
     return dict(np.load(out))
 
 
+def rates(z: np.ndarray) -> tuple[float, float]:
+    """The 99th percentile and the largest |qdot| of windows z (N, C, 2d): the Euler-angle
+    systems' rates grow as 1/sin(beta) near the pole, and a few such windows dominate an L2
+    loss."""
+    v = np.abs(z[..., z.shape[-1] // 2 :])
+    return float(np.percentile(v, 99)), float(v.max())
+
+
 def checkpoint(curve: str, step, pred, true, angular, cv: dict) -> dict:
     """One row of ``curves.csv``: both metrics and constant velocity's error over the model's
     (a failed prediction scores error 1)."""
@@ -236,6 +246,13 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
     z_test = paper["z_test"].reshape(*paper["z_test"].shape[:2], -1)
     ts_train, ts_test = paper["ts_train"], paper["ts_test"]
     cv = scores(constant_velocity(z_test, ts_test), z_test, angular)
+    ours_rates, paper_rates = rates(np.asarray(data.z_train)), rates(z_train)
+    ratio = paper_rates[1] / ours_rates[1]
+    rows.append({"check": "d", "quantity": "largest training rate, paper / ours", "value": ratio})
+    lines.append(
+        f"(d) the training windows' |qdot|: the paper's 99th percentile {paper_rates[0]:.3g}, "
+        f"largest {paper_rates[1]:.3g}; ours {ours_rates[0]:.3g}, {ours_rates[1]:.3g}"
+    )
     curves = [
         checkpoint("paper", step, pred.reshape(z_test.shape), z_test, angular, cv)
         for step, pred in zip(paper["checkpoints"], paper["preds"], strict=True)
