@@ -61,6 +61,34 @@ def write_table(path: Path, rows: list[dict], fieldnames=None) -> None:
         w.writerows(rows)
 
 
+def torch_error(python: str, modules) -> str | None:
+    """None when the interpreter ``python`` imports every module of ``modules``; else the
+    one-line error naming them (``--torch-python``: the other framework's environment)."""
+    import subprocess
+
+    try:
+        r = subprocess.run(
+            [python, "-c", "import " + ", ".join(modules)], capture_output=True, timeout=120
+        )
+        ok = r.returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        ok = False
+    return None if ok else f"--torch-python {python}: cannot import {', '.join(modules)}"
+
+
+def run_side(cmd, out, log, whose: str = "the paper's") -> dict:
+    """Run the other framework's side ``cmd`` (stdout and stderr to ``log``) and load the .npz
+    it wrote to ``out``; a failure raises RuntimeError naming the log and its last lines."""
+    import subprocess
+
+    with open(log, "w") as f:
+        proc = subprocess.run([str(c) for c in cmd], stdout=f, stderr=subprocess.STDOUT)
+    if proc.returncode != 0:
+        tail = Path(log).read_text().strip().splitlines()[-5:]
+        raise RuntimeError(f"{whose} side failed ({log}): " + " | ".join(tail))
+    return dict(np.load(out))
+
+
 def check_seed_code(path) -> Path:
     """``path`` as a Path when it holds every file of :data:`EXPECTED`; else SeedCodeError."""
     return check_checkout(path, "MilesCranmer/lagrangian_nns", EXPECTED)

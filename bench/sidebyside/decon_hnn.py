@@ -45,7 +45,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -65,7 +64,7 @@ from ._decon import (
     wrapped_difference,
 )
 from ._decon_ours import Ours, loss_and_grad, paper_metric
-from ._seed import SeedCodeError, verdict_line, write_table
+from ._seed import SeedCodeError, run_side, torch_error, verdict_line, write_table
 
 CURVES = ("paper", "mapped", "suite", "suite_mapped", "registered")
 PROFILE = "paper"
@@ -95,25 +94,6 @@ def run_config(model: str, seed: int):
     if len(cells) != 1:
         raise ValueError(f"{len(cells)} paper cells of {model} on chain_pendulum k = 2")
     return cells[0]
-
-
-def run_paper(python, root, inp, out, log) -> dict:
-    cmd = [
-        python,
-        str(TORCH_SCRIPT),
-        "--seed-code",
-        str(root),
-        "--inp",
-        str(inp),
-        "--out",
-        str(out),
-    ]
-    with open(log, "w") as f:
-        proc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, check=False)
-    if proc.returncode != 0:
-        tail = Path(log).read_text().strip().splitlines()[-5:]
-        raise RuntimeError(f"the paper's side failed ({log}): " + " | ".join(tail))
-    return dict(np.load(out))
 
 
 def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
@@ -170,7 +150,20 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
         if int(paper["losses"].shape[0]) < a.steps:
             raise ValueError(f"--reuse-paper: {out}/paper_out.npz holds fewer than {a.steps} steps")
     else:
-        paper = run_paper(a.torch_python, root, inp, out / "paper_out.npz", out / "paper_log.txt")
+        paper = run_side(
+            [
+                a.torch_python,
+                TORCH_SCRIPT,
+                "--seed-code",
+                root,
+                "--inp",
+                inp,
+                "--out",
+                out / "paper_out.npz",
+            ],
+            out / "paper_out.npz",
+            out / "paper_log.txt",
+        )
     print(f"paper's side: {time.perf_counter() - t0:.0f} s", flush=True)
     rows, lines = [], []
 
@@ -429,17 +422,9 @@ def main(argv=None) -> int:
         )
         print(f"error: {msg}", file=sys.stderr)
         return 2
-    probe = [a.torch_python, "-c", "import torch, torchdiffeq, networkx, oil"]
-    try:
-        ok = subprocess.run(probe, capture_output=True, check=False).returncode == 0
-    except OSError:
-        ok = False
-    if not ok:
-        print(
-            f"error: --torch-python {a.torch_python}: cannot import torch, torchdiffeq, "
-            "networkx and oil (olive-oil-ml)",
-            file=sys.stderr,
-        )
+    msg = torch_error(a.torch_python, ("torch", "torchdiffeq", "networkx", "oil"))
+    if msg:
+        print(f"error: {msg}", file=sys.stderr)
         return 2
 
     from bench.core import setup_process

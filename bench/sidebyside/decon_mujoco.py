@@ -47,7 +47,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -56,7 +55,7 @@ import numpy as np
 
 from . import _mujoco as M
 from ._mujoco_ours import Ours, loss_and_grad, normalised_mse, paper_optimizer
-from ._seed import SeedCodeError, verdict_line, write_table
+from ._seed import SeedCodeError, run_side, torch_error, verdict_line, write_table
 
 CURVES = ("paper", "mapped", "mapped_paper_opt", "suite")
 PROFILE = "paper-core"
@@ -95,16 +94,6 @@ def run_config(task: str, model: str, seed: int):
     if len(cells) != 1:
         raise ValueError(f"{len(cells)} {PROFILE} cells of {model} on {task} at lr {CODE_LR}")
     return cells[0]
-
-
-def run_paper(python, root, inp, out, log) -> dict:
-    cmd = [python, str(TORCH_SCRIPT), "--seed-code", str(root), "--inp", str(inp), "--out", out]
-    with open(log, "w") as f:
-        proc = subprocess.run([str(x) for x in cmd], stdout=f, stderr=subprocess.STDOUT)
-    if proc.returncode != 0:
-        tail = Path(log).read_text().strip().splitlines()[-5:]
-        raise RuntimeError(f"the paper's side failed ({log}): " + " | ".join(tail))
-    return dict(np.load(out))
 
 
 def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
@@ -155,7 +144,20 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
         if int(paper["losses"].shape[0]) != a.steps:
             raise ValueError(f"--reuse-paper: {out}/paper_out.npz holds another --steps")
     else:
-        paper = run_paper(a.torch_python, root, inp, out / "paper_out.npz", out / "paper_log.txt")
+        paper = run_side(
+            [
+                a.torch_python,
+                TORCH_SCRIPT,
+                "--seed-code",
+                root,
+                "--inp",
+                inp,
+                "--out",
+                out / "paper_out.npz",
+            ],
+            out / "paper_out.npz",
+            out / "paper_log.txt",
+        )
     print(f"paper's side: {time.perf_counter() - t0:.0f} s", flush=True)
     rows, lines = [], []
 
@@ -406,16 +408,9 @@ def main(argv=None) -> int:
     if msg:
         print(f"error: {msg}", file=sys.stderr)
         return 2
-    probe = [a.torch_python, "-c", "import torch, torchdiffeq, pandas"]
-    try:
-        ok = subprocess.run(probe, capture_output=True, check=False).returncode == 0
-    except OSError:
-        ok = False
-    if not ok:
-        print(
-            f"error: --torch-python {a.torch_python}: cannot import torch, torchdiffeq and pandas",
-            file=sys.stderr,
-        )
+    msg = torch_error(a.torch_python, ("torch", "torchdiffeq", "pandas"))
+    if msg:
+        print(f"error: {msg}", file=sys.stderr)
         return 2
 
     from bench.core import setup_process

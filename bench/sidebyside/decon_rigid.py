@@ -50,14 +50,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from ._decon import check_paper_code
-from ._seed import SeedCodeError, check_checkout, write_table
+from ._seed import SeedCodeError, check_checkout, run_side, torch_error, write_table
 
 SYSTEMS = ("rotor", "gyroscope", "magnet_pendulum")
 MODELS = ("node", "node_so", "hnn_so")
@@ -136,17 +135,6 @@ def stored_ratio(results: Path, system: str, model: str, lr: float) -> tuple[flo
     return float(np.exp(np.mean(np.log(cv[seeds].to_numpy() / err[seeds].to_numpy())))), len(seeds)
 
 
-def run_paper(python, root, meshes, inp, out, log) -> dict:
-    cmd = [python, str(TORCH_SCRIPT), "--seed-code", str(root), "--meshes", str(meshes)]
-    cmd += ["--inp", str(inp), "--out", str(out)]
-    with open(log, "w") as f:
-        proc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, check=False)
-    if proc.returncode != 0:
-        tail = Path(log).read_text().strip().splitlines()[-5:]
-        raise RuntimeError(f"the paper's side failed ({log}): " + " | ".join(tail))
-    return dict(np.load(out))
-
-
 def rates(z: np.ndarray) -> tuple[float, float]:
     """The 99th percentile and the largest |qdot| of windows z (N, C, 2d): the Euler-angle
     systems' rates grow as 1/sin(beta) near the pole, and a few such windows dominate an L2
@@ -221,8 +209,9 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
         f"{config.width}{toy}",
         flush=True,
     )
-    paper = run_paper(
-        a.torch_python, root, meshes, inp, out / "paper_out.npz", out / "paper_log.txt"
+    cmd = [a.torch_python, TORCH_SCRIPT, "--seed-code", root, "--meshes", meshes, "--inp", inp]
+    paper = run_side(
+        cmd + ["--out", out / "paper_out.npz"], out / "paper_out.npz", out / "paper_log.txt"
     )
     rows, lines = [], []
 
@@ -353,17 +342,9 @@ def main(argv=None) -> int:
     if msg:
         print(f"error: {msg}", file=sys.stderr)
         return 2
-    probe = [a.torch_python, "-c", "import torch, torchdiffeq, oil, pywavefront"]
-    try:
-        ok = subprocess.run(probe, capture_output=True, check=False).returncode == 0
-    except OSError:
-        ok = False
-    if not ok:
-        print(
-            f"error: --torch-python {a.torch_python}: cannot import torch, torchdiffeq, oil "
-            "(olive-oil-ml) and pywavefront",
-            file=sys.stderr,
-        )
+    msg = torch_error(a.torch_python, ("torch", "torchdiffeq", "oil", "pywavefront"))
+    if msg:
+        print(f"error: {msg}", file=sys.stderr)
         return 2
 
     from bench.core import setup_process

@@ -78,7 +78,7 @@ from ._hnn_ours import (
     seed_total,
 )
 from ._hnn_verdicts import curve_verdicts, init_checks, update_check
-from ._seed import write_table
+from ._seed import torch_error, write_table
 
 MODELS = ("hnn", "node")
 CURVES = ("seed", "ours", "suite")
@@ -115,14 +115,6 @@ def run_seed_side(python, root, model, seed, data, idx, held_idx, first, log_eve
 
 def prefixed(arrays: dict, prefix: str) -> dict:
     return {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith(prefix + "/")}
-
-
-def torch_available(python: str) -> bool:
-    try:
-        r = subprocess.run([python, "-c", "import torch, numpy"], capture_output=True, timeout=120)
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-    return r.returncode == 0
 
 
 def main(argv=None) -> int:
@@ -169,11 +161,9 @@ def main(argv=None) -> int:
         )
         print(f"error: {msg}", file=sys.stderr)
         return 2
-    if not torch_available(a.torch_python):
-        print(
-            f"error: --torch-python {a.torch_python}: cannot import torch and numpy",
-            file=sys.stderr,
-        )
+    msg = torch_error(a.torch_python, ("torch", "numpy"))
+    if msg:
+        print(f"error: {msg}", file=sys.stderr)
         return 2
 
     from bench.core import setup_process
