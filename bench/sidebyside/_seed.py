@@ -76,15 +76,18 @@ def torch_error(python: str, modules) -> str | None:
     return None if ok else f"--torch-python {python}: cannot import {', '.join(modules)}"
 
 
-def run_side(cmd, out, log, whose: str = "the paper's") -> dict:
-    """Run the other framework's side ``cmd`` (stdout and stderr to ``log``) and load the .npz
-    it wrote to ``out``; a failure raises RuntimeError naming the log and its last lines."""
+def run_side(python, script, folder: Path, *args, whose: str = "the paper's") -> dict:
+    """Run the other framework's side, ``python script *args --out folder/paper_out.npz``
+    (stdout and stderr to ``folder/paper_log.txt``), and load the .npz it wrote; a failure
+    raises RuntimeError naming the log and its last lines."""
     import subprocess
 
+    out, log = Path(folder) / "paper_out.npz", Path(folder) / "paper_log.txt"
+    cmd = [str(c) for c in (python, script, *args, "--out", out)]
     with open(log, "w") as f:
-        proc = subprocess.run([str(c) for c in cmd], stdout=f, stderr=subprocess.STDOUT)
+        proc = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
     if proc.returncode != 0:
-        tail = Path(log).read_text().strip().splitlines()[-5:]
+        tail = log.read_text().strip().splitlines()[-5:]
         raise RuntimeError(f"{whose} side failed ({log}): " + " | ".join(tail))
     return dict(np.load(out))
 

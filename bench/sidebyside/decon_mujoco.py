@@ -144,20 +144,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
         if int(paper["losses"].shape[0]) != a.steps:
             raise ValueError(f"--reuse-paper: {out}/paper_out.npz holds another --steps")
     else:
-        paper = run_side(
-            [
-                a.torch_python,
-                TORCH_SCRIPT,
-                "--seed-code",
-                root,
-                "--inp",
-                inp,
-                "--out",
-                out / "paper_out.npz",
-            ],
-            out / "paper_out.npz",
-            out / "paper_log.txt",
-        )
+        paper = run_side(a.torch_python, TORCH_SCRIPT, out, "--seed-code", root, "--inp", inp)
     print(f"paper's side: {time.perf_counter() - t0:.0f} s", flush=True)
     rows, lines = [], []
 

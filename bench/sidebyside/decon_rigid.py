@@ -209,10 +209,8 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
         f"{config.width}{toy}",
         flush=True,
     )
-    cmd = [a.torch_python, TORCH_SCRIPT, "--seed-code", root, "--meshes", meshes, "--inp", inp]
-    paper = run_side(
-        cmd + ["--out", out / "paper_out.npz"], out / "paper_out.npz", out / "paper_log.txt"
-    )
+    args = ("--seed-code", root, "--meshes", meshes, "--inp", inp)
+    paper = run_side(a.torch_python, TORCH_SCRIPT, out, *args)
     rows, lines = [], []
 
     # (0) the ground truth
