@@ -7,6 +7,7 @@ and where they differ. ``python -m bench.sidebyside.lnn_seed``: the LNN seed's d
 ``python -m bench.sidebyside.lnn_relativistic``: the LNN seed's relativistic particle (claim 7's
 three models); ``python -m bench.sidebyside.hnn_seed``: the HNN seed's pixel pendulum;
 ``python -m bench.sidebyside.decon_hnn``: the paper's code, NODE+SO and the HNNs on the chain;
-``python -m bench.sidebyside.decon_mujoco``: the paper's code, its MuJoCo models
+``python -m bench.sidebyside.decon_mujoco``: the paper's code, its MuJoCo models;
+``python -m bench.sidebyside.decon_rigid``: the paper's code, Fig. 9's rigid bodies end to end
 (docs/sidebyside.md).
 """
