@@ -7,10 +7,12 @@ from pathlib import Path
 
 import pytest
 
+from bench import studies as ST
 from bench.core import _experiments as E
 from bench.core import _store
 from bench.studies import paper as P
-from bench.studies.paper._common import SYMREG_WEIGHTS_CORE
+from bench.studies._claims import SYMREG_WEIGHTS_CORE
+from bench.studies.lnn_seed import relativistic as REL
 from bench.studies.paper.campaign import _campaign as C
 from bench.studies.paper.campaign._budget import run_seconds
 
@@ -66,18 +68,18 @@ def test_paper_core_covers_every_claim_with_its_further_readings_apart():
     rel = {
         (c.model, c.coordinates, c.model_options) for c in E.expand("relativistic", "paper-core")
     }
-    assert rel == set(P.RELATIVISTIC_CELLS)
+    assert rel == set(REL.RELATIVISTIC_CELLS)
     # claim 7's second reading, the LNN seed's protocol, every cell
     assert "relativistic_seed" in C.campaign_experiments("paper-core")
     seed = {
         (c.model, c.coordinates, c.model_options)
         for c in E.expand("relativistic_seed", "paper-core")
     }
-    assert seed == set(P.SEED_CELLS)
+    assert seed == set(REL.SEED_CELLS)
     coords = E.expand("coordinates", "paper-core")
     assert {c.system_params for c in coords if c.system == "spring_pendulum"} == {
-        P.SPRING_PAPER,
-        P.SPRING_EQUILIBRIUM,
+        ST.SPRING_PAPER,
+        ST.SPRING_EQUILIBRIUM,
     }
 
 
@@ -215,7 +217,7 @@ def test_the_lnn_seeds_hours_come_from_its_measured_costs(tmp_path, monkeypatch)
     """Claim 9 at paper-core: per seed, one dataset of 150,000 ten-second trajectories (shared
     by its three runs) and 30,000 steps of the LNN and of NODE+SO at the paper's size, each at
     the cost lnn_seed.MEASURED records (the rollout-trained scaling said 0.5 h, not 2.6)."""
-    from bench.studies.paper import lnn_seed
+    from bench.studies.lnn_seed import notebook as lnn_seed
     from bench.studies.paper.campaign._budget import data_seconds, total_seconds
 
     m = lnn_seed.MEASURED

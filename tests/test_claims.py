@@ -1,4 +1,5 @@
-"""Verdict rules of bench.studies.paper on synthetic run tables (no training).
+"""Verdict rules of the claims' studies (bench.studies.<paper>) on synthetic run tables (no
+training).
 
 The tables come from ``tests/_synthetic.py``: every paper experiment expanded in the smoke
 profile with five seeds (0-4, what a verdict needs), the store's own row format, errors built so
@@ -22,7 +23,7 @@ from scipy import stats
 from bench import kit as R
 from bench.core import initial_state, option, params_of
 from bench.kit import policy
-from bench.studies.paper import relativistic as REL
+from bench.studies.lnn_seed import relativistic as REL
 from bench.studies.paper.report._comparison import _disc_mark
 
 # claim number -> verdict rule, from the registry
@@ -1058,7 +1059,7 @@ def _with_paper_form(runs, seeds=None, models=("node_so",)):
     """``runs`` plus a copy of the rows of ``models`` in the paper's form (node_so as
     ``node_so_pq``, node and hnn with their paper options; on ``seeds`` only where given),
     each with its own hash."""
-    from bench.studies.paper._common import PAPER_FORM
+    from bench.studies._claims import PAPER_FORM
 
     rows = runs[runs["model"].isin(models) & (runs["seed"].isin(seeds) if seeds else True)]
     form = rows.assign(

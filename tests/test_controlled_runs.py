@@ -14,8 +14,8 @@ import pytest
 import models
 from bench.core import RunConfig, check_runnable, execute_run, expand, load_runs, sweep
 from bench.core import _controlled as C
-from bench.studies.paper import mujoco as X
-from bench.studies.paper.mujoco import _rule as R
+from bench.studies.decon import mujoco as X
+from bench.studies.decon.mujoco import _rule as R
 from systems import mujoco_data as D
 
 TASK = "HopperFull-v0"

@@ -258,7 +258,7 @@ def test_a_pending_campaign_beside_two_disagreeing_folders_names_both_causes(loa
 def test_symplectic_figure_draws_from_weight_zero_runs_only(tmp_path):
     """A campaign under way may hold only the unregularised runs of the symplectic sweep; its
     figure is drawn (it failed on the empty log axis of the weight panel before)."""
-    from bench.studies.paper.symplectic import fig_symplectic
+    from bench.studies.decon.symplectic import fig_symplectic
 
     runs, curves = synthetic_tables("smoke", seeds=(0, 1, 2, 3, 4), experiments=("symplectic",))
     from bench.core import option

@@ -11,7 +11,7 @@ from _markdown import table_rows
 
 import models
 from bench.core import build_run, train, train_config
-from bench.studies.paper.hnn_diagnosis import _diagnosis as D
+from bench.studies.decon.hnn_diagnosis import _diagnosis as D
 from models._mlp import MLP
 
 

@@ -13,7 +13,7 @@ from _markdown import table_rows
 
 from bench.core import _store, expand
 from bench.kit import policy
-from bench.studies.paper import hnn_seed as H
+from bench.studies.hnn_seed import tasks as H
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32: t half-width 0.30 at n = 5

@@ -239,26 +239,35 @@ def test_every_data_file_of_the_packages_ships_with_them():
     assert missing == []
 
 
-def test_each_paper_study_lives_in_a_folder_of_its_own():
-    """The paper's studies are folders (``bench/studies/paper/<study>/``): every registered
-    study's code is inside one, every folder there holds a study but the campaign's and the
-    report's operations, and nothing else sits loose beside them."""
+def test_each_study_of_a_claim_lives_in_its_papers_folder():
+    """The claims' studies are folders by paper (``bench/studies/<paper>/<study>/``): every
+    registered study of a claim is inside one, every folder there holds a study, and nothing sits
+    loose beside them; ``bench/studies/paper/`` holds what spans every claim, the campaign's and
+    the report's operations, and no study."""
     import inspect
 
     import bench  # noqa: F401 (registers the studies)
     from bench.core import studies
 
-    paper = ROOT / "bench" / "studies" / "paper"
+    root = ROOT / "bench" / "studies"
+    papers = ("decon", "hnn_seed", "lnn_seed", "vin_seed")
     used = set()
     for s in studies():
         code = s.rule or s.figure or s.section
         module = inspect.getmodule(code).__name__.split(".")
-        if module[:3] != ["bench", "studies", "paper"]:
+        assert module[:3] != ["bench", "studies", "paper"], f"study {s.name} in studies/paper"
+        if module[:2] != ["bench", "studies"] or module[2] not in papers:
+            assert s.claim is None, f"claim {s.claim}'s study {s.name} outside the papers' folders"
             continue
-        assert len(module) >= 4, f"study {s.name} sits loose in bench/studies/paper"
-        used.add(module[3])
-    folders = {p.name for p in paper.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
-    assert folders - used == {"campaign", "report"}
-    assert used <= folders
-    loose = {p.name for p in paper.glob("*.py")}
-    assert loose == {"__init__.py", "_common.py"}
+        assert len(module) >= 4, f"study {s.name} sits loose in bench/studies/{module[2]}"
+        used.add((module[2], module[3]))
+    folders = {
+        (paper, p.name)
+        for paper in papers
+        for p in (root / paper).iterdir()
+        if p.is_dir() and (p / "__init__.py").exists()
+    }
+    assert folders == used
+    assert {p.name for paper in papers for p in (root / paper).glob("*.py")} == {"__init__.py"}
+    spans = {p.name for p in (root / "paper").iterdir() if p.name != "__pycache__"}
+    assert spans == {"__init__.py", "campaign", "report"}

@@ -163,7 +163,7 @@ def test_no_package_has_an_import_cycle(package):
 
 def test_bench_layers_point_one_way():
     graph = _module_graph()
-    assert "bench.core._runner" in graph and "bench.studies.paper.energy" in graph
+    assert "bench.core._runner" in graph and "bench.studies.decon.energy" in graph
     assert "bench.kit._verdict" in graph
     assert not _upward(graph), "upward imports: " + "; ".join(_upward(graph))
 
@@ -184,8 +184,8 @@ def test_no_module_above_the_studies_imports_a_study():
     graph = _module_graph()
     assert "bench._cli" in graph and "bench._tables" in graph and "bench._report" in graph
     assert _top_reaching_studies(graph) == []
-    graph["bench._cli"] = graph["bench._cli"] | {"bench.studies.paper.energy"}
-    assert _top_reaching_studies(graph) == ["bench._cli imports bench.studies.paper.energy"]
+    graph["bench._cli"] = graph["bench._cli"] | {"bench.studies.decon.energy"}
+    assert _top_reaching_studies(graph) == ["bench._cli imports bench.studies.decon.energy"]
 
 
 def test_graph_checks_can_fail(tmp_path):
@@ -255,19 +255,22 @@ def test_the_lower_packages_have_no_import_cycle(package):
 
 # ----------------------------------------------------------------------------- the studies' house
 # The claims kit (bench.kit) is reached through its face: outside it, a module imports the names
-# of ``bench.kit.__all__``, never one of its private modules. A study of the paper is a folder
-# (bench/studies/paper/<study>/) holding its experiments, rule, figure and report section; beside
-# the studies stand only what they share (``_common``), the report's sections and the campaign.
-PAPER = ROOT / "bench" / "studies" / "paper"
+# of ``bench.kit.__all__``, never one of its private modules. A study of a claim is a folder
+# (bench/studies/<paper>/<study>/) holding its experiments, rule, figure and report section; a
+# paper's folder holds its studies' folders alone, and what spans every claim (the campaign, the
+# report's sections) stands in bench/studies/paper/.
+STUDIES = ROOT / "bench" / "studies"
+PAPERS = ("decon", "hnn_seed", "lnn_seed", "vin_seed")
 
 
 def _folder(module: str) -> str:
-    """The folder a module stands in as a room of the house: bench.kit, a study's folder under
-    bench.studies.paper, or the module's own package elsewhere."""
+    """The folder a module stands in as a room of the house: bench.kit, a study's folder under a
+    paper's (or the campaign's or the report's under bench.studies.paper), or the module's own
+    package elsewhere."""
     parts = module.split(".")
     if parts[:2] == ["bench", "kit"]:
         return "bench.kit"
-    if parts[:3] == ["bench", "studies", "paper"] and len(parts) > 3:
+    if parts[:2] == ["bench", "studies"] and len(parts) > 3 and parts[2] in (*PAPERS, "paper"):
         return ".".join(parts[:4])
     return module
 
@@ -283,17 +286,17 @@ def _folder_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
 
 def test_no_cycle_joins_the_kit_the_studies_and_their_folders():
     folders = _folder_graph(_module_graph())
-    assert "bench.kit" in folders and "bench.studies.paper.pixels" in folders
+    assert "bench.kit" in folders and "bench.studies.hnn_seed.pixels" in folders
     assert not _cycles(folders), _cycles(folders)
 
 
 def test_the_folder_check_sees_a_cycle_between_two_studies():
     graph = {
-        "bench.studies.paper.a": {"bench.studies.paper.b._rule"},
-        "bench.studies.paper.b._rule": {"bench.studies.paper.a._figure"},
-        "bench.studies.paper.a._figure": set(),
+        "bench.studies.decon.a": {"bench.studies.vin_seed.b._rule"},
+        "bench.studies.vin_seed.b._rule": {"bench.studies.decon.a._figure"},
+        "bench.studies.decon.a._figure": set(),
     }
-    assert _cycles(_folder_graph(graph)) == [["bench.studies.paper.a", "bench.studies.paper.b"]]
+    assert _cycles(_folder_graph(graph)) == [["bench.studies.decon.a", "bench.studies.vin_seed.b"]]
 
 
 def _kit_imports(path: Path, root: Path = ROOT) -> list[tuple[str, str, int]]:
@@ -336,18 +339,19 @@ def test_the_kit_check_sees_a_private_module(tmp_path):
     assert got == [("bench.kit._stats", "greater", 1), ("bench.kit", "verdict", 2)]
 
 
-def test_each_study_of_the_paper_is_a_folder():
+def test_each_study_of_a_claim_is_a_folder():
     from bench.core import _studies
 
-    flat = sorted(p.name for p in PAPER.glob("*.py") if p.name not in ("__init__.py", "_common.py"))
-    assert flat == [], f"modules beside the study folders: {flat}"
+    for paper in PAPERS:
+        flat = sorted(p.name for p in (STUDIES / paper).glob("*.py") if p.name != "__init__.py")
+        assert flat == [], f"modules beside the study folders of {paper}: {flat}"
     for study in _studies.studies():
         parts = [
             f.__module__
             for f in (study.rule, study.figure, study.results_figure, study.section)
             if f is not None
         ]
-        mine = {m for m in parts if m.startswith("bench.studies.paper.")}
+        mine = {m for m in parts if m.startswith("bench.studies.") and m.split(".")[2] in PAPERS}
         if not mine:
             continue
         folders = {_folder(m) for m in mine}

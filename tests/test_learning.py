@@ -147,8 +147,8 @@ def test_claims_whose_runs_lack_checkpoints_are_left_out(scenarios):
 
 
 def test_claim_4_is_judged_again_on_the_longer_learning_runs(scenarios):
+    from bench.studies.decon.coordinates import claim_4
     from bench.studies.learning import verdicts_along_learning
-    from bench.studies.paper.coordinates import claim_4
 
     runs, curves = scenarios["reproduce"]
     mask = (

@@ -13,7 +13,7 @@ from _synthetic import synthetic_tables
 from bench import kit as R
 from bench.core import expand
 from bench.kit import evaluate_claims, seed_span
-from bench.studies.paper.coordinates import PAPER_BUDGET_MODELS, claim_4, fig_links
+from bench.studies.decon.coordinates import PAPER_BUDGET_MODELS, claim_4, fig_links
 from bench.studies.paper.report import _links as L
 
 
@@ -162,7 +162,7 @@ def test_the_figure_draws_error_against_k(fig5, tmp_path):
 def test_the_figure_compares_the_models_at_each_k_on_the_seeds_they_share(fig5):
     """Mid-campaign, seed 5 at k = 1 lacks HNN+SO on the spring: it waits (every k = 1 point
     rests on seeds 0-4 and 6-9); at k = 2 every seed is complete and stays."""
-    from bench.studies.paper.coordinates._links import common_seeds, link_rows
+    from bench.studies.decon.coordinates._links import common_seeds, link_rows
 
     runs, _ = fig5
     drop = (runs["k"] == 1) & (runs["seed"] == 5) & (runs["model"] == "hnn_so")
@@ -255,7 +255,7 @@ def test_claim_1_fits_only_the_k_where_every_fig2_model_learned():
     """Claim 1 (a) and (d) over every k: a k where a gated model (HNN+SO, gated by both) did
     not learn on one system is left out of the fit, named in the note, and the fit equals
     the one without that k."""
-    from bench.studies.paper.energy import claim_1
+    from bench.studies.decon.energy import claim_1
 
     runs, curves = synthetic_tables("paper", experiments=("energy",))
     assert set(runs["k"]) == {1, 2, 3, 4}

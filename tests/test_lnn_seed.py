@@ -20,8 +20,8 @@ import models
 import systems
 from bench.core import TrainConfig, _store, expand, train
 from bench.kit import policy
-from bench.studies.paper import lnn_seed as S
-from bench.studies.paper.lnn_seed import _diagnosis as D
+from bench.studies.lnn_seed import notebook as S
+from bench.studies.lnn_seed.notebook import _diagnosis as D
 from models._mlp import MLP
 from models._scalar import velocity_hessian
 

@@ -265,7 +265,7 @@ def _committed():
 def test_a_committed_file_matches_its_card_and_the_experiments_size(path):
     import json
 
-    from bench.studies.paper import mujoco as X
+    from bench.studies.decon import mujoco as X
     from systems import mujoco_data as D
 
     card = json.loads(path.with_suffix(".json").read_text())

@@ -16,9 +16,9 @@ from _markdown import section, table_rows
 import systems
 from bench.core import RunConfig, _store, expand, is_supplementary
 from bench.kit import policy
-from bench.studies.paper import mujoco as X
-from bench.studies.paper.mujoco import _rule as R
-from bench.studies.paper.mujoco._section import DIFFERENCES
+from bench.studies.decon import mujoco as X
+from bench.studies.decon.mujoco import _rule as R
+from bench.studies.decon.mujoco._section import DIFFERENCES
 from systems import mujoco_data as D
 
 SEEDS = (0, 1, 2, 3, 4)
@@ -141,7 +141,7 @@ def test_quick_runs_one_task_and_every_profile_reads_the_files_size(monkeypatch,
 
 def test_the_study_is_registered_with_its_rule_figure_and_section():
     from bench.kit import claim_studies
-    from bench.studies.paper import CLAIM_TITLES
+    from bench.studies import CLAIM_TITLES
 
     study = next(s for s in claim_studies() if s.claim == 16)
     assert (
@@ -421,7 +421,7 @@ def test_the_figure_shows_the_verdicts_learning_rate_with_both_hnns():
     """Fig. 7's figure at the rate the verdict reads: at the code's once NODE and NODE+SO ran
     there, the paper's HNN beside them (ours not yet there), constant velocity from App. C's
     rows; App. C's rows otherwise."""
-    from bench.studies.paper.mujoco._section import figure_rows
+    from bench.studies.decon.mujoco._section import figure_rows
 
     runs = _tables()
     data, kind, lr = figure_rows(runs)
@@ -483,7 +483,7 @@ def test_models_worse_than_holding_the_velocity_on_their_training_data_are_named
     """A trained model whose training MSE is above the constant-velocity predictor's fits its
     own training data worse than holding the velocity (a finite loss, so not flagged
     diverged): the section names its seeds; models below the predictor are not named."""
-    from bench.studies.paper.mujoco._section import worse_than_trivial_in_training
+    from bench.studies.decon.mujoco._section import worse_than_trivial_in_training
 
     runs = _tables()
     assert worse_than_trivial_in_training(runs) == []

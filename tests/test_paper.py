@@ -4,9 +4,11 @@ cells share config hashes, and the budgets stay within what each profile promise
 import pytest
 
 from bench import kit
+from bench import studies as ST
 from bench.core import _experiments as E
 from bench.studies import paper as P
-from bench.studies.paper.second_order import is_suite_cell
+from bench.studies.decon.second_order import is_suite_cell
+from bench.studies.lnn_seed import relativistic as REL
 
 NAMES = [e.name for e in P.PAPER_EXPERIMENTS]
 
@@ -64,12 +66,12 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     paper_init = {
         c.config_hash
         for c in E.expand("coordinates", profile)
-        if c.system_params != P.SPRING_EQUILIBRIUM and c.model != "node_so_pq"
+        if c.system_params != ST.SPRING_EQUILIBRIUM and c.model != "node_so_pq"
     }
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     # the paper's own form of NODE+SO: at its budget, for claim 4 alone
     pq = {c.system_params for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
-    assert pq == ({(), P.SPRING_PAPER} if profile in ("paper", "paper-core", "paper-k") else set())
+    assert pq == ({(), ST.SPRING_PAPER} if profile in ("paper", "paper-core", "paper-k") else set())
     l2 = {c.config_hash for c in E.expand("loss", profile) if c.loss == "l2"}
     assert l2 <= h["second_order"]
     # claim 6 is not run at quick, nor at paper-k (which sweeps k in Figs. 2-5 only)
@@ -79,8 +81,8 @@ def test_figures_2_4_5_and_8_share_runs(profile):
 def test_damped_has_plain_mixture_and_rayleigh_hnn():
     runs = E.expand("damped", "smoke")
     hnn = {(c.system, c.dissipation) for c in runs if c.model == "hnn_so"}
-    assert hnn == {(s, d) for s in P.SYSTEMS for d in (False, True)}
-    assert {c.system for c in runs if c.model == "mixture_hnn"} == set(P.SYSTEMS)
+    assert hnn == {(s, d) for s in ST.SYSTEMS for d in (False, True)}
+    assert {c.system for c in runs if c.model == "mixture_hnn"} == set(ST.SYSTEMS)
     assert all(c.dissipation is None for c in runs if not c.model.startswith("hnn"))
     assert all(c.friction == 0.4 for c in runs)
     # quick: the verdict's cells only, at five seeds (the Rayleigh extra is paper-only)
@@ -107,10 +109,10 @@ def test_every_experiment_has_a_trivial_predictor_at_every_seed(name, profile):
 def test_relativistic_variants():
     runs = E.expand("relativistic", "quick")
     cells = {(c.model, c.coordinates, c.model_options) for c in runs}
-    assert cells == set(P.RELATIVISTIC_CELLS)
-    assert all(c.system_params == P.RELATIVISTIC_TEST_PARAMS for c in runs)
+    assert cells == set(REL.RELATIVISTIC_CELLS)
+    assert all(c.system_params == ST.RELATIVISTIC_TEST_PARAMS for c in runs)
     paper = {(c.model, c.coordinates, c.model_options) for c in E.expand("relativistic", "paper")}
-    assert paper == set(P.RELATIVISTIC_CELLS) | set(P.RELATIVISTIC_EXTRAS)
+    assert paper == set(REL.RELATIVISTIC_CELLS) | set(REL.RELATIVISTIC_EXTRAS)
 
 
 def test_relativistic_seed_declares_the_seeds_protocol():
@@ -119,7 +121,7 @@ def test_relativistic_seed_declares_the_seeds_protocol():
     for profile in WHOLE:
         runs = E.expand("relativistic_seed", profile)
         cells = {(c.model, c.coordinates, c.model_options) for c in runs}
-        assert cells == set(P.SEED_CELLS), profile
+        assert cells == set(REL.SEED_CELLS), profile
     runs = E.expand("relativistic_seed", "paper")
     lnn = next(c for c in runs if c.model == "lnn")
     assert dict(lnn.model_options) == {"kinetic_prior": 0.0, "solve": "pinv"}
@@ -168,10 +170,10 @@ def test_spring_cells_use_the_papers_initial_state_and_claim_4_both():
         springs = {
             c.system_params for c in E.expand(name, "quick") if c.system == "spring_pendulum"
         }
-        assert springs == {P.SPRING_PAPER}, name
+        assert springs == {ST.SPRING_PAPER}, name
     coords = E.expand("coordinates", "quick")
     springs = {c.system_params for c in coords if c.system == "spring_pendulum"}
-    assert springs == {P.SPRING_PAPER, P.SPRING_EQUILIBRIUM}
+    assert springs == {ST.SPRING_PAPER, ST.SPRING_EQUILIBRIUM}
     assert all(c.system_params == () for c in coords if c.system == "chain_pendulum")
     assert {c.k for c in E.expand("coordinates", "paper")} == {1, 2, 3, 4}
 
@@ -202,6 +204,6 @@ def test_smoke_is_small_and_quick_budget_does_not_grow():
 def test_every_claim_has_one_read_only_title():
     """Every claim study is titled from the one table, which no study can change."""
     for s in kit.claim_studies():
-        assert s.title == P.CLAIM_TITLES[s.claim], s.name
+        assert s.title == ST.CLAIM_TITLES[s.claim], s.name
     with pytest.raises(TypeError):
-        P.CLAIM_TITLES[12] = "another title"
+        ST.CLAIM_TITLES[12] = "another title"

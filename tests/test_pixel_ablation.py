@@ -16,7 +16,7 @@ from _markdown import table_rows
 
 import models
 from bench.core import _pixels, expand
-from bench.studies.paper.pixels import _ablation as D
+from bench.studies.hnn_seed.pixels import _ablation as D
 
 
 def _latent_vin(dtype="float64"):

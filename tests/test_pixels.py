@@ -19,9 +19,9 @@ import models
 import systems
 from bench.core import RunConfig, _store, check_runnable, expand
 from bench.kit import learned_text, policy
-from bench.studies.paper import pixels as P
-from bench.studies.paper import vin_blog as V
-from bench.studies.paper.pixels import _section as S
+from bench.studies.hnn_seed import pixels as P
+from bench.studies.hnn_seed.pixels import _section as S
+from bench.studies.vin_seed import vin_blog as V
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32

@@ -8,7 +8,7 @@ import pytest
 from bench import _cli
 from bench._preflight import cells, preflight
 from bench.core import _experiments as E
-from bench.studies.paper import mujoco
+from bench.studies.decon import mujoco
 
 
 @pytest.fixture

@@ -15,7 +15,7 @@ import pytest
 from _markdown import table_rows
 
 from bench.core import RunConfig, _schema, _store, execute_run, expand
-from bench.studies.paper import real_pendulum as P
+from bench.studies.hnn_seed import real_pendulum as P
 from systems import _real_pendulum as R
 
 SEEDS = (0, 1, 2, 3, 4)

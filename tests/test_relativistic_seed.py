@@ -10,8 +10,8 @@ from _markdown import section, table_rows
 from _synthetic import synthetic_tables
 
 from bench._report import make_figures, write_report
-from bench.studies.paper import relativistic as REL
-from bench.studies.paper.relativistic._section import _one, _protocol
+from bench.studies.lnn_seed import relativistic as REL
+from bench.studies.lnn_seed.relativistic._section import _one, _protocol
 
 EXPERIMENTS = ("relativistic", "relativistic_seed")
 

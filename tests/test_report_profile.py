@@ -13,8 +13,8 @@ from bench._cli import main
 from bench._report import make_figures, write_report
 from bench.core import chosen_profile, experiment_rows, load_tables, pick_profile
 from bench.kit._plot import model_bar_values
-from bench.studies.paper.energy import claim_1
-from bench.studies.paper.energy._figure import fig2_line, fig_energy
+from bench.studies.decon.energy import claim_1
+from bench.studies.decon.energy._figure import fig2_line, fig_energy
 
 
 @pytest.fixture(scope="module")

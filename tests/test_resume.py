@@ -216,7 +216,7 @@ import bench.core._resume as R
 R.EVERY_S = 0.0
 from bench.core import execute_run, expand, get
 cfg = [c for c in expand(get("lnn_seed_notebook"), "smoke") if c.model == "lnn"][0]
-from bench.studies.paper.lnn_seed import notebook_lr
+from bench.studies.lnn_seed.notebook import notebook_lr
 steps = int(sys.argv[2])
 cfg = dataclasses.replace(cfg, steps=steps, lr=notebook_lr("lnn", steps))
 row = execute_run(cfg, cache_root=Path(sys.argv[1]))

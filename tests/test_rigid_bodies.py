@@ -11,7 +11,7 @@ from _markdown import table_rows
 from _synthetic import cell_tables
 
 from bench.core import expand
-from bench.studies.paper import rigid_bodies as R
+from bench.studies.decon import rigid_bodies as R
 
 # the paper's picture: SO closes most of the gyroscope's gap; the NODE leads on the other two
 REPRODUCE = {

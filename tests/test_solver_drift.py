@@ -18,8 +18,8 @@ import models
 import systems
 from bench.core import expand
 from bench.kit import policy
-from bench.studies.paper.energy import _solver_drift as D
-from bench.studies.paper.energy import claim_1
+from bench.studies.decon.energy import _solver_drift as D
+from bench.studies.decon.energy import claim_1
 
 NAME = "(d) HNN+SO energy violation over the solver's own drift"
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0: a ratio on the margin stays undecided

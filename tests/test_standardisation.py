@@ -17,7 +17,7 @@ import pytest
 import models
 from bench.core import RunConfig, expand
 from bench.core import _controlled as C
-from bench.studies.paper import mujoco as X
+from bench.studies.decon import mujoco as X
 from models import Scene, Standardisation
 
 D, NU, DT = 2, 3, 0.05

@@ -14,7 +14,7 @@ from _markdown import table_rows
 
 from bench.core import _store, expand
 from bench.kit import policy
-from bench.studies.paper import three_body as T
+from bench.studies.hnn_seed import three_body as T
 from bench.studies.paper.campaign._campaign import campaign_experiments
 
 SEEDS = (0, 1, 2, 3, 4)

@@ -28,9 +28,9 @@ from bench.core import (
     seed_elbo,
 )
 from bench.kit import policy
-from bench.studies.paper import pixels as P
-from bench.studies.paper import vin_blog as V
+from bench.studies.hnn_seed import pixels as P
 from bench.studies.paper.report._comparison import _disc_mark
+from bench.studies.vin_seed import vin_blog as V
 
 SEEDS = (0, 1, 2, 3, 4)
 SPREAD = np.array([-0.4, 0.4, 0.0, -0.2, 0.2])  # mean 0, sd 0.32

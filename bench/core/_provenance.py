@@ -34,7 +34,7 @@ PROVENANCE_COLUMNS = (*VERSION_COLUMNS, *DEVICE_COLUMNS, *CPU_COLUMNS, *GIT_COLU
 #   CPU thread pools: a sweep worker is pinned to its own). float32 round-off differs between
 #   CPU types (another vector width, another fused reduction) and core counts (XLA splits a
 #   reduction over its threads), and round-off can decide a training run's fate:
-#   bench.studies.paper.hnn_diagnosis replays a plain-HNN spring run that stalls on one core
+#   bench.studies.decon.hnn_diagnosis replays a plain-HNN spring run that stalls on one core
 #   and learns on two;
 # - git_commit (the full hash of this checkout's HEAD) and git_dirty (whether the working tree
 #   differs from it outside results/; None when not known).

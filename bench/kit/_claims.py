@@ -1,7 +1,7 @@
 """Claim evaluation over the registered studies: the rows each claim reads, and its verdicts.
 
 A claim is a registered :class:`~bench.core.Study` with a verdict rule; the rules themselves
-live with their studies (``bench.studies.paper.energy``: claim 1, ...), built from this kit.
+live with their studies (``bench.studies.decon.energy``: claim 1, ...), built from this kit.
 """
 
 from __future__ import annotations

@@ -41,7 +41,7 @@ from ._along import (
     settling_table,
     verdicts_along_curve,
 )
-from .paper import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides
+from ._claims import PAPER_MODELS, SPRING_EQUILIBRIUM, SYSTEMS, initial_ok, shared_overrides
 
 # The cells of the learning curves: undamped, noiseless, in (q, qdot), L2 (the campaign's damped
 # runs share system, k and model with them)

@@ -30,7 +30,7 @@ def on_task(cell, task: str, **changes):
     import dataclasses
 
     import systems
-    from bench.studies.paper.mujoco import task_test_chunks
+    from bench.studies.decon.mujoco import task_test_chunks
 
     dt, chunks = systems.MUJOCO_TASKS[task].dt, task_test_chunks(task)
     return dataclasses.replace(cell, system=task, dt=dt, test_chunks=chunks, **changes)

@@ -11,7 +11,7 @@ import sys
 from _probe import on_task, score
 
 from bench.core import expand
-from bench.studies.paper.mujoco import TASKS
+from bench.studies.decon.mujoco import TASKS
 
 steps = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
 seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0

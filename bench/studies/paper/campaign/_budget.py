@@ -10,15 +10,15 @@ import models
 
 from ....core import Experiment, RunConfig, expand
 from ....kit import TRIVIAL_MODELS
-from ..coordinates import COORDINATES
-from ..damped import DAMPED
-from ..double_pendulum import DOUBLE_PENDULUM_ENERGY
-from ..energy import ENERGY
-from ..loss import LOSS
-from ..relativistic import RELATIVISTIC, RELATIVISTIC_SEED
-from ..second_order import SECOND_ORDER
-from ..symplectic import SYMPLECTIC
-from ..vin import VIN
+from ...decon.coordinates import COORDINATES
+from ...decon.damped import DAMPED
+from ...decon.energy import ENERGY
+from ...decon.loss import LOSS
+from ...decon.second_order import SECOND_ORDER
+from ...decon.symplectic import SYMPLECTIC
+from ...lnn_seed.double_pendulum import DOUBLE_PENDULUM_ENERGY
+from ...lnn_seed.relativistic import RELATIVISTIC, RELATIVISTIC_SEED
+from ...vin_seed.vin import VIN
 
 PAPER_EXPERIMENTS: tuple[Experiment, ...] = (
     ENERGY,

@@ -31,8 +31,8 @@ import pandas as pd
 
 from ....core import expand, get
 from ....kit import Judgement, claim_studies, judge, seed_sets, seed_span, stored_counts
-from .._common import LINKS
-from .._common import LINKS_PROFILE as PROFILE
+from ..._claims import LINKS
+from ..._claims import LINKS_PROFILE as PROFILE
 
 # the claims judged per k, and those whose rule pools k (module docstring)
 LINK_CLAIMS = (1, 2, 3, 4)

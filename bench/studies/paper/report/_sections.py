@@ -286,8 +286,9 @@ def claims_section(ctx: ReportContext) -> list[str]:
     return [
         "## Claims",
         "",
-        "Verdict rules are in the docstrings of `bench/studies/paper/` (conventions: "
-        "`bench/kit/_stats.py`). Each claim is split into the parts its sentences "
+        "Verdict rules are in the docstrings of the studies' folders, "
+        "`bench/studies/<paper>/` (conventions: `bench/kit/_stats.py`). Each claim is split "
+        "into the parts its sentences "
         "state; each part is a one-sided t test on paired per-seed values (log ratios of "
         "rollout errors, energy violations, losses or training times; slopes; shares) against "
         "the margin of its quantity (*Margin policy* below). An ordering holds only beyond the "
