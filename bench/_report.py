@@ -27,6 +27,7 @@ import models
 from ._tables import (
     _discrimination_lines,
     _experiment_table,
+    _failed_lines,
     _missing_cells,
     _perf_section,
     _table_variant,
@@ -363,7 +364,6 @@ def _write_report(results_dir: Path, compare, runs, curves, profile) -> Path:
             lines += ["No runs of this experiment are stored: figure and table skipped.", ""]
             lines += _missing_cells(rows, name, profile)
             continue
-        bad = rows[rows["status"] != "ok"] if "status" in rows else rows.iloc[0:0]
         ok = select(rows)
         lines.append(f"{_status_counts(rows)}; mean ± standard error over seeds.")
         lines.append("")
@@ -373,21 +373,7 @@ def _write_report(results_dir: Path, compare, runs, curves, profile) -> Path:
             lines += _discrimination_lines(rows)
             lines.append("")
         lines += _missing_cells(rows, name, profile)
-        bad = bad.assign(_label=_table_variant(bad)) if len(bad) else bad
-        for _, r in bad.iterrows():
-            err = r.get("error") or f"diverged at step {r.get('diverged_step')}"
-            coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
-            how = (
-                "not counted (a trivial predictor)"
-                if r["model"] in trivial
-                else "scored as error 1"
-            )
-            lines.append(
-                f"- {r['_label']}{coords} on {r['system']} seed {r['seed']}: {r['status']}, "
-                f"{how} ({md_escape(str(err))[:200]})"
-            )
-        if len(bad):
-            lines.append("")
+        lines += _failed_lines(rows, trivial)
         lines += _blown_up_lines(rows)
         stem = study.stem
         if (figdir / f"{stem}.png").exists():

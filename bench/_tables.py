@@ -55,7 +55,9 @@ def _initial(rows: pd.DataFrame) -> pd.Series:
     return params_of(rows).map(lambda p: p.get("initial", "-"))
 
 
-def _experiment_table(rows: pd.DataFrame) -> list[str]:
+def _cells(rows: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """``rows`` with the table's cell columns filled in, and those of :data:`CELL_COLUMNS` that
+    tell the experiment's cells apart (the variant and coordinates always)."""
     df = rows.assign(
         variant=_table_variant(rows), weight=option(rows, "weight"), initial=_initial(rows)
     )
@@ -66,6 +68,38 @@ def _experiment_table(rows: pd.DataFrame) -> list[str]:
         and (df[c].astype(str).nunique() > 1 or c in ("variant", "coordinates"))
         and (c != "lr" or several_rates(rows))
     ]
+    return df, cells
+
+
+def _failed_lines(rows: pd.DataFrame, trivial) -> list[str]:
+    """One line per failed or diverged run of an experiment: its model, the cell as the table
+    names it (the columns that tell the cells apart), its seed, what happened (the error, or the
+    step at which training went non-finite) and how the verdicts count it (a model's: error 1;
+    a trivial predictor's: not at all)."""
+    if "status" not in rows or not (rows["status"] != "ok").any():
+        return []
+    df, cells = _cells(rows)
+    out = []
+    for _, r in df[df["status"] != "ok"].iterrows():
+        cell = ", ".join(
+            f"{c}={r[c]}" for c in cells if c not in ("system", "variant", "coordinates")
+        )
+        coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
+        err, step = r.get("error"), pd.to_numeric(r.get("diverged_step"), errors="coerce")
+        if isinstance(err, str) and err:
+            what = _md_escape(err)[:200]
+        elif r["status"] == "diverged" and np.isfinite(step):
+            what = f"diverged at step {int(step)}"
+        else:
+            what = str(r["status"])
+        how = "not counted (a trivial predictor)" if r["model"] in trivial else "scored as error 1"
+        where = f"{r['system']}" + (f" ({cell})" if cell else "")
+        out.append(f"- {r['variant']}{coords} on {where} seed {r['seed']}: {what}; {how}")
+    return [*out, ""]
+
+
+def _experiment_table(rows: pd.DataFrame) -> list[str]:
+    df, cells = _cells(rows)
     for c in cells:
         df[c] = df[c].astype(object).where(df[c].notna(), "-")
     metrics = [
