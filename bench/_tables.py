@@ -11,7 +11,14 @@ import numpy as np
 import pandas as pd
 
 from .core import cell_key, expand, option, params_of, parse_pairs, row_cell_keys, variant
-from .kit import MODEL_LABELS, TRIVIAL_MODELS, discrimination, several_rates, velocity_scores
+from .kit import (
+    MODEL_LABELS,
+    TRIVIAL_MODELS,
+    discrimination,
+    seed_span,
+    several_rates,
+    velocity_scores,
+)
 from .kit import fmt as _fmt
 from .kit import md_escape as _md_escape
 
@@ -72,30 +79,44 @@ def _cells(rows: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
 
 
 def _failed_lines(rows: pd.DataFrame, trivial) -> list[str]:
-    """One line per failed or diverged run of an experiment: its model, the cell as the table
-    names it (the columns that tell the cells apart), its seed, what happened (the error, or the
-    step at which training went non-finite) and how the verdicts count it (a model's: error 1;
-    a trivial predictor's: not at all)."""
+    """The failed and diverged runs of an experiment, a line per cell: its model, the cell as
+    the table names it (the columns that tell the cells apart), what happened on which seeds
+    (a diverged run: the training step at which it went non-finite; a failed run: its error)
+    and how the verdicts count it (a model's: error 1; a trivial predictor's: not at all)."""
     if "status" not in rows or not (rows["status"] != "ok").any():
         return []
     df, cells = _cells(rows)
+    bad = df[df["status"] != "ok"].copy()
+    shown = [c for c in cells if c not in ("system", "variant", "coordinates")]
+    bad["_where"] = bad.apply(_where, axis=1, shown=shown)
+    bad["_what"] = bad.apply(_what_happened, axis=1)
     out = []
-    for _, r in df[df["status"] != "ok"].iterrows():
-        cell = ", ".join(
-            f"{c}={r[c]}" for c in cells if c not in ("system", "variant", "coordinates")
-        )
-        coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
-        err, step = r.get("error"), pd.to_numeric(r.get("diverged_step"), errors="coerce")
-        if isinstance(err, str) and err:
-            what = _md_escape(err)[:200]
-        elif r["status"] == "diverged" and np.isfinite(step):
-            what = f"diverged at step {int(step)}"
-        else:
-            what = str(r["status"])
-        how = "not counted (a trivial predictor)" if r["model"] in trivial else "scored as error 1"
-        where = f"{r['system']}" + (f" ({cell})" if cell else "")
-        out.append(f"- {r['variant']}{coords} on {where} seed {r['seed']}: {what}; {how}")
+    for (where, what), g in bad.groupby(["_where", "_what"], sort=False):
+        counted = g["model"].iloc[0] not in trivial
+        how = "scored as error 1" if counted else "not counted (a trivial predictor)"
+        seeds = seed_span(g["seed"].astype(int))
+        which = f"seed {seeds}" if len(g) == 1 else f"seeds {seeds} ({len(g)} runs)"
+        steps = pd.to_numeric(g["diverged_step"], errors="coerce").dropna().astype(int)
+        if what == "diverged" and len(steps):
+            lo, hi = steps.min(), steps.max()
+            what = f"diverged at step {lo}" if lo == hi else f"diverged at steps {lo}-{hi}"
+        out.append(f"- {where}, {which}: {what}; {how}")
     return [*out, ""]
+
+
+def _where(r, shown) -> str:
+    """A run's model (its coordinates where canonical), system and the cell columns ``shown``."""
+    coords = " (q, p)" if r.get("coordinates") == "momentum" else ""
+    cell = ", ".join(f"{c}={r[c]}" for c in shown)
+    return f"{r['variant']}{coords} on {r['system']}" + (f" ({cell})" if cell else "")
+
+
+def _what_happened(r) -> str:
+    """A failed run's error (one line, 200 characters), or the word for its status."""
+    err = r.get("error")
+    if isinstance(err, str) and err and r["status"] != "diverged":
+        return _md_escape(err)[:200]
+    return str(r["status"])
 
 
 def _experiment_table(rows: pd.DataFrame) -> list[str]:
