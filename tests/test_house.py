@@ -271,3 +271,24 @@ def test_each_study_of_a_claim_lives_in_its_papers_folder():
     assert {p.name for paper in papers for p in (root / paper).glob("*.py")} == {"__init__.py"}
     spans = {p.name for p in (root / "paper").iterdir() if p.name != "__pycache__"}
     assert spans == {"__init__.py", "campaign", "report"}
+
+
+def test_the_studies_index_names_every_study_folder_and_its_pages_exist():
+    """docs/studies/README.md maps each claim to its study's folder and page: every folder of
+    the papers' studies is named once, every folder it names exists, every page it links too."""
+    import re
+
+    root = ROOT / "bench" / "studies"
+    index = ROOT / "docs" / "studies" / "README.md"
+    text = index.read_text()
+    folders = {
+        f"bench/studies/{paper}/{p.name}/"
+        for paper in ("decon", "hnn_seed", "lnn_seed", "vin_seed")
+        for p in (root / paper).iterdir()
+        if (p / "__init__.py").exists()
+    }
+    named = re.findall(r"`(bench/studies/[a-z_]+/[a-z_]+/)`", text)
+    named = [n for n in named if not n.startswith("bench/studies/paper/")]
+    assert sorted(named) == sorted(folders)
+    for link in re.findall(r"\]\(([^)#]+)\)", text):
+        assert (index.parent / link).exists(), link
