@@ -276,8 +276,6 @@ def test_each_study_of_a_claim_lives_in_its_papers_folder():
 def test_the_studies_index_names_every_study_folder_and_its_pages_exist():
     """docs/studies/README.md maps each claim to its study's folder and page: every folder of
     the papers' studies is named once, every folder it names exists, every page it links too."""
-    import re
-
     root = ROOT / "bench" / "studies"
     index = ROOT / "docs" / "studies" / "README.md"
     text = index.read_text()

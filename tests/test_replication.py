@@ -572,3 +572,56 @@ def _configs(rows):
 
 def get_study(claim):
     return next(s for s in R.claim_studies() if s.claim == claim)
+
+
+def test_a_difference_between_the_seed_sets_names_their_machines_where_they_differ():
+    """The report closes a line on the seed sets' difference with the machines each ran on,
+    where they differ (a time or a cost is the machine's), and says nothing where they match."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from bench.core import ReportContext
+    from bench.studies.paper.report._sections import _machines_apart
+
+    runs, curves = synthetic_tables("smoke", seeds=range(10), experiments=["damped"])
+    j = SimpleNamespace(primary_seeds=(0, 1, 2, 3, 4), replication_seeds=(5, 6, 7, 8, 9))
+    alike = runs.assign(device="cpu A", cpu_family_model="1/2")
+    assert _machines_apart(ReportContext(Path("."), alike, curves, "smoke"), j, 5) == ""
+    other = runs["seed"].ge(5) & runs["model"].ne("node_so")
+    apart = runs.assign(
+        device=np.where(other, "cpu B", "cpu A"), cpu_family_model=np.where(other, "3/4", "1/2")
+    )
+    said = _machines_apart(ReportContext(Path("."), apart, curves, "smoke"), j, 5)
+    n0 = int(runs["seed"].lt(5).sum())
+    assert said.startswith(" (the seed sets ran on different machines: seeds 0-4: cpu A 1/2 ")
+    assert f"cpu A 1/2 ({n0} runs); seeds 5-9: cpu B 3/4 (" in said
+    assert said.endswith(" runs))") and "cpu A 1/2" in said.split("seeds 5-9:")[1]
+
+
+def test_costs_apart_only_where_a_cost_part_differs_between_the_seed_sets():
+    """The report names the seed sets' machines only where the sets differ on a cost (a time is
+    the machine's): a cost part whose estimates differ beyond chance, or that reverses; not an
+    error part, nor a cost part both sets estimate alike."""
+    from types import SimpleNamespace
+
+    from bench.kit import costs_apart
+    from bench.kit._stats import Part
+
+    def part(name, quantity, point, status="holds"):
+        return Part(name, status, point, point - 0.02, point + 0.02, 5, quantity=quantity)
+
+    def j(*pairs):
+        primary = SimpleNamespace(parts=[a for a, _ in pairs])
+        replication = SimpleNamespace(parts=[b for _, b in pairs])
+        return SimpleNamespace(primary={"5": primary}, replication={"5": replication})
+
+    cost_apart = (part("(c) cost", "cost", 1.7), part("(c) cost", "cost", 1.85))
+    cost_alike = (part("(c) cost", "cost", 1.7), part("(c) cost", "cost", 1.71))
+    error_apart = (part("(a) error", "error", 0.9), part("(a) error", "error", 0.6))
+    reverses = (part("(c) cost", "cost", 0.1), part("(c) cost", "cost", 0.1, "contradicts"))
+    assert costs_apart(j(cost_apart, error_apart), "5")
+    assert costs_apart(j(reverses), "5")
+    assert not costs_apart(j(cost_alike, error_apart), "5")
+    assert not costs_apart(j(cost_alike), "5") and not costs_apart(j(cost_apart), "4")

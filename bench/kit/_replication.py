@@ -178,6 +178,17 @@ def estimates_differ(j: Judgement, key: str, alpha: float = ALPHA) -> str | None
     return "; ".join(lines) or None
 
 
+def costs_apart(j: Judgement, key: str, alpha: float = ALPHA) -> bool:
+    """Whether a part on which a claim's two seed sets differ (it reverses, or its estimates
+    differ beyond chance: :func:`_differing`) measures a cost (its quantity is policy's
+    "cost"): a time is the machine's, so the report names the machines each set ran on."""
+    p, r = j.primary.get(key), j.replication.get(key)
+    if p is None or r is None:
+        return False
+    apart = set(reversed_parts(p, r)) | {name for _, name, _ in _differing(p, r, alpha)}
+    return any(q.quantity == "cost" for q in p.parts if q.name in apart)
+
+
 def stored_counts(
     runs: pd.DataFrame, profile: str | None, seeds=None, keep=None, *, supplementary=False
 ) -> dict[int, tuple]:

@@ -5,6 +5,7 @@ and the verdicts at both budgets. Registered at import; they share one judgement
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ....core import ReportContext, ReportSection, register_section
 from ....kit import (
@@ -88,14 +89,51 @@ def _claims_table(j) -> list[str]:
     return out
 
 
-def _why_not_replicated(j) -> list[str]:
+def _machines_apart(ctx: ReportContext, j, claim: int) -> str:
+    """Where the two seed sets of ``claim`` ran on different machines: each set's machines
+    (``machine_key``: device and CPU family/model) with their runs, a clause to close a line
+    on the sets' difference in a cost (a time is the machine's); "" elsewhere."""
+    from ....core import experiment_rows, machine_key
+    from ....kit import claim_studies, seed_span
+
+    names = {e.name for s in claim_studies() if s.claim == claim for e in s.experiments}
+    runs = ctx.runs
+    if runs is None or not len(runs) or not names:
+        return ""
+    rows = [experiment_rows(runs, n, ctx.profile) for n in sorted(names)]
+    rows = [r for r in rows if len(r)]
+    if not rows:
+        return ""
+    rows = pd.concat(rows, ignore_index=True)
+    key = machine_key(rows).replace("", "unrecorded")
+    sets = []
+    for seeds in (j.primary_seeds, j.replication_seeds):
+        counts = key[rows["seed"].isin(seeds)].value_counts()
+        sets.append((seed_span(seeds), counts))
+    if len(sets[1][1]) == 0 or set(sets[0][1].index) == set(sets[1][1].index):
+        return ""
+    said = "; ".join(
+        f"seeds {span}: " + ", ".join(f"{m} ({n} runs)" for m, n in counts.items())
+        for span, counts in sets
+    )
+    return f" (the seed sets ran on different machines: {said})"
+
+
+def _why_not_replicated(j, ctx: ReportContext | None = None) -> list[str]:
     """One line per claim whose seed sets read different verdicts (the parts that moved), per
     claim whose pooled reading differs from the one both sets read (the parts pooling
-    resolved), and per claim whose sets sign a part alike at sizes that differ beyond chance."""
-    from ....kit import estimates_differ, pooled_moves, why_not_replicated
+    resolved), and per claim whose sets sign a part alike at sizes that differ beyond chance;
+    where the sets differ in a cost (:func:`~bench.kit.costs_apart`), the line names the
+    machines each set ran on, if they differ."""
+    from ....kit import costs_apart, estimates_differ, pooled_moves, why_not_replicated
+
+    def machines(v) -> str:
+        if ctx is None or not costs_apart(j, v.key):
+            return ""
+        return md_escape(_machines_apart(ctx, j, v.claim))
 
     lines = [
-        f"- claim {md_escape(v.key)}: {md_escape(why)}"
+        f"- claim {md_escape(v.key)}: {md_escape(why)}{machines(v)}"
         for v in j.final
         if (why := why_not_replicated(j, v.key))
     ]
@@ -105,7 +143,7 @@ def _why_not_replicated(j) -> list[str]:
         if (why := pooled_moves(j, v.key))
     ]
     sized = [
-        f"- claim {md_escape(v.key)}: {md_escape(why)}"
+        f"- claim {md_escape(v.key)}: {md_escape(why)}{machines(v)}"
         for v in j.final
         if (why := estimates_differ(j, v.key))
     ]
@@ -323,7 +361,7 @@ def claims_section(ctx: ReportContext) -> list[str]:
         "",
         *_claims_table(j),
         "",
-        *_why_not_replicated(j),
+        *_why_not_replicated(j, ctx),
         *_not_run_note(ctx.profile),
         "### Every part: effect, margin, test, level, and its status and estimate on each seed set",
         "",
