@@ -142,6 +142,13 @@ def test_report_sets_both_budgets_side_by_side(results, judged):
     assert row3.labels == ("smoke (here)", "paper (`paper/`)")
     assert [v.verdict for v in row3.verdicts] == [REPRODUCED, NOT_REPRODUCED]
     assert row3.agree is False and "budget" in {c.kind for c in row3.causes}
+    # where the two readings part: the parts whose status moved, with both sides' effects
+    (moved,) = [c.text for c in row3.causes if c.kind == "parts"]
+    here, there = (v for v in row3.verdicts)
+    theirs = {q.name: q.status for q in there.parts}
+    names = [q.name for q in here.parts if q.role == "part" and theirs.get(q.name) != q.status]
+    assert names and moved.startswith(f"parts that read otherwise: {names[0]}: holds (")
+    assert ") at smoke (here), contradicts (" in moved and moved.count("; ") <= 3
     shown = {r["claim"] for r in table_rows(section(text, "Verdicts at both budgets"), "claim")}
     for key, row in rows.items():  # one row per claim key that some folder has runs for
         ran = any(v is not None and (v.n_seeds or v.pending) for v in row.verdicts)

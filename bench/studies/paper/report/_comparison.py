@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from ....core import SELECTIONS, load_tables
-from ....kit import folder_label, judge, md_escape, stored_counts, supplements_waiting
+from ....kit import fmt, folder_label, judge, md_escape, stored_counts, supplements_waiting
 
 __all__ = [
     "Cause",
@@ -23,7 +23,18 @@ __all__ = [
 
 # The kinds of likely cause of two folders' verdicts of one claim disagreeing, in the order
 # they are named (:class:`Cause`).
-CAUSES = ("not comparable", "stability", "test set", "failed runs", "metric", "seeds", "budget")
+CAUSES = (
+    "not comparable",
+    "stability",
+    "test set",
+    "failed runs",
+    "metric",
+    "seeds",
+    "parts",
+    "budget",
+)
+# At most this many parts named in a "parts" cause (the rest counted).
+PARTS_NAMED = 3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -151,11 +162,34 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> l
         causes.append(Cause("metric", same_profile_metric))
     if a.n_seeds != b.n_seeds and min(a.n_seeds, b.n_seeds) < 2:
         causes.append(Cause("seeds", "too few seeds on one side"))
+    if moved := _parts_moved(a, b, label_a, label_b):
+        causes.append(Cause("parts", moved))
     budget = (
         "budget (training steps, data, width and seeds differ between the profiles: "
         "effects that need the longer training show only at the paper profile)"
     )
     return [*causes, Cause("budget", budget)]
+
+
+def _parts_moved(a, b, label_a: str, label_b: str) -> str:
+    """The parts of a claim whose status differs between two verdicts of it (statements only,
+    not the conditions), each with its status and effect on both sides: where the verdicts
+    part ways ("" where no part's status moved: a gate or the discrimination check did)."""
+    theirs = {q.name: q for q in b.parts if q.role == "part"}
+    moved = [
+        f"{q.name}: {q.status} ({fmt(q.point)}) at {label_a}, {theirs[q.name].status} "
+        f"({fmt(theirs[q.name].point)}) at {label_b}"
+        for q in a.parts
+        if q.role == "part" and q.name in theirs and theirs[q.name].status != q.status
+    ]
+    if not moved:
+        return ""
+    more = len(moved) - PARTS_NAMED
+    return (
+        "parts that read otherwise: "
+        + "; ".join(moved[:PARTS_NAMED])
+        + (f"; and {more} more" if more > 0 else "")
+    )
 
 
 def _labels(profile: str | None, others) -> list[str]:
@@ -232,7 +266,9 @@ def comparison_section(verdicts, profile: str | None, others) -> list[str]:
         "stability of one folder's reading (it does not replicate on seeds 5-9 or changes "
         "without one seed; where its own seeds read as the other folder does, that is the only "
         "cause named), the metric "
-        "(claim 4: geometric-mean error vs MSE), or the budget (the paper profile trains 8000 "
+        "(claim 4: geometric-mean error vs MSE), the parts that read otherwise (each with its "
+        "status and effect on both sides: where the two readings part), or the budget (the "
+        "paper profile trains 8000 "
         "steps on 800 trajectories at width 256 with 5 seeds; quick 1000 steps on 200 at width "
         "128 with 5). *agree* compares the verdicts (reproduced, partly reproduced, not "
         "reproduced, inconclusive), not an inconclusive verdict's reason: neither "
