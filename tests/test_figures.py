@@ -454,3 +454,28 @@ def test_every_built_in_model_has_a_colour():
 
     built = [n for n in models.available() if n not in _registry._MODULES]
     assert [n for n in built if n not in TRIVIAL_MODELS and n not in COLORS] == []
+
+
+def test_two_metrics_that_disagree_name_the_parts_where_they_part():
+    """Claim 4 under geometric-mean error holds its spring edge, under MSE leaves it undecided:
+    the metric cause names that part with its status, effect and interval under each metric;
+    a part both metrics read alike is not named."""
+    from bench.kit._stats import Part
+
+    def v(variant, verdict, edge_status, edge):
+        parts = [
+            Part("chain edge", "holds", 2.0, 1.8, 2.2, 5),
+            Part("spring edge", edge_status, edge, edge - 0.3, edge + 0.3, 5),
+        ]
+        return Verdict(4, "t", verdict, 0.1, 0.0, 0.2, 5, "d", variant=variant, parts=parts)
+
+    gm, mse = "geometric-mean error, spring from paper", "MSE, spring from paper"
+    here = [v(gm, PARTLY, "contradicts", 0.75), v(mse, INCONCLUSIVE, "undecided", 0.28)]
+    others = [("a", "quick", [v(gm, REPRODUCED, "holds", 0.1), v(mse, REPRODUCED, "holds", 0.1)])]
+    rows = {r.key: r for r in comparison_rows(here, "paper-core", others)}
+    (note,) = [c.text for c in rows[f"4 ({gm})"].causes if c.kind == "metric"]
+    assert note == (
+        "metric: geometric-mean error and MSE disagree within a profile (the parts: spring "
+        "edge: contradicts (0.75 [0.45, 1.05]) at geometric-mean error, undecided (0.28 "
+        "[-0.02, 0.58]) at MSE)"
+    )

@@ -171,25 +171,25 @@ def _cause(a, b, label_a: str, label_b: str, same_profile_metric: str = "") -> l
     return [*causes, Cause("budget", budget)]
 
 
-def _parts_moved(a, b, label_a: str, label_b: str) -> str:
+def _parts_moved(a, b, label_a: str, label_b: str, lead: str = "parts that read otherwise") -> str:
     """The parts of a claim whose status differs between two verdicts of it (statements only,
-    not the conditions), each with its status and effect on both sides: where the verdicts
-    part ways ("" where no part's status moved: a gate or the discrimination check did)."""
+    not the conditions), each with its status, effect and 90% interval on both sides: where the
+    verdicts part ways ("" where no part's status moved: a gate or the discrimination check
+    did)."""
+
+    def said(q) -> str:
+        return f"{q.status} ({fmt(q.point)} [{fmt(q.lo)}, {fmt(q.hi)}])"
+
     theirs = {q.name: q for q in b.parts if q.role == "part"}
     moved = [
-        f"{q.name}: {q.status} ({fmt(q.point)}) at {label_a}, {theirs[q.name].status} "
-        f"({fmt(theirs[q.name].point)}) at {label_b}"
+        f"{q.name}: {said(q)} at {label_a}, {said(theirs[q.name])} at {label_b}"
         for q in a.parts
         if q.role == "part" and q.name in theirs and theirs[q.name].status != q.status
     ]
     if not moved:
         return ""
     more = len(moved) - PARTS_NAMED
-    return (
-        "parts that read otherwise: "
-        + "; ".join(moved[:PARTS_NAMED])
-        + (f"; and {more} more" if more > 0 else "")
-    )
+    return f"{lead}: " + "; ".join(moved[:PARTS_NAMED]) + (f"; and {more} more" if more > 0 else "")
 
 
 def _labels(profile: str | None, others) -> list[str]:
@@ -216,7 +216,12 @@ def comparison_rows(verdicts, profile: str | None, others) -> list[ComparisonRow
         )
         a, b = m.get(key), m.get(other)
         if a and b and _outcome(a) != _outcome(b) and not (_no_runs(a) or _no_runs(b)):
-            return "metric: geometric-mean error and MSE disagree within a profile"
+            labels = ("geometric-mean error", "MSE")
+            labels = labels if "geometric" in key else labels[::-1]
+            moved = _parts_moved(a, b, *labels, lead="the parts")
+            return "metric: geometric-mean error and MSE disagree within a profile" + (
+                f" ({moved})" if moved else ""
+            )
         return ""
 
     rows = []
