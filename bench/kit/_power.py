@@ -146,7 +146,10 @@ def power_lines(table: pd.DataFrame) -> list[str]:
         "seeds, the part's own test at its level before Holm's correction: upper bounds): the "
         "chance that it signs (holds or is contradicted) at 5 and at 10 seeds, and the fewest "
         f"seeds that sign it with {POWER:.0%} probability (*on the margin*: none up to "
-        f"{MAX_SEEDS}). `python -m bench power` writes the whole table.",
+        f"{MAX_SEEDS}). `python -m bench power` writes the whole table. The count sizes a new "
+        "study, not an extension of this one: seeds added to these until a part signs would "
+        "test it again and again (optional stopping) and sign it more often than the level "
+        "says; a fresh seed set judged on its own, as the replication set is, keeps the level.",
         "",
         "| claim | part | effect | spread | signs at 5 seeds | at 10 | seeds to decide |",
         "| --- | --- | --- | --- | --- | --- | --- |",
