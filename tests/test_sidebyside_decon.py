@@ -155,9 +155,24 @@ def test_bad_options_and_interpreter_are_one_line(tmp_path, capsys):
         (tmp_path / f).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / f).write_text("")
     assert S.main(["--seed-code", str(tmp_path), "--model", "lnn"]) == 2
+    assert S.main(["--seed-code", str(tmp_path), "--k", "5"]) == 2
     assert S.main(["--seed-code", str(tmp_path), "--torch-python", str(tmp_path / "nopython")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and err[0].startswith("error: --model") and "--torch-python" in err[1]
+    assert len(err) == 3 and err[0].startswith("error: --model") and "--torch-python" in err[2]
+    assert "--k of 1, 2, 3, 4" in err[1]
+
+
+def test_the_cell_at_each_number_of_links_is_the_suite_form():
+    for k in (1, 2, 3, 4):
+        for model in ("node_so", "hnn", "hnn_so"):
+            c = S.run_config(model, 3, k)
+            assert (c.system, c.k, c.model, c.seed, c.model_options) == (
+                "chain_pendulum",
+                k,
+                model,
+                3,
+                (),
+            )
 
 
 def test_late_and_the_paper_metric():
@@ -170,3 +185,47 @@ def test_late_and_the_paper_metric():
     e = 0.1 / 2.1
     assert S.paper_metric(pred, true) == pytest.approx(e)
     assert S.paper_metric(pred, true, t0=True) == pytest.approx((1e-7 * e * e) ** (1 / 3))
+
+
+def test_learning_sets_the_papers_trained_model_beside_ours_and_the_stored_runs(monkeypatch):
+    """(l): constant velocity over each final prediction (constant velocity itself: 1x, does
+    not learn; a prediction a tenth as far off: learns), the stored runs' ratio on the cell,
+    and the verdict between the paper's code and ours."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from bench.sidebyside._learn import constant_velocity
+
+    rng = np.random.default_rng(0)
+    ts = np.linspace(0.0, 1.0, 11)
+    z = rng.normal(size=(6, 11, 4))
+    cv = constant_velocity(z, ts)
+    close = z + 0.1 * (cv - z)
+    rows = [("constant_velocity", s, 0.4) for s in range(3)] + [
+        ("node_so", s, 0.1) for s in range(3)
+    ]
+    runs = pd.DataFrame(rows, columns=["model", "seed", "rollout_error"])
+    runs["system"], runs["k"], runs["status"], runs["model_options"] = (
+        "chain_pendulum",
+        2,
+        "ok",
+        "[]",
+    )
+    monkeypatch.setattr("bench.load_runs", lambda _: runs)
+    recorded = []
+    a = SimpleNamespace(k=2, steps=10, results="unused")
+    system = SimpleNamespace(angular=(True, True, False, False))
+    lines = S.learning(
+        "node_so", system, a, z, ts, {"paper": cv, "suite": close}, lambda *r: recorded.append(r)
+    )
+    assert (
+        "paper 1x (does not learn)" in lines[0]
+        and "our stored runs (3 seeds): 4x (learns)" in lines[0]
+    )
+    assert "suite " in lines[0] and lines[0].split("suite ")[1].split("x")[0] != "1"
+    assert lines[1] == (
+        "verdict: DIFFER: node_so on chain_pendulum k = 2: ours learns it "
+        "(gate 2x constant velocity)"
+    )
+    assert [r[0] for r in recorded] == ["l", "l", "l"]

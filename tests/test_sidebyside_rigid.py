@@ -90,11 +90,13 @@ def test_stored_ratio_scores_failed_runs_as_error_one(tmp_path, monkeypatch):
     runs = pd.DataFrame(rows, columns=["model", "lr", "seed", "status", "rollout_error"])
     runs["experiment"], runs["system"] = "rigid_bodies", "rotor"
     monkeypatch.setattr("bench.load_runs", lambda _: runs)
-    ratio, n = R.stored_ratio(tmp_path, "rotor", "node", 0.005)
+    cell = {"experiment": "rigid_bodies", "system": "rotor"}
+    ratio, n = R.stored_ratio(tmp_path, cell, "node", lr=0.005)
     assert n == 3
     assert ratio == pytest.approx(np.exp(np.mean(np.log([4.0, 2.0, 0.4]))))
     assert R.learns(ratio).endswith("(does not learn)") and R.learns(2.0).endswith("(learns)")
-    assert np.isnan(R.stored_ratio(tmp_path, "gyroscope", "node", 0.005)[0])
+    gyro = {"experiment": "rigid_bodies", "system": "gyroscope"}
+    assert np.isnan(R.stored_ratio(tmp_path, gyro, "node", lr=0.005)[0])
 
 
 def test_a_failed_prediction_scores_error_one():

@@ -1,7 +1,8 @@
-"""NODE+SO and the HNNs on the chain pendulum (k = 2), side by side with the paper's own code.
+"""NODE+SO and the HNNs on the chain pendulum (k = 2, or ``--k``), side by side with the
+paper's own code.
 
     python -m bench.sidebyside.decon_hnn --seed-code /path/to/decon-hnn \\
-        [--model node_so,hnn] [--steps 2000] [--out DIR]
+        [--model node_so,hnn] [--k 2] [--steps 2000] [--out DIR]
 
 ``--seed-code`` is a checkout of the paper's public code (``git clone
 https://github.com/ngruver/decon-hnn``), read and run, never copied. It is PyTorch code: its
@@ -10,8 +11,8 @@ side runs in another interpreter (``--torch-python``, default ``$DECON_TORCH_PYT
 script ``_decon_torch.py`` beside this one; the two sides exchange arrays through .npz files in
 ``--out``.
 
-Our side is the ``paper`` profile's cell of the model (``second_order``, chain_pendulum, k = 2,
-seed ``--seed``): its dataset, batch order (``Batches``), training configuration and step
+Our side is the ``paper`` profile's cell of the model (``second_order``, chain_pendulum, k =
+``--k``, seed ``--seed``): its dataset, batch order (``Batches``), training configuration and step
 (``bench.core._train.make_step``: the rollout loss over 5-point chunks by the 3/8-rule RK4,
 clipping at 1, AdamW with decay 1e-4, cosine over 8000 steps). The paper's side runs its
 ``IntegratedDynamicsTrainer`` on the SAME arrays and batches, cast to float32 as its data are.
@@ -34,7 +35,11 @@ one-line verdicts:
   training loss, and every
   ``--log-every`` steps the paper's held-out metric (the geometric mean over the windows and
   times of ||err|| / (||pred|| + ||true||), angles not wrapped; from t = 1, and from t = 0 as
-  the paper reports it) and the MSE; judged on the checkpoints of the second half (``late``).
+  the paper reports it) and the MSE; judged on the checkpoints of the second half (``late``);
+- (l) learning, as the verdicts gate it (:mod:`._learn`): constant velocity's error over the
+  model's on the held-out windows, for the paper's trained model and each curve's at the last
+  step, beside our stored runs of the cell (``--results``, the seeds judged); the verdict asks
+  whether the paper's code learns where ours does not.
 
 Writes ``checks.csv``, ``curves.csv`` and ``verdicts.txt`` per model under ``--out``;
 docs/sidebyside.md (the paper's code section) has the measured numbers.
@@ -64,6 +69,7 @@ from ._decon import (
     wrapped_difference,
 )
 from ._decon_ours import Ours, loss_and_grad, paper_metric
+from ._learn import constant_velocity, learns, scores, stored_ratio, verdict
 from ._seed import SeedCodeError, run_side, torch_error, verdict_line, write_table
 
 CURVES = ("paper", "mapped", "suite", "suite_mapped", "registered")
@@ -82,17 +88,18 @@ TOL_GRAD = {"32": 1e-2, "64": 1e-8}  # (b) worst layer, ||g_paper - g_ours|| / |
 TOL_CURVE = 0.25  # (c) late held-out metric (``late``) of a curve within 25 % of the paper's
 
 
-def run_config(model: str, seed: int):
-    """The ``paper`` profile's chain-2 cell of ``model`` in ``second_order``."""
+def run_config(model: str, seed: int, k: int = 2):
+    """The ``paper`` profile's chain-``k`` cell of ``model`` in ``second_order`` (its suite
+    form, without model options)."""
     import bench
 
     cells = [
         c
         for c in bench.expand("second_order", PROFILE, seeds=[seed])
-        if c.system == "chain_pendulum" and c.k == 2 and c.model == model
+        if c.system == "chain_pendulum" and c.k == k and c.model == model and not c.model_options
     ]
     if len(cells) != 1:
-        raise ValueError(f"{len(cells)} paper cells of {model} on chain_pendulum k = 2")
+        raise ValueError(f"{len(cells)} paper cells of {model} on chain_pendulum k = {k}")
     return cells[0]
 
 
@@ -104,7 +111,7 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
     from bench.core import Batches, build_run, train_config
     from systems import cache_root
 
-    config = run_config(name, a.seed)
+    config = run_config(name, a.seed, a.k)
     system, data, scene, suite_model = build_run(config, cache_root())
     tcfg = train_config(config)
     out.mkdir(parents=True, exist_ok=True)
@@ -277,11 +284,11 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
             }
         )
     final_paper = paper["pred_final"]
-    trained = {}
+    trained, last = {}, {}
     for c, side in sides.items():
         done, losses, trained[c] = 0, np.zeros(0), []
         while True:
-            pred = side.predict(z_eval[:, 0], ts_eval)
+            pred = last[c] = side.predict(z_eval[:, 0], ts_eval)
             row = {
                 "curve": c,
                 "step": done,
@@ -351,11 +358,34 @@ def side_by_side(name: str, a, root: Path, out: Path) -> list[str]:
                 f"{TOL_CURVE:.0%}",
             )
         )
+    lines += learning(name, system, a, z_eval, ts_eval, {"paper": final_paper, **last}, record)
     write_table(out / "curves.csv", curve_rows)
     write_table(out / "checks.csv", rows, ["check", "quantity", "paper", "ours", "rel"])
     np.save(out / "paper_losses.npy", paper["losses"])
     (out / "verdicts.txt").write_text("\n".join(lines) + "\n")
     return lines
+
+
+def learning(name, system, a, z_eval, ts_eval, preds: dict, record) -> list[str]:
+    """(l): constant velocity's error over each final prediction's on the held-out windows
+    (the paper's trained model, each of our curves), our stored runs' ratio on the cell, and
+    whether the paper's code learns where ours does not."""
+    angular = tuple(system.angular)
+    cv = scores(constant_velocity(z_eval, ts_eval), z_eval, angular)
+    ratios = {c: cv["error"] / scores(p, z_eval, angular)["error"] for c, p in preds.items()}
+    for c, r in ratios.items():
+        what = f"constant velocity's error over the model's at step {a.steps}: {c}"
+        record("l", what, r if c == "paper" else None, None if c == "paper" else r, None)
+    cell = {"system": "chain_pendulum", "k": a.k}
+    stored, n_seeds = stored_ratio(Path(a.results), cell, name)
+    record("l", f"the same, our stored runs ({n_seeds} seeds)", None, stored, None)
+    said = "; ".join(f"{c} {learns(r)}" for c, r in ratios.items())
+    where = f"chain_pendulum k = {a.k}"
+    return [
+        f"l learning on {where}, constant velocity's error ({cv['error']:.4g}) over the model's "
+        f"after {a.steps} steps: {said}; our stored runs ({n_seeds} seeds): {learns(stored)}",
+        verdict(name, where, ratios["paper"], stored),
+    ]
 
 
 def late(rows, curve: str, key: str, steps: int) -> float:
@@ -370,7 +400,7 @@ def late(rows, curve: str, key: str, steps: int) -> float:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         prog="python -m bench.sidebyside.decon_hnn",
-        description="NODE+SO and the HNNs on chain-2 beside the paper's own code (same data, "
+        description="NODE+SO and the HNNs on the chain beside the paper's own code (same data, "
         "same batches, same initial parameters).",
     )
     p.add_argument("--seed-code", required=True, help="a checkout of ngruver/decon-hnn")
@@ -378,6 +408,10 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=2000)
     p.add_argument("--log-every", type=int, default=250)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--k", type=int, default=2, help="the chain's links, 1-4 (the paper profile's)")
+    p.add_argument(
+        "--results", default="results/reference/paper", help="stored runs for (l) learning"
+    )
     p.add_argument("--n-eval", type=int, default=200, help="held-out windows (of 200)")
     p.add_argument("--n-traj", type=int, default=4, help="windows through the paper's data code")
     p.add_argument("--curves", default=",".join(CURVES[1:]), help=f"of {', '.join(CURVES[1:])}")
@@ -402,10 +436,11 @@ def main(argv=None) -> int:
         or any(c not in CURVES[1:] for c in a.curves)
         or a.steps < 0
         or a.log_every < 1
+        or a.k not in (1, 2, 3, 4)
     ):
         msg = (
             f"--model of {', '.join(PAPER_CLASSES)}; --curves of {', '.join(CURVES[1:])}; "
-            "--steps >= 0"
+            "--steps >= 0; --k of 1, 2, 3, 4"
         )
         print(f"error: {msg}", file=sys.stderr)
         return 2

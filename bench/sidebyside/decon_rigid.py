@@ -55,15 +55,13 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.kit import policy
-
 from ._decon import check_paper_code
+from ._learn import constant_velocity, learns, scores, stored_ratio, verdict
 from ._seed import SeedCodeError, check_checkout, run_side, torch_error, write_table
 
 SYSTEMS = ("rotor", "gyroscope", "magnet_pendulum")
 MODELS = ("node", "node_so", "hnn_so")
 MESHES = ("rotor.obj", "gyro.obj")
-LEARN = policy.margin("learning").value  # the verdicts' gate over the best trivial predictor
 TOL_TRUTH = 1e-4  # (0) max |x_paper - x_ours| / max |x| over the windows (paper: float32)
 PAPER_DATA = {"n_systems": 1000, "tau": 10.0, "chunk": 5}  # toy_systems.py's defaults
 DEPARTURES = {"magnet_pendulum": "the paper's dipole term has the opposite sign"}
@@ -100,43 +98,6 @@ def cartesian_starts(system, z0: np.ndarray) -> np.ndarray:
     return np.asarray(jax.vmap(points)(jnp.asarray(z0)))
 
 
-def constant_velocity(z: np.ndarray, ts: np.ndarray) -> np.ndarray:
-    """q0 + qdot0 t, qdot0, from each window's first state: (N, T, 2d)."""
-    d = z.shape[-1] // 2
-    q0, v0 = z[:, :1, :d], z[:, :1, d:]
-    qt = q0 + v0 * (ts - ts[0])[None, :, None]
-    return np.concatenate([qt, np.broadcast_to(v0, qt.shape)], -1)
-
-
-def scores(pred: np.ndarray, true: np.ndarray, angular) -> dict:
-    """The suite's rollout error (angles wrapped, from t = 1) and the paper's (angles as stored,
-    t = 0 included), geometric means over windows and times."""
-    from bench.core import geometric_mean, relative_error
-
-    ours = relative_error(pred, true, angular)
-    paper = relative_error(pred, true, angular, reference_compatible=True)
-    return {
-        "error": float(geometric_mean(ours[..., 1:])),
-        "paper_gerr": float(geometric_mean(paper)),
-    }
-
-
-def stored_ratio(results: Path, system: str, model: str, lr: float) -> tuple[float, int]:
-    """From the stored runs: geometric mean over seeds of constant velocity's rollout error over
-    the model's (failed runs scored 1, as the verdicts score them), and the seeds."""
-    from bench import load_runs
-
-    r = load_runs(results)
-    r = r[(r["experiment"] == "rigid_bodies") & (r["system"] == system)]
-    cv = r[r["model"] == "constant_velocity"].groupby("seed")["rollout_error"].first()
-    m = r[(r["model"] == model) & (r["lr"] == lr)]
-    err = m["rollout_error"].where(m["status"] == "ok", 1.0).groupby(m["seed"]).first()
-    seeds = sorted(set(cv.index) & set(err.index))
-    if not seeds:
-        return float("nan"), 0
-    return float(np.exp(np.mean(np.log(cv[seeds].to_numpy() / err[seeds].to_numpy())))), len(seeds)
-
-
 def rates(z: np.ndarray) -> tuple[float, float]:
     """The 99th percentile and the largest |qdot| of windows z (N, C, 2d): the Euler-angle
     systems' rates grow as 1/sin(beta) near the pole, and a few such windows dominate an L2
@@ -150,20 +111,6 @@ def checkpoint(curve: str, step, pred, true, angular, cv: dict) -> dict:
     (a failed prediction scores error 1)."""
     s = scores(pred, true, angular)
     return {"curve": curve, "step": int(step), **s, "cv_ratio": cv["error"] / s["error"]}
-
-
-def verdict(name: str, system: str, paper: float, stored: float) -> str:
-    """Does the paper's code learn where ours does not? Its model on its own data (one seed)
-    against our stored runs (the seeds judged): agree where both learn or neither does."""
-    if (paper >= LEARN) == (stored >= LEARN):
-        both = "learns" if paper >= LEARN else "does not learn"
-        return f"verdict: agree: {name} {both} {system} in the paper's code and in ours"
-    who = "the paper's code learns it, ours does not" if paper >= LEARN else "ours learns it"
-    return f"verdict: DIFFER: {name} on {system}: {who} (gate {LEARN:g}x constant velocity)"
-
-
-def learns(ratio: float) -> str:
-    return f"{ratio:.3g}x {'(learns)' if ratio >= LEARN else '(does not learn)'}"
 
 
 def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]:
@@ -261,7 +208,9 @@ def side_by_side(name: str, a, root: Path, meshes: Path, out: Path) -> list[str]
     write_table(out / "curves.csv", curves)
     final = {c["curve"]: c for c in curves}  # the last checkpoint of each curve
     diverged = {"paper": int(paper["diverged"]), "ours": 0}
-    stored, n_seeds = stored_ratio(Path(a.results), a.system, name, tcfg.lr)
+    stored, n_seeds = stored_ratio(
+        Path(a.results), {"experiment": "rigid_bodies", "system": a.system}, name, lr=tcfg.lr
+    )
     for key, text in (
         ("paper", "the paper's code on its own data"),
         ("ours", "our model and step on the paper's data"),
