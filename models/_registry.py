@@ -25,9 +25,10 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
 in for p and dz/dt = J grad H on (q, qdot). ``hnn_force`` takes ``inverse_mass_floor``
 (default 1e-4: the floor under its M^-1's spectrum). ``hnn`` (its H network), ``hnn_so`` (both
-networks), ``node`` and ``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation;
-``paper``: the Deconstructing paper's, node_so_pq's default); ``hnn`` also ``inverse_mass``
-(learn M^-1 = L L^T + 1e-4 I, as that paper's code does, instead of M's factor).
+networks), ``node`` and ``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN
+seed's PyTorch initialisation; ``paper``: the Deconstructing paper's, node_so_pq's default);
+``hnn`` also ``inverse_mass`` (learn M^-1 = L L^T + 1e-4 I, as that paper's code does, instead
+of M's factor).
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
