@@ -36,6 +36,8 @@ class SeparableHamiltonian(eqx.Module):
 
     L(q) lower-triangular with softplus diagonal from an MLP; V an MLP. ``floor`` (default
     1e-4, :data:`INVERSE_MASS_JITTER`) bounds M^-1's spectrum from below, so M <= I / floor.
+    ``init``: both networks' initialisation (:class:`~models._mlp.MLP`; the mass network's
+    last layer starts without a bias either way).
     """
 
     inverse_mass: CholeskyNet
@@ -52,13 +54,16 @@ class SeparableHamiltonian(eqx.Module):
         *,
         key,
         floor: float = INVERSE_MASS_JITTER,
+        init: str = "orthogonal",
     ):
         k1, k2 = jr.split(key)
         self.inverse_mass = CholeskyNet(
-            features, width, depth, activation, dtype, key=k1, jitter=floor
+            features, width, depth, activation, dtype, key=k1, jitter=floor, init=init
         )
         self.features = features = features.without_controls()  # V(q) never sees u
-        self.potential = MLP(features.size(False), 1, width, depth, activation, dtype, key=k2)
+        self.potential = MLP(
+            features.size(False), 1, width, depth, activation, dtype, key=k2, init=init
+        )
 
     def kinetic(self, q: Array, p: Array, args: Array) -> Array:
         lt_p = self.inverse_mass.factor(q, args).T @ p

@@ -70,10 +70,8 @@ class HNN(AbstractContinuousModel):
         kh, km, kd = jr.split(key, 3)
         features = Features(scene)
         if separable:
-            if init != "orthogonal":
-                raise ValueError(f"init {init!r}: the separable HNN takes the default only")
             self.hamiltonian_part = SeparableHamiltonian(
-                features, width, depth, activation, dtype, key=kh
+                features, width, depth, activation, dtype, key=kh, init=init
             )
         else:  # init: H's network, and the mass network's with "paper" (dissipation: default)
             self.hamiltonian_part = GeneralHamiltonian(
@@ -236,19 +234,23 @@ class AbstractSeparableHNN(AbstractContinuousModel):
 
 class SeparableHNN(AbstractSeparableHNN):
     """The separable HNN (hnn_so), with friction Q = -D(q) qdot when ``dissipation``
-    (:class:`AbstractSeparableHNN` for the field)."""
+    (:class:`AbstractSeparableHNN` for the field). ``init="paper"`` starts H's networks as
+    the Deconstructing paper's ``HNN`` does (PyTorch's default biases; the friction network
+    keeps the default)."""
 
     scene: Scene = eqx.field(static=True)
     dtype: str = eqx.field(static=True)
     hamiltonian_part: SeparableHamiltonian
     dissipation: Dissipation | None
 
-    def __init__(self, scene, width, depth, activation, dtype, *, key, dissipation=False):
+    def __init__(
+        self, scene, width, depth, activation, dtype, *, key, dissipation=False, init="orthogonal"
+    ):
         self.scene, self.dtype = scene, dtype
         kh, kd = jr.split(key)
         features = Features(scene)
         self.hamiltonian_part = SeparableHamiltonian(
-            features, width, depth, activation, dtype, key=kh
+            features, width, depth, activation, dtype, key=kh, init=init
         )
         self.dissipation = (
             Dissipation(features, width, depth, activation, dtype, key=kd) if dissipation else None

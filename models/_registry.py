@@ -24,10 +24,11 @@ sibling modules, one family per file (``_node``, ``_resnet``, ``_hnn``, ``_lnn``
 ``hnn`` takes ``momentum_map`` (default True: p = M(q) qdot with a learned M in a velocity
 scene); ``momentum_map=False`` is the LNN seed's naive baseline, H(q, qdot) with qdot standing
 in for p and dz/dt = J grad H on (q, qdot). ``hnn_force`` takes ``inverse_mass_floor``
-(default 1e-4: the floor under its M^-1's spectrum). ``hnn`` (its H network), ``node`` and
-``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN seed's PyTorch initialisation;
-``paper``: the Deconstructing paper's, node_so_pq's default); ``hnn`` also ``inverse_mass``
-(learn M^-1 = L L^T + 1e-4 I, as that paper's code does, instead of M's factor).
+(default 1e-4: the floor under its M^-1's spectrum). ``hnn`` (its H network), ``hnn_so`` (both
+networks), ``node`` and ``lnn`` take ``init`` (``models._mlp.INITS``; ``hnn_seed``: the HNN
+seed's PyTorch initialisation; ``paper``: the Deconstructing paper's, node_so_pq's default);
+``hnn`` also ``inverse_mass`` (learn M^-1 = L L^T + 1e-4 I, as that paper's code does, instead
+of M's factor).
 
 The structured models (hnn, hnn_so, lnn, vin, vin_implicit) add the :class:`Dissipation`
 part when the scene is damped (or ``dissipation=True``).
@@ -72,7 +73,7 @@ def _build_hnn(
     inverse_mass=False,
 ):
     if separable and not scene.canonical:
-        return SeparableHNN(scene, *a, key=key, dissipation=dissipation)
+        return SeparableHNN(scene, *a, key=key, dissipation=dissipation, init=init)
     return HNN(
         scene,
         *a,
@@ -136,9 +137,10 @@ _REGISTRY = {
     ),
     "hnn_so": _Entry(
         SeparableHNN,
-        lambda s, *a, key, dissipation: _build_hnn(
-            s, *a, key=key, separable=True, dissipation=dissipation
+        lambda s, *a, key, dissipation, init="orthogonal": _build_hnn(
+            s, *a, key=key, separable=True, dissipation=dissipation, init=init
         ),
+        {"init": _choice("init", INITS)},
         structured=True,
     ),
     "mixture_hnn": _Entry(MixtureHNN, _plain(MixtureHNN)),

@@ -996,7 +996,7 @@ def test_claim_3_is_read_in_each_form_and_the_forms_never_mix(tables):
     6's, which read the same experiments by model name)."""
     runs, curves = tables
     assert len(CLAIMS[3](runs, curves)) == 1  # no paper-form rows: the suite's reading alone
-    both = _with_paper_form(runs, models=("node", "node_so", "hnn"))
+    both = _with_paper_form(runs, models=("node", "node_so", "hnn", "hnn_so"))
     suite, paper = CLAIMS[3](both, curves)
     assert paper.key == "3 (the paper's models)" and suite.key == "3"
     assert suite.verdict == paper.verdict == _claim3(runs, curves).verdict == R.REPRODUCED
@@ -1070,33 +1070,40 @@ def _with_paper_form(runs, seeds=None, models=("node_so",)):
     return pd.concat([runs, form], ignore_index=True)
 
 
-PAPER_FORM = "4 (geometric-mean error, spring from paper, the paper's NODE+SO)"
+PAIR = ("node_so", "hnn_so")
+PAPER_FORM = "4 (geometric-mean error, spring from paper, the paper's models)"
 
 
-def test_claim_4_is_read_with_each_form_of_node_so_apart(tables):
-    """The paper's NODE+SO (``node_so_pq``) gets its own verdicts, from the paper's spring start
-    and on the rows without the suite's ``node_so``: each form can pass, fail or stay undecided
-    whatever the other does."""
+def test_claim_4_is_read_with_each_form_of_the_models_apart(tables):
+    """The paper's NODE+SO and HNN+SO (``node_so_pq``; ``hnn_so`` with PyTorch's biases) get
+    their own verdicts, from the paper's spring start and on the rows without the suite's
+    forms: each form can pass, fail or stay undecided whatever the other does."""
     runs, curves = tables
-    assert not any("paper's NODE+SO" in v.key for v in CLAIMS[4](runs, curves))  # none stored
-    both = _with_paper_form(runs)
+    assert not any("paper's models" in v.key for v in CLAIMS[4](runs, curves))  # none stored
+    both = _with_paper_form(runs, models=PAIR)
     got = {v.key: v for v in CLAIMS[4](both, curves)}
     assert got[PAPER_FORM].verdict == got[CLAIM_4].verdict == R.REPRODUCED
     assert not any("equilibrium, the paper's" in k for k in got)
     # the suite's NODE+SO as good as HNN+SO on the chain: its reading fails, the paper's holds
     so = _paper(both, "chain_pendulum", "node_so")
-    hs = _paper(both, "chain_pendulum", "hnn_so")
+    opts = both["model_options"]
+    hs = _paper(both, "chain_pendulum", "hnn_so") & (opts == "[]")
     got = {v.key: v for v in CLAIMS[4](_set_ratio(both, so, hs, 1.0), curves)}
     assert _status(got[CLAIM_4], "chain") == "contradicts"
     assert got[PAPER_FORM].verdict == R.REPRODUCED
-    # and the other way round
+    # and the other way round, on each of the paper's two models
     pq = _paper(both, "chain_pendulum", "node_so_pq")
-    got = {v.key: v for v in CLAIMS[4](_set_ratio(both, pq, hs, 1.0), curves)}
-    assert _status(got[PAPER_FORM], "chain") == "contradicts"
-    assert got[CLAIM_4].verdict == R.REPRODUCED
+    hs_paper = _paper(both, "chain_pendulum", "hnn_so") & (opts != "[]")
+    for worse, better in ((pq, hs_paper), (hs_paper, pq)):
+        got = {v.key: v for v in CLAIMS[4](_set_ratio(both, worse, better, 1.0), curves)}
+        assert _status(got[PAPER_FORM], "chain") == "contradicts"
+        assert got[CLAIM_4].verdict == R.REPRODUCED
     # the paper's form on two seeds only: too few to sign
-    few = {v.key: v for v in CLAIMS[4](_with_paper_form(runs, seeds=[0, 1]), curves)}
+    few = {v.key: v for v in CLAIMS[4](_with_paper_form(runs, seeds=[0, 1], models=PAIR), curves)}
     assert few[PAPER_FORM].verdict == R.INCONCLUSIVE and few[PAPER_FORM].n_seeds == 2
+    # the paper's NODE+SO without the paper's HNN+SO: that reading has no HNN+SO to judge
+    alone = {v.key: v for v in CLAIMS[4](_with_paper_form(runs), curves)}
+    assert alone[PAPER_FORM].verdict != R.REPRODUCED
 
 
 # ----------------------------------------------------------------------------- claim 5

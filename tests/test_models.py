@@ -256,7 +256,7 @@ def test_hnn_learning_the_inverse_mass_is_still_a_hamiltonian_flow():
 def test_the_paper_init_is_pytorch_bias_over_the_orthogonal_draw():
     """``init="paper"``: the orthogonal weights of the default (the same draw) and PyTorch's
     default biases U(+-1/sqrt(fan_in)) on every layer, but a mass network's last (zero, as the
-    paper's code builds it); node_so_pq starts so by default."""
+    paper's code builds it); node_so_pq starts so by default, hnn_so on request."""
     key = jr.PRNGKey(3)
     a = models.MLP(6, 4, 256, 2, "tanh", "float64", key=key)
     b = models.MLP(6, 4, 256, 2, "tanh", "float64", key=key, init="paper")
@@ -272,3 +272,10 @@ def test_the_paper_init_is_pytorch_bias_over_the_orthogonal_draw():
     assert np.any(pq.inner.inverse_mass.net.biases[0])
     plain = models.make("node_so_pq", CHAIN2, key=key, width=W, init="orthogonal")
     assert not any(np.any(x) for x in plain.inner.net.biases)
+    so = models.make("hnn_so", CHAIN2, key=key, width=W, init="paper").hamiltonian_part
+    assert np.any(so.potential.biases[0]) and np.any(so.potential.biases[-1])
+    assert np.any(so.inverse_mass.net.biases[0]) and not np.any(so.inverse_mass.net.biases[-1])
+    default = models.make("hnn_so", CHAIN2, key=key, width=W).hamiltonian_part
+    assert not any(np.any(x) for x in default.potential.biases)
+    for wa, wb in zip(default.potential.weights, so.potential.weights, strict=True):
+        np.testing.assert_array_equal(wa, wb)

@@ -7,6 +7,7 @@ from bench import kit
 from bench import studies as ST
 from bench.core import _experiments as E
 from bench.studies import paper as P
+from bench.studies._claims import PAPER_INIT
 from bench.studies.decon.second_order import is_suite_cell
 from bench.studies.lnn_seed import relativistic as REL
 
@@ -58,15 +59,19 @@ def test_figures_2_4_5_and_8_share_runs(profile):
     form = {c.config_hash: c for c in E.expand("second_order", profile) if not is_suite_cell(c)}
     assert {c.k for c in form.values()} <= {2}
     assert bool(form) == (profile in ("paper", "paper-core"))
-    pq = {h_ for h_, c in form.items() if c.model == "node_so_pq"}
-    assert pq <= h["coordinates"]
-    coords_pq = {c.k for c in E.expand("coordinates", profile) if c.model == "node_so_pq"}
+    pair = {h_ for h_, c in form.items() if c.model in ("node_so_pq", "hnn_so")}
+    assert pair <= h["coordinates"]
     want = {"paper": {1, 2, 3, 4}, "paper-core": {2}, "paper-k": {1, 3, 4}}
-    assert coords_pq == want.get(profile, set())
+    for model, options in (("node_so_pq", ()), ("hnn_so", PAPER_INIT)):
+        coords = E.expand("coordinates", profile)
+        ks = {c.k for c in coords if c.model == model and c.model_options == options}
+        assert ks == want.get(profile, set())
     paper_init = {
         c.config_hash
         for c in E.expand("coordinates", profile)
-        if c.system_params != ST.SPRING_EQUILIBRIUM and c.model != "node_so_pq"
+        if c.system_params != ST.SPRING_EQUILIBRIUM
+        and c.model != "node_so_pq"
+        and not c.model_options
     }
     assert paper_init <= h["energy"] and paper_init != h["coordinates"]
     # the paper's own form of NODE+SO: at its budget, for claim 4 alone

@@ -79,6 +79,7 @@ PROFILE = "paper"
 REGISTERED = {
     "node_so": ("node_so_pq", {}),
     "hnn": ("hnn", {"inverse_mass": True, "init": "paper"}),
+    "hnn_so": ("hnn_so", {"init": "paper"}),
 }
 TORCH_SCRIPT = Path(__file__).with_name("_decon_torch.py")
 TOL_FIELD = {"32": 1e-4, "64": 1e-9}  # (0) max relative difference of qddot and of the energy

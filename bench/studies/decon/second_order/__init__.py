@@ -36,10 +36,11 @@ from ..._claims import (
     suite_form,
 )
 
-# the axes that add the paper-form cells (node_so_pq; node and hnn with their paper options)
+# the axes that add the paper-form cells (node_so_pq; node, hnn and hnn_so with their paper
+# options)
 PAPER_FORM_AXES = {
     "model": (*PAPER_MODELS, "node_so_pq", "constant_velocity"),
-    "model_options": ((), *PAPER_FORM_OPTIONS.values()),
+    "model_options": tuple(dict.fromkeys(((), *PAPER_FORM_OPTIONS.values()))),
 }
 
 
