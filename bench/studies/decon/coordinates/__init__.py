@@ -26,13 +26,14 @@ from ....kit import (
 )
 from ..._claims import (
     CLAIM_TITLES,
-    PAPER_FORM_OPTIONS,
+    PAPER_FORM,
     PAPER_INIT,
     SPRING_EQUILIBRIUM,
     SPRING_PAPER,
     SYSTEMS,
     initial_ok,
     paper_form,
+    paper_form_ok,
     shared_overrides,
     suite_form,
 )
@@ -40,13 +41,12 @@ from ._links import fig_links
 
 
 def _is_paper_form(c: RunConfig) -> bool:
-    """A cell of the paper's form of the two models alone (``node_so_pq``, ``hnn_so`` with its
-    paper options)."""
-    return c.model == "node_so_pq" or (c.model == "hnn_so" and c.model_options == PAPER_INIT)
+    """A cell of the paper's form (``PAPER_FORM``) of the two models alone."""
+    return (c.model, c.model_options) in (PAPER_FORM["node_so"], PAPER_FORM["hnn_so"])
 
 
 def _coordinates_include(c: RunConfig) -> bool:
-    if c.model_options not in ((), PAPER_FORM_OPTIONS.get(c.model, ())):
+    if not paper_form_ok(c):
         return False
     if _is_paper_form(c):  # read from the paper's spring start only (FORM_STARTS)
         return initial_ok(c, (SPRING_PAPER,))
